@@ -1,0 +1,107 @@
+use super::*;
+use std::f64::consts::PI;
+
+/// Integrate R_d over the plane numerically (radial, substitution r = t/(1-t) on [0,1)).
+fn integrate_rd_plane(d: &Dipole) -> [f64; 3] {
+    let n = 400_000;
+    let mut sum = [0.0; 3];
+    for i in 0..n {
+        // midpoint rule in u = ln(r): dense near r = 0 where R_d peaks
+        let u0 = -14.0;
+        let u1 = 8.0;
+        let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
+        let r = u.exp();
+        let du = (u1 - u0) / n as f64;
+        let rd = d.rd_planar(r);
+        for c in 0..3 {
+            sum[c] += rd[c] * 2.0 * PI * r * r * du;
+        }
+    }
+    sum
+}
+
+#[test]
+fn total_diffuse_reflectance_matches_numerical_integral() {
+    for name in ["marble", "skimmilk", "ketchup", "skin1", "wax"] {
+        let m = Material::by_name(name).unwrap();
+        let d = Dipole::new(&m, 1.0);
+        let closed = d.total_diffuse_reflectance();
+        let num = integrate_rd_plane(&d);
+        for c in 0..3 {
+            let rel = (num[c] - closed[c]).abs() / closed[c];
+            assert!(
+                rel < 1e-4,
+                "{name} channel {c}: numeric {} vs closed {}",
+                num[c],
+                closed[c]
+            );
+        }
+    }
+}
+
+#[test]
+fn total_diffuse_reflectance_limits() {
+    // No scattering: alpha' -> 0 gives R_d -> 0; no absorption: alpha' -> 1 gives R_d -> 1.
+    let dark = Material::custom("dark", [1e-6; 3], [10.0; 3], 1.3).unwrap();
+    let white = Material::custom("white", [10.0; 3], [1e-9; 3], 1.3).unwrap();
+    for c in 0..3 {
+        assert!(Dipole::new(&dark, 1.0).total_diffuse_reflectance()[c] < 1e-6);
+        assert!((Dipole::new(&white, 1.0).total_diffuse_reflectance()[c] - 1.0).abs() < 1e-3);
+    }
+    // Scale-invariant: R_d_total depends on alpha' only.
+    let m = Material::by_name("marble").unwrap();
+    let a = Dipole::new(&m, 1.0).total_diffuse_reflectance();
+    let b = Dipole::new(&m, 37.0).total_diffuse_reflectance();
+    for c in 0..3 {
+        assert!((a[c] - b[c]).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn rd_is_reciprocal_in_the_planar_case() {
+    let d = Dipole::new(&Material::by_name("skin2").unwrap(), 1.0);
+    let n = glam::DVec3::Z;
+    let x = glam::DVec3::new(0.3, -1.2, 0.0);
+    let y = glam::DVec3::new(-2.0, 0.7, 0.0);
+    let (a, b) = (d.rd(x, n, y), d.rd(y, n, x));
+    for c in 0..3 {
+        assert!((a[c] - b[c]).abs() <= 1e-14 * a[c].abs());
+        assert!((a[c] - d.rd_planar((x - y).length())[c]).abs() <= 1e-12 * a[c]);
+    }
+}
+
+#[test]
+fn scale_converts_mm_to_mesh_units() {
+    // A 1-unit mesh at 10 cm: one unit is 100 mm, so sigma_tr per unit is 100x sigma_tr per mm.
+    let m = Material::by_name("Marble").unwrap();
+    let per_mm = Dipole::new(&m, 1.0);
+    let per_unit = Dipole::for_model_scale(&m, 1.0, 0.1);
+    for c in 0..3 {
+        assert!((per_unit.sigma_tr[c] - 100.0 * per_mm.sigma_tr[c]).abs() < 1e-9);
+        assert!((per_unit.z_r[c] - per_mm.z_r[c] / 100.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn fresnel_limits() {
+    // Normal incidence: ((eta-1)/(eta+1))^2.
+    let eta: f64 = 1.3;
+    let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    assert!((fresnel_dielectric(1.0, eta) - r0).abs() < 1e-12);
+    assert!((fresnel_dielectric(0.0, eta) - 1.0).abs() < 1e-12);
+    assert!((fresnel_transmittance(1.0, eta) - (1.0 - r0)).abs() < 1e-12);
+    // Total internal reflection from inside (eta < 1) beyond the critical angle.
+    assert_eq!(fresnel_dielectric(0.1, 1.0 / 1.5), 1.0);
+    // F_dr for eta = 1.3 is about 0.44 (Jensen 2001).
+    assert!((fresnel_diffuse_reflectance(1.3) - 0.4396).abs() < 1e-3);
+}
+
+#[test]
+fn materials_by_name() {
+    assert_eq!(Material::by_name("SKIMMILK").unwrap().name, "Skimmilk");
+    assert_eq!(Material::by_name("candle-wax").unwrap().name, "Wax");
+    let err = Material::by_name("unobtainium").unwrap_err().to_string();
+    assert!(err.contains("unobtainium") && err.contains("Marble"));
+    assert!(Material::custom("x", [1.0, 0.0, 1.0], [1.0; 3], 1.3).is_err());
+    assert!(Material::custom("x", [1.0; 3], [1.0; 3], f64::NAN).is_err());
+}

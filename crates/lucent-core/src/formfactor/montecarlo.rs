@@ -1,0 +1,1 @@
+//! Monte Carlo reference for the form factor (stub).

@@ -1,0 +1,38 @@
+//! # lucent-core
+//!
+//! The physics and the solvers of lucent, with no GPU dependency. The modules follow the data
+//! flow of the homogeneous method (Mertens et al. 2003, "Interactive Rendering of Translucent
+//! Deformable Objects"):
+//!
+//! ```text
+//! mesh ──► hierarchy ──► irradiance ──► solver ──► shading ──► (lucent-gpu) image
+//!            (§5.1)        (§5.3)      (§3, §5.2, §5.5)  (§5.4)
+//! ```
+//!
+//! * [`bssrdf`]: the dipole diffusion model (Jensen et al. 2001; Mertens table 1), the measured
+//!   materials and the dielectric Fresnel terms.
+//! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
+//!   reference for the same integral.
+//! * [`mesh`]: triangle meshes, file loading and validation, generators and deformers.
+//! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
+//! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
+//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes.
+//! * [`shading`]: exitant radiance `L = F_t B / pi` and the final per-vertex colour (§5.4).
+//! * [`volume`]: density volumes for the heterogeneous method (Shopf 2007, §4.2).
+//!
+//! Units: material coefficients are in mm^-1 as measured; a mesh is given a *model scale* (the
+//! largest side of its bounding box in metres) and every length inside the solver is in mesh
+//! units, with coefficients converted by [`bssrdf::Dipole::new`].
+
+pub mod bssrdf;
+pub mod formfactor;
+pub mod hierarchy;
+pub mod irradiance;
+pub mod mesh;
+pub mod shading;
+pub mod solver;
+pub mod volume;
+
+/// An RGB triple of `f32` (radiance, irradiance or a per-channel coefficient, as documented
+/// where it is used).
+pub type Rgb = glam::Vec3;

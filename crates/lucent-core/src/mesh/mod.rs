@@ -1,0 +1,123 @@
+//! Triangle meshes: the flat data every later stage reads (positions and index triples),
+//! loading and validation, generators and deformers.
+
+use glam::Vec3;
+
+pub mod deform;
+pub mod generate;
+pub mod io;
+
+pub use io::{MeshError, load_mesh};
+
+/// An indexed triangle mesh. Faces are counter-clockwise seen from outside.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions, in mesh units (the model scale maps them to metres).
+    pub positions: Vec<Vec3>,
+    /// Triangles as indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// A mesh from its parts (not validated; see [`io::validate`]).
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// The three corner positions of face `f`.
+    #[inline]
+    pub fn corners(&self, f: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.triangles[f];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// `(b - a) x (c - a)` of face `f`: twice its area times its unit normal.
+    #[inline]
+    pub fn face_cross(&self, f: usize) -> Vec3 {
+        let [a, b, c] = self.corners(f);
+        (b - a).cross(c - a)
+    }
+
+    /// Area of face `f`, in mesh units^2.
+    #[inline]
+    pub fn face_area(&self, f: usize) -> f32 {
+        0.5 * self.face_cross(f).length()
+    }
+
+    /// Unit normal of face `f` (zero for a degenerate face).
+    #[inline]
+    pub fn face_normal(&self, f: usize) -> Vec3 {
+        self.face_cross(f).normalize_or_zero()
+    }
+
+    /// Centroid of face `f` (the "midpoint" of Mertens §3.1).
+    #[inline]
+    pub fn face_centroid(&self, f: usize) -> Vec3 {
+        let [a, b, c] = self.corners(f);
+        (a + b + c) / 3.0
+    }
+
+    /// Area-weighted vertex normals (zero where a vertex has no non-degenerate face).
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut n = vec![Vec3::ZERO; self.positions.len()];
+        for (f, tri) in self.triangles.iter().enumerate() {
+            let c = self.face_cross(f);
+            for &v in tri {
+                n[v as usize] += c;
+            }
+        }
+        n.iter_mut().for_each(|v| *v = v.normalize_or_zero());
+        n
+    }
+
+    /// Axis-aligned bounding box `(min, max)`; `(0, 0)` for an empty mesh.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        if self.positions.is_empty() {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        self.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        )
+    }
+
+    /// The largest side of the bounding box, in mesh units: the length that the model scale
+    /// (metres) refers to.
+    pub fn extent(&self) -> f32 {
+        let (lo, hi) = self.bounds();
+        (hi - lo).max_element()
+    }
+
+    /// Total surface area, in mesh units^2.
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|f| self.face_area(f) as f64)
+            .sum()
+    }
+
+    /// Averages per-face values to vertices, weighting each face by its area (Mertens §3.2:
+    /// "the accumulated results at the leaf nodes are averaged at the vertices").
+    pub fn face_to_vertex(&self, face_values: &[Vec3]) -> Vec<Vec3> {
+        assert_eq!(face_values.len(), self.triangles.len());
+        let mut sum = vec![Vec3::ZERO; self.positions.len()];
+        let mut weight = vec![0.0f32; self.positions.len()];
+        for (f, tri) in self.triangles.iter().enumerate() {
+            let a = self.face_area(f);
+            for &v in tri {
+                sum[v as usize] += a * face_values[f];
+                weight[v as usize] += a;
+            }
+        }
+        sum.iter()
+            .zip(&weight)
+            .map(|(s, w)| if *w > 0.0 { *s / *w } else { Vec3::ZERO })
+            .collect()
+    }
+}

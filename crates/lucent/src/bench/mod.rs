@@ -1,0 +1,9 @@
+//! `lucent bench`: accuracy and speed measurements, printed as tables or JSON lines.
+
+use crate::cli::{BenchArgs, BenchTarget};
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    match args.what {
+        BenchTarget::Formfactor => anyhow::bail!("bench formfactor: not implemented yet"),
+    }
+}
