@@ -21,11 +21,7 @@ pub enum MaterialError {
     #[error("unknown material '{name}'; known materials: {known}")]
     Unknown { name: String, known: String },
     #[error("material '{name}': {what} must be finite and > 0 in every channel, got {values:?}")]
-    NonPositive {
-        name: String,
-        what: &'static str,
-        values: [f64; 3],
-    },
+    NonPositive { name: String, what: &'static str, values: [f64; 3] },
     #[error("material '{name}': eta must be finite and within 1.0..=3.0, got {eta}")]
     BadEta { name: String, eta: f64 },
 }
@@ -59,24 +55,12 @@ impl Material {
     /// A preset by name, case-insensitively (`"skimmilk"`, `"Marble"`, `"wax"`; `"candlewax"`
     /// and `"candle-wax"` are accepted for `Wax`).
     pub fn by_name(name: &str) -> Result<Material, MaterialError> {
-        let wanted = name
-            .trim()
-            .to_ascii_lowercase()
-            .replace(['-', '_', ' '], "");
-        let wanted = if wanted == "candlewax" {
-            "wax".to_string()
-        } else {
-            wanted
-        };
+        let wanted = name.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
+        let wanted = if wanted == "candlewax" { "wax".to_string() } else { wanted };
         PRESETS
             .iter()
             .find(|(n, _, _)| n.to_ascii_lowercase() == wanted)
-            .map(|&(n, s, a)| Material {
-                name: n.to_string(),
-                sigma_s_prime: s,
-                sigma_a: a,
-                eta: 1.3,
-            })
+            .map(|&(n, s, a)| Material { name: n.to_string(), sigma_s_prime: s, sigma_a: a, eta: 1.3 })
             .ok_or_else(|| MaterialError::Unknown {
                 name: name.to_string(),
                 known: PRESETS.iter().map(|r| r.0).collect::<Vec<_>>().join(", "),
@@ -90,12 +74,7 @@ impl Material {
         sigma_a: [f64; 3],
         eta: f64,
     ) -> Result<Material, MaterialError> {
-        let m = Material {
-            name: name.to_string(),
-            sigma_s_prime,
-            sigma_a,
-            eta,
-        };
+        let m = Material { name: name.to_string(), sigma_s_prime, sigma_a, eta };
         m.validate()?;
         Ok(m)
     }
@@ -118,10 +97,7 @@ impl Material {
             });
         }
         if !self.eta.is_finite() || !(1.0..=3.0).contains(&self.eta) {
-            return Err(MaterialError::BadEta {
-                name: self.name.clone(),
-                eta: self.eta,
-            });
+            return Err(MaterialError::BadEta { name: self.name.clone(), eta: self.eta });
         }
         Ok(())
     }

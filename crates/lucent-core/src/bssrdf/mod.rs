@@ -84,8 +84,7 @@ impl Dipole {
     pub fn rd_from_distances(&self, c: usize, s_r: f64, s_v: f64) -> f64 {
         let sigma = self.sigma_tr[c];
         let term = |z: f64, s: f64| z * (1.0 + sigma * s) * (-sigma * s).exp() / (s * s * s);
-        self.alpha_prime[c] / (4.0 * std::f64::consts::PI)
-            * (term(self.z_r[c], s_r) + term(self.z_v[c], s_v))
+        self.alpha_prime[c] / (4.0 * std::f64::consts::PI) * (term(self.z_r[c], s_r) + term(self.z_v[c], s_v))
     }
 
     /// Total diffuse reflectance `R_d_total = ∫ R_d dA` over an infinite plane, closed form

@@ -29,12 +29,7 @@ fn total_diffuse_reflectance_matches_numerical_integral() {
         let num = integrate_rd_plane(&d);
         for c in 0..3 {
             let rel = (num[c] - closed[c]).abs() / closed[c];
-            assert!(
-                rel < 1e-4,
-                "{name} channel {c}: numeric {} vs closed {}",
-                num[c],
-                closed[c]
-            );
+            assert!(rel < 1e-4, "{name} channel {c}: numeric {} vs closed {}", num[c], closed[c]);
         }
     }
 }

@@ -18,9 +18,7 @@ pub struct FormFactorOptions {
 
 impl Default for FormFactorOptions {
     fn default() -> Self {
-        FormFactorOptions {
-            max_segment_ratio: 0.8,
-        }
+        FormFactorOptions { max_segment_ratio: 0.8 }
     }
 }
 
@@ -56,9 +54,5 @@ pub fn polygon_centroid_area(polygon: &[DVec3]) -> (DVec3, f64) {
         total += a;
     }
     let _ = area_vec;
-    if total > 0.0 {
-        (weighted / total, total)
-    } else {
-        (polygon.first().copied().unwrap_or_default(), 0.0)
-    }
+    if total > 0.0 { (weighted / total, total) } else { (polygon.first().copied().unwrap_or_default(), 0.0) }
 }

@@ -33,18 +33,12 @@ pub fn face_irradiance(mesh: &Mesh, lights: &[Light], eta: f64) -> Vec<Rgb> {
 /// Irradiance transmitted into the surface at `p` with unit normal `n` from one light.
 pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, eta: f64) -> Rgb {
     let (to_light, e) = match *light {
-        Light::Point {
-            position,
-            intensity,
-        } => {
+        Light::Point { position, intensity } => {
             let d = position - p;
             let d2 = d.length_squared().max(1e-12);
             (d / d2.sqrt(), intensity / d2)
         }
-        Light::Directional {
-            direction,
-            irradiance,
-        } => (-direction.normalize_or_zero(), irradiance),
+        Light::Directional { direction, irradiance } => (-direction.normalize_or_zero(), irradiance),
     };
     let cos = n.dot(to_light);
     if cos <= 0.0 {

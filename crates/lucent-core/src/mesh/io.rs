@@ -11,8 +11,5 @@ pub enum MeshError {
 
 /// Loads a mesh from an OBJ, PLY, OFF, glTF or GLB file.
 pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
-    Err(MeshError::Invalid {
-        path: path.display().to_string(),
-        reason: "not implemented".into(),
-    })
+    Err(MeshError::Invalid { path: path.display().to_string(), reason: "not implemented".into() })
 }

@@ -21,21 +21,14 @@ pub struct Mesh {
 impl Mesh {
     /// A mesh from its parts (not validated; see [`io::validate`]).
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
-        Mesh {
-            positions,
-            triangles,
-        }
+        Mesh { positions, triangles }
     }
 
     /// The three corner positions of face `f`.
     #[inline]
     pub fn corners(&self, f: usize) -> [Vec3; 3] {
         let [a, b, c] = self.triangles[f];
-        [
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        ]
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 
     /// `(b - a) x (c - a)` of face `f`: twice its area times its unit normal.
@@ -82,10 +75,9 @@ impl Mesh {
         if self.positions.is_empty() {
             return (Vec3::ZERO, Vec3::ZERO);
         }
-        self.positions.iter().fold(
-            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        )
+        self.positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
     }
 
     /// The largest side of the bounding box, in mesh units: the length that the model scale
@@ -97,9 +89,7 @@ impl Mesh {
 
     /// Total surface area, in mesh units^2.
     pub fn area(&self) -> f64 {
-        (0..self.triangles.len())
-            .map(|f| self.face_area(f) as f64)
-            .sum()
+        (0..self.triangles.len()).map(|f| self.face_area(f) as f64).sum()
     }
 
     /// Averages per-face values to vertices, weighting each face by its area (Mertens §3.2:
@@ -115,9 +105,6 @@ impl Mesh {
                 weight[v as usize] += a;
             }
         }
-        sum.iter()
-            .zip(&weight)
-            .map(|(s, w)| if *w > 0.0 { *s / *w } else { Vec3::ZERO })
-            .collect()
+        sum.iter().zip(&weight).map(|(s, w)| if *w > 0.0 { *s / *w } else { Vec3::ZERO }).collect()
     }
 }

@@ -9,16 +9,10 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// Per-face `B` (same units as the irradiance) for per-face irradiance `face_irradiance`.
-pub fn solve(
-    mesh: &Mesh,
-    dipole: &Dipole,
-    face_irradiance: &[Rgb],
-    opts: &FormFactorOptions,
-) -> Vec<Rgb> {
+pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Vec<Rgb> {
     assert_eq!(face_irradiance.len(), mesh.triangles.len());
-    let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len())
-        .map(|f| mesh.corners(f).map(|p| p.as_dvec3()))
-        .collect();
+    let tris: Vec<[DVec3; 3]> =
+        (0..mesh.triangles.len()).map(|f| mesh.corners(f).map(|p| p.as_dvec3())).collect();
     (0..tris.len())
         .into_par_iter()
         .map(|o| {
