@@ -2,57 +2,327 @@
 //! `F(A, x_o) = ∫_A R_d(x_i, x_o) dx_i`, with the dipole placed at the receiver `x_o`
 //! (the "inverse interpretation" of §4) and the area integral reduced to the polygon's edges.
 //!
-//! (Stub: a one-point estimate until the semi-analytic integration lands.)
+//! For one source `d` of the dipole (depth/height `z`, transport coefficient `σ = sigma_tr`) the
+//! area integral of eq. (8), `I = ∫_A z (1 + σs) e^{-σs} / s^3 dx`, is written in polar
+//! coordinates around `d'`, the orthogonal projection of `d` onto the polygon's plane (height
+//! `h = |d - d'|`). The radial integral is analytic (eq. 10), which leaves, per edge `e` with
+//! signed angle `Δθ_e` seen from `d'`,
+//!
+//! ```text
+//! I = z Σ_e [ Δθ_e e^{-σh}/h  -  sign_e ∫_e e^{-σ s(θ)}/s(θ) |dθ| ]      (I1 - I2, eqs. 10-13)
+//! ```
+//!
+//! `Σ_e Δθ_e` is `2π` when `d'` is inside the polygon, `0` outside (and the interior angle when
+//! `d'` lies on the boundary), so the I1 terms need one `atan2` per edge. The I2 integral along
+//! an edge, `z R ∫ e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (eq. 13), is split recursively into
+//! segments under condition (19) (`L / r_0 < ratio`, `σ L < limit`) as in the paper, but each
+//! segment is integrated with 3-point Gauss-Legendre instead of the paper's one-term Taylor
+//! expansion (17): that expansion is the midpoint rule and errs by up to 16% on Mertens' own
+//! figure 3 set-up, while Gauss-Legendre on the same kind of segments errs by well under 0.1%.
+//!
+//! Signs follow the signed-angle formulation, which is equivalent to the paper's "back facing
+//! edges count positive, front facing negative" rule and works for any planar polygon (convex
+//! or not) in either winding: angles are measured around the polygon's own (Newell) normal.
+//!
+//! Numerical choices, each for robustness:
+//! * When `d'` lies close to an edge's supporting line (`R ≪ L`), the `1/(R²+t²)` factor of the
+//!   I2 integrand is a narrow spike around the foot point `t = 0`. The `L / r_0` condition then
+//!   bisects the segment holding the foot point about `log2(L/R)` times, each level accepting
+//!   its outer half at once, so the cost grows only logarithmically. (Integrating in
+//!   `φ = atan(t/R)` instead absorbs the spike, but moves the branch points `t = ±iS` of
+//!   `e^{-σs}/s` to within `R/S` of the ends `φ = ±π/2`, which costs accuracy; it is used only
+//!   for a segment at [`MAX_DEPTH`], where it is exact in the limit `R → 0`.)
+//! * `d'` exactly on an edge's line (`R = 0`): the triangle `(d', a, b)` has zero area and that
+//!   edge contributes nothing (the limit of `I1 - I2` as `R → 0` is 0 from both sides).
+//! * Source (nearly) in the polygon's plane (`h → 0`): the true integral diverges like `1/h`
+//!   when `d'` is inside the polygon (the dipole model breaks down there), so `h` is clamped to
+//!   [`HEIGHT_FLOOR`]` · z`. When `d'` is outside, the angle sum is snapped to exactly 0 and the
+//!   finite result is the difference of the I2 terms, with no `1/h` cancellation.
+//! * Degenerate polygons (fewer than 3 vertices, zero area) and non-finite input give 0;
+//!   round-off below 0 is clamped to 0. Never NaN.
+//!
+//! Everything is `f64`, allocation free and deterministic (a fixed explicit stack for the
+//! recursive subdivision).
 
 use crate::bssrdf::Dipole;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
+use std::f64::consts::{PI, TAU};
 
 pub mod montecarlo;
 
-/// Options of the semi-analytic integration.
-#[derive(Clone, Copy, Debug)]
+/// Smallest height of a dipole source above the polygon's plane, relative to its `z`
+/// (`h ≥ HEIGHT_FLOOR · z`). Only matters when a source lies (almost) in the plane of the
+/// polygon, where the integral over a polygon containing `d'` diverges like `1/h`.
+pub const HEIGHT_FLOOR: f64 = 1e-6;
+
+/// Polygons whose doubled area is below `DEGENERATE_AREA · (longest edge)²` count as zero area.
+const DEGENERATE_AREA: f64 = 1e-12;
+
+/// Deepest recursive bisection of one edge (reached only when `d'` is within `2^-60 L` of the
+/// edge's line); a segment at this depth is integrated in `φ = atan(t/R)` as it is.
+const MAX_DEPTH: u32 = 60;
+
+/// Angle sums within this distance (radians) of a multiple of `2π` are snapped to it.
+const WINDING_SNAP: f64 = 1e-7;
+
+/// 3-point Gauss-Legendre nodes on `[-1, 1]` (±√(3/5) and 0) and their weights.
+const GL_X: f64 = 0.774_596_669_241_483_4;
+const GL_W_OUTER: f64 = 5.0 / 9.0;
+const GL_W_CENTER: f64 = 8.0 / 9.0;
+
+/// Options of the semi-analytic integration (the segment conditions of Mertens eq. 19).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FormFactorOptions {
-    /// Largest allowed `L / r_0` of an edge segment before it is split (Mertens eq. 19 uses 2/5).
+    /// Largest allowed `L / r_0` of an edge segment before it is split, where `L` is the
+    /// segment's length and `r_0` the distance from `d'` to its midpoint (unitless, > 0).
+    /// Mertens eq. (19) uses 2/5 with a one-term Taylor rule; with 3-point Gauss-Legendre per
+    /// segment 4/5 errs by < 0.05% (the error falls ~64x per halving). Default 0.8.
     pub max_segment_ratio: f64,
+    /// Largest allowed `σ L` of a segment (unitless, > 0; `f64::INFINITY` disables the test).
+    /// Mertens eq. (19) uses 2/5 and notes it hardly matters for translucent materials; it
+    /// keeps `e^{-σs}` well resolved for opaque ones. Default 0.8.
+    pub max_segment_sigma: f64,
 }
 
 impl Default for FormFactorOptions {
     fn default() -> Self {
-        FormFactorOptions { max_segment_ratio: 0.8 }
+        FormFactorOptions { max_segment_ratio: 0.8, max_segment_sigma: 0.8 }
     }
 }
 
-/// `F(A, x_o)` per channel for the planar polygon `polygon` (vertices in order, any winding),
-/// seen from the receiver `x_o` with unit normal `n_o`. Mesh units; the result is unitless.
+/// `F(A, x_o)` per channel for the planar polygon `polygon` (vertices in order, any winding,
+/// at least 3), seen from the receiver `x_o` with unit normal `n_o`. Mesh units; the result is
+/// unitless (the fraction of irradiance `E` on `A` that leaves as radiosity `B` at `x_o`).
+///
+/// Finite and non-negative for every input (0 for degenerate or non-finite input).
 pub fn form_factor(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
     dipole: &Dipole,
-    _opts: &FormFactorOptions,
+    opts: &FormFactorOptions,
 ) -> [f64; 3] {
-    point_sample(polygon, x_o, n_o, dipole)
+    form_factor_counted(polygon, x_o, n_o, dipole, opts).0
 }
 
-/// One-sample estimate: `R_d` from the polygon's centroid times its area.
+/// [`form_factor`] plus the number of edge segments it integrated (over all six dipole
+/// sources and all edges): the paper's cost measure (Mertens fig. 4 calls them "samples").
+pub fn form_factor_counted(
+    polygon: &[DVec3],
+    x_o: DVec3,
+    n_o: DVec3,
+    dipole: &Dipole,
+    opts: &FormFactorOptions,
+) -> ([f64; 3], usize) {
+    let n = polygon.len();
+    if n < 3 || !x_o.is_finite() || !n_o.is_finite() {
+        return ([0.0; 3], 0);
+    }
+    let n_o = n_o.normalize_or_zero();
+    if n_o == DVec3::ZERO {
+        return ([0.0; 3], 0);
+    }
+
+    // Plane of the polygon: origin at the vertex average, normal from Newell's formula (the
+    // plain cross product for triangles), so a slightly non-planar polygon is projected.
+    let (origin, twice_area_vec, max_edge2) = if n == 3 {
+        let (a, b, c) = (polygon[0], polygon[1], polygon[2]);
+        let m = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+        ((a + b + c) / 3.0, (b - a).cross(c - a), m)
+    } else {
+        let origin = polygon.iter().copied().sum::<DVec3>() / n as f64;
+        let mut nv = DVec3::ZERO;
+        let mut m = 0.0f64;
+        for i in 0..n {
+            let a = polygon[i] - origin;
+            let b = polygon[(i + 1) % n] - origin;
+            nv += a.cross(b);
+            m = m.max((b - a).length_squared());
+        }
+        (origin, nv, m)
+    };
+    let twice_area = twice_area_vec.length();
+    if !twice_area.is_finite() || !origin.is_finite() || twice_area <= DEGENERATE_AREA * max_edge2 {
+        return ([0.0; 3], 0);
+    }
+    let n_p = twice_area_vec / twice_area;
+    let (e1, e2) = n_p.any_orthonormal_pair();
+    let to_2d = |v: DVec3| {
+        let d = v - origin;
+        DVec2::new(d.dot(e1), d.dot(e2))
+    };
+
+    // The six point sources: (real, virtual) per channel.
+    let mut src = [Source::default(); 6];
+    for c in 0..3 {
+        let sigma = dipole.sigma_tr[c];
+        for (k, pos, z) in [
+            (2 * c, x_o - dipole.z_r[c] * n_o, dipole.z_r[c]),
+            (2 * c + 1, x_o + dipole.z_v[c] * n_o, dipole.z_v[c]),
+        ] {
+            let rel = pos - origin;
+            let h = rel.dot(n_p).abs().max(HEIGHT_FLOOR * z);
+            src[k] = Source {
+                d: DVec2::new(rel.dot(e1), rel.dot(e2)),
+                h2: h * h,
+                h,
+                z,
+                sigma,
+                theta: 0.0,
+                i2: 0.0,
+            };
+        }
+    }
+
+    let ratio2 = opts.max_segment_ratio * opts.max_segment_ratio;
+    let sigma_limit = opts.max_segment_sigma;
+    let mut segments = 0usize;
+    let mut b2 = to_2d(polygon[0]);
+    for i in 0..n {
+        let a2 = b2;
+        b2 = to_2d(polygon[(i + 1) % n]);
+        let e = b2 - a2;
+        let len = e.length();
+        if len <= 0.0 {
+            continue;
+        }
+        let u = e / len;
+        for s in src.iter_mut() {
+            let w = a2 - s.d;
+            // Signed distance from d' to the edge's line: > 0 when (d', a, b) winds
+            // counter-clockwise around n_p, i.e. when the edge is a back-facing one.
+            let r_s = w.perp_dot(u);
+            if r_s == 0.0 {
+                continue;
+            }
+            let t_a = w.dot(u);
+            let t_b = t_a + len;
+            let r2 = r_s * r_s;
+            s.theta += (len * r_s).atan2(r2 + t_a * t_b);
+            let (i2, segs) = edge_i2(r_s.abs(), r2 + s.h2, s.sigma, t_a, t_b, ratio2, sigma_limit);
+            s.i2 += i2.copysign(r_s);
+            segments += segs;
+        }
+    }
+
+    let mut f = [0.0; 3];
+    for (k, s) in src.iter().enumerate() {
+        // Snap the angle sum to the winding number (0 outside, 2π inside): removes the
+        // round-off of ~1e-16 · z/h that would otherwise survive when h is tiny.
+        let k_wind = (s.theta / TAU).round();
+        let theta = if (s.theta - k_wind * TAU).abs() < WINDING_SNAP { k_wind * TAU } else { s.theta };
+        let i1 = theta * (-s.sigma * s.h).exp() / s.h;
+        let c = k / 2;
+        f[c] += s.z * (i1 - s.i2);
+    }
+    let f = std::array::from_fn(|c| {
+        let v = dipole.alpha_prime[c] / (4.0 * PI) * f[c];
+        if v.is_finite() { v.max(0.0) } else { 0.0 }
+    });
+    (f, segments)
+}
+
+/// One point source of the dipole, in the polygon's 2D frame, with its running sums.
+#[derive(Clone, Copy, Default)]
+struct Source {
+    /// Projection `d'` onto the polygon's plane (2D plane coordinates, mesh units).
+    d: DVec2,
+    /// Height above the plane (floored), and its square.
+    h: f64,
+    h2: f64,
+    /// `z_r` or `z_v` (mesh units) and `sigma_tr` (per mesh unit).
+    z: f64,
+    sigma: f64,
+    /// Running sum of the signed edge angles (radians) and of the signed I2 terms (over `z`).
+    theta: f64,
+    i2: f64,
+}
+
+/// `∫_{t_a}^{t_b} R e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (Mertens eq. 13 without `z`) for
+/// `R > 0`, by recursive bisection under condition (19) and 3-point Gauss-Legendre per segment.
+/// Returns the integral and the number of segments.
+#[inline]
+fn edge_i2(r: f64, s2: f64, sigma: f64, t_a: f64, t_b: f64, ratio2: f64, sigma_limit: f64) -> (f64, usize) {
+    let r2 = r * r;
+    // Depth-first bisection with an explicit stack: one slot per level is enough.
+    let mut stack = [(0.0f64, 0.0f64, 0u32); MAX_DEPTH as usize + 2];
+    let mut top = 1;
+    stack[0] = (t_a, t_b, 0);
+    let mut sum = 0.0;
+    let mut segments = 0;
+    while top > 0 {
+        top -= 1;
+        let (t1, t2, depth) = stack[top];
+        let l = t2 - t1;
+        let half = 0.5 * l;
+        let t0 = t1 + half;
+        let l2 = l * l;
+        let sigma_ok = sigma * l <= sigma_limit;
+        if sigma_ok && l2 <= ratio2 * (r2 + t0 * t0) {
+            // Smooth in t: Gauss-Legendre on the eq. (13) integrand.
+            let f = |t: f64| {
+                let s = (s2 + t * t).sqrt();
+                (-sigma * s).exp() / (s * (r2 + t * t))
+            };
+            let dt = half * GL_X;
+            sum += r * half * (GL_W_CENTER * f(t0) + GL_W_OUTER * (f(t0 - dt) + f(t0 + dt)));
+            segments += 1;
+        } else if depth >= MAX_DEPTH {
+            // Tiny segment at the foot point of an edge whose line passes (almost) through d':
+            // integrate in φ = atan(t/R), where dφ = R dt / (R² + t²) absorbs the spike.
+            let p1 = (t1 / r).atan();
+            let p2 = (t2 / r).atan();
+            let hp = 0.5 * (p2 - p1);
+            let p0 = p1 + hp;
+            let g = |p: f64| {
+                let t = r * p.tan();
+                let s = (s2 + t * t).sqrt();
+                (-sigma * s).exp() / s
+            };
+            let dp = hp * GL_X;
+            sum += hp * (GL_W_CENTER * g(p0) + GL_W_OUTER * (g(p0 - dp) + g(p0 + dp)));
+            segments += 1;
+        } else {
+            stack[top] = (t0, t2, depth + 1);
+            stack[top + 1] = (t1, t0, depth + 1);
+            top += 2;
+        }
+    }
+    (sum, segments)
+}
+
+/// One-sample estimate: `R_d` from the polygon's centroid times its area (the far-field
+/// approximation used for distant links, Mertens §4.2).
 pub fn point_sample(polygon: &[DVec3], x_o: DVec3, n_o: DVec3, dipole: &Dipole) -> [f64; 3] {
     let (centroid, area) = polygon_centroid_area(polygon);
     let rd = dipole.rd(x_o, n_o, centroid);
     rd.map(|v| v * area)
 }
 
-/// Area centroid and area of a planar polygon.
+/// Area centroid and area (mesh units², ≥ 0) of a planar polygon (vertices in order, any
+/// winding, convex or not). Fewer than 3 vertices or zero area give the first vertex (or the
+/// origin) and 0.
 pub fn polygon_centroid_area(polygon: &[DVec3]) -> (DVec3, f64) {
-    let mut area_vec = DVec3::ZERO;
-    let mut weighted = DVec3::ZERO;
-    let mut total = 0.0;
-    for i in 1..polygon.len().saturating_sub(1) {
-        let c = (polygon[i] - polygon[0]).cross(polygon[i + 1] - polygon[0]);
-        area_vec += c;
-        let a = c.length() * 0.5;
-        weighted += a * (polygon[0] + polygon[i] + polygon[i + 1]) / 3.0;
-        total += a;
+    let n = polygon.len();
+    if n < 3 {
+        return (polygon.first().copied().unwrap_or_default(), 0.0);
     }
-    let _ = area_vec;
-    if total > 0.0 { (weighted / total, total) } else { (polygon.first().copied().unwrap_or_default(), 0.0) }
+    let p0 = polygon[0];
+    // Fan triangles weighted by their *signed* area along the polygon's normal, so concave
+    // polygons come out right.
+    let mut area_vec = DVec3::ZERO;
+    for i in 1..n - 1 {
+        area_vec += (polygon[i] - p0).cross(polygon[i + 1] - p0);
+    }
+    let twice_area = area_vec.length();
+    if twice_area <= 0.0 || !twice_area.is_finite() {
+        return (p0, 0.0);
+    }
+    let normal = area_vec / twice_area;
+    let mut weighted = DVec3::ZERO;
+    for i in 1..n - 1 {
+        let a = (polygon[i] - p0).cross(polygon[i + 1] - p0).dot(normal);
+        weighted += a * (p0 + polygon[i] + polygon[i + 1]);
+    }
+    (weighted / (3.0 * twice_area), 0.5 * twice_area)
 }
