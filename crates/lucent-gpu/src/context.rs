@@ -102,7 +102,8 @@ impl GpuContext {
     /// As [`GpuContext::new`], also enabling those of `optional_features` the adapter supports
     /// (check `device.features()` before relying on one).
     pub fn with_features(optional_features: wgpu::Features) -> Result<GpuContext, GpuError> {
-        let order: Vec<wgpu::Backends> = match wgpu::Backends::from_env() {
+        let from_env = wgpu::Backends::from_env();
+        let order: Vec<wgpu::Backends> = match from_env {
             Some(b) if b.is_empty() => {
                 return Err(GpuError::BadBackendEnv {
                     value: std::env::var("WGPU_BACKEND").unwrap_or_default(),
@@ -115,6 +116,13 @@ impl GpuContext {
         let mut tried = Vec::new();
         for backends in order {
             if !compiled.intersects(backends) {
+                if from_env.is_some() {
+                    tried.push(format!(
+                        "{}: not built into this binary, which has {}",
+                        backend_names(backends),
+                        backend_names(compiled)
+                    ));
+                }
                 continue;
             }
             let name = backend_names(backends);
@@ -159,7 +167,7 @@ impl GpuContext {
             }
         }
         if tried.is_empty() {
-            tried.push(format!("none of the requested backends are compiled in ({compiled:?})"));
+            tried.push(format!("no backend of {} is built into this binary", backend_names(compiled)));
         }
         Err(GpuError::NoAdapter { tried: tried.join("; ") })
     }

@@ -1,13 +1,22 @@
 //! # lucent-gpu
 //!
 //! Everything lucent does on the GPU, through wgpu: choosing an adapter that exists (Vulkan,
-//! else GL; `WGPU_BACKEND` honoured), the per-vertex radiance raster with tone mapping, and
-//! read-back of offscreen images.
+//! else GL; `WGPU_BACKEND` honoured), the per-vertex radiance raster with tone mapping
+//! (Mertens 2003 §5.4), and read-back of offscreen images.
 //!
 //! * [`context`]: [`GpuContext`] (device, queue, adapter) and the shared texture formats.
 //! * [`readback`]: textures and buffers back to the CPU (row padding handled).
+//! * [`camera`]: an orbit camera framing a bounding sphere.
+//! * [`mesh_pass`]: per-vertex `B / pi` times the per-pixel exit Fresnel factor, highlights and
+//!   the environment-reflection hook, into an HDR target.
+//! * [`tonemap`]: exposure, gamma curve or ACES fit, background.
+//! * [`offscreen`]: the two passes into offscreen targets and read-back to an image.
 
+pub mod camera;
 pub mod context;
+pub mod mesh_pass;
+pub mod offscreen;
 pub mod readback;
+pub mod tonemap;
 
 pub use context::{DEPTH_FORMAT, GpuContext, GpuError, HDR_FORMAT, LDR_FORMAT};

@@ -66,7 +66,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.05)]
     pub scale: f64,
     /// A light: `point:x,y,z` (mesh units) or `dir:x,y,z` (direction the light travels).
-    /// Repeatable. Default: a point light behind and above the object.
+    /// Repeatable. White; a point light gives irradiance 1 at the distance of the object's
+    /// centre, a directional light irradiance 1. Default: a point light behind and above.
     #[arg(long)]
     pub light: Vec<String>,
     /// Image width in pixels.
@@ -84,6 +85,33 @@ pub struct RenderArgs {
     /// Exposure multiplier applied to radiance before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// Tone curve: `gamma` (clamp, then the gamma curve, as in the paper) or `aces` (a filmic
+    /// roll-off of highlights, then the gamma curve).
+    #[arg(long, value_enum, default_value_t = ToneCurve::Gamma)]
+    pub tonemap: ToneCurve,
+    /// Display gamma of the tone curve.
+    #[arg(long, default_value_t = 2.2)]
+    pub gamma: f32,
+    /// Camera yaw about the vertical axis, degrees (0: looking along -z; lights default behind).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub yaw: f32,
+    /// Camera pitch above the horizon, degrees (-89..89).
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    pub pitch: f32,
+    /// Camera distance from the object's centre in bounding-sphere radii (> 1); by default the
+    /// object just fits the image.
+    #[arg(long)]
+    pub distance: Option<f32>,
+}
+
+/// Tone curve of `lucent render`.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ToneCurve {
+    /// Exposure, clamp to 0..1, gamma curve (Mertens 2003 §5.4).
+    #[default]
+    Gamma,
+    /// Exposure, Narkowicz's ACES filmic fit, gamma curve.
+    Aces,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -1,0 +1,456 @@
+//! The mesh pass (Mertens 2003 §5.4): a triangle mesh with per-vertex diffuse radiance `B / pi`
+//! from the solver, Gouraud interpolated, times the exit Fresnel transmittance
+//! `F_t(eta, w_o)` evaluated per pixel (`L = F_t(eta, w_o) B / pi`, eq. 3). Optional additions
+//! in the same pass: a Fresnel-weighted normalised Blinn-Phong highlight for the lights and a
+//! Fresnel-weighted reflection of an equirectangular environment map (the paper's "reflection
+//! mapping or phong shading").
+//!
+//! Output is HDR radiance in an [`HDR_FORMAT`](crate::HDR_FORMAT) target with alpha = coverage;
+//! [`crate::tonemap`] turns it into an image.
+//!
+//! Bind groups: 0 = [`MeshUniforms`] (camera and shading), 1 = environment map and sampler.
+
+use crate::camera::CameraView;
+use crate::context::{DEPTH_FORMAT, GpuContext, GpuError};
+use glam::Vec3;
+use lucent_core::Rgb;
+use lucent_core::irradiance::Light;
+use wgpu::util::DeviceExt;
+
+/// Most lights the highlight loop reads (more are ignored, with a log line).
+pub const MAX_LIGHTS: usize = 8;
+
+/// A mesh on the GPU: geometry (positions, normals), per-vertex radiance and indices, in
+/// separate buffers so the interactive modes can update radiance (every frame) and geometry
+/// (deformation) independently.
+pub struct GpuMesh {
+    geometry: wgpu::Buffer,
+    radiance: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    vertex_count: u32,
+    /// Bounding-sphere centre, mesh units (for framing).
+    pub center: Vec3,
+    /// Bounding-sphere radius, mesh units.
+    pub radius: f32,
+}
+
+/// Geometry vertex: position and unit normal, mesh units.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GeometryVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+}
+
+impl GpuMesh {
+    /// Uploads a mesh. `positions`, `normals` and `radiance` (per-vertex `B / pi`, HDR, >= 0)
+    /// have one entry per vertex; `triangles` index into them.
+    pub fn new(
+        ctx: &GpuContext,
+        positions: &[Vec3],
+        normals: &[Vec3],
+        radiance: &[Rgb],
+        triangles: &[[u32; 3]],
+    ) -> Result<GpuMesh, GpuError> {
+        let n = positions.len();
+        if normals.len() != n || radiance.len() != n {
+            return Err(GpuError::InvalidInput(format!(
+                "mesh upload: {} positions, {} normals, {} radiance values (must be equal)",
+                n,
+                normals.len(),
+                radiance.len()
+            )));
+        }
+        if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
+            return Err(GpuError::InvalidInput(format!(
+                "mesh upload: triangle {t:?} indexes past the {n} vertices"
+            )));
+        }
+        if triangles.is_empty() {
+            return Err(GpuError::InvalidInput("mesh upload: no triangles".into()));
+        }
+        let geometry: Vec<GeometryVertex> = positions
+            .iter()
+            .zip(normals)
+            .map(|(p, nrm)| GeometryVertex { position: p.to_array(), normal: nrm.to_array() })
+            .collect();
+        let usage = wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST;
+        let geometry = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lucent mesh geometry"),
+            contents: bytemuck::cast_slice(&geometry),
+            usage,
+        });
+        let radiance = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lucent mesh radiance"),
+            contents: bytemuck::cast_slice(&flatten(radiance)),
+            usage,
+        });
+        let indices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lucent mesh indices"),
+            contents: bytemuck::cast_slice(triangles),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let (center, radius) = crate::camera::bounding_sphere(positions);
+        Ok(GpuMesh {
+            geometry,
+            radiance,
+            indices,
+            index_count: (triangles.len() * 3) as u32,
+            vertex_count: n as u32,
+            center,
+            radius,
+        })
+    }
+
+    /// Replaces the per-vertex radiance (`B / pi`), e.g. after a new solve.
+    pub fn update_radiance(&self, ctx: &GpuContext, radiance: &[Rgb]) -> Result<(), GpuError> {
+        if radiance.len() != self.vertex_count as usize {
+            return Err(GpuError::InvalidInput(format!(
+                "radiance update: {} values for {} vertices",
+                radiance.len(),
+                self.vertex_count
+            )));
+        }
+        ctx.queue.write_buffer(&self.radiance, 0, bytemuck::cast_slice(&flatten(radiance)));
+        Ok(())
+    }
+
+    /// Replaces positions and normals (deformation; same vertex count and connectivity).
+    /// The bounding sphere is not recomputed.
+    pub fn update_geometry(
+        &self,
+        ctx: &GpuContext,
+        positions: &[Vec3],
+        normals: &[Vec3],
+    ) -> Result<(), GpuError> {
+        if positions.len() != self.vertex_count as usize || normals.len() != positions.len() {
+            return Err(GpuError::InvalidInput(format!(
+                "geometry update: {} positions and {} normals for {} vertices",
+                positions.len(),
+                normals.len(),
+                self.vertex_count
+            )));
+        }
+        let geometry: Vec<GeometryVertex> = positions
+            .iter()
+            .zip(normals)
+            .map(|(p, n)| GeometryVertex { position: p.to_array(), normal: n.to_array() })
+            .collect();
+        ctx.queue.write_buffer(&self.geometry, 0, bytemuck::cast_slice(&geometry));
+        Ok(())
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+}
+
+fn flatten(v: &[Rgb]) -> Vec<[f32; 3]> {
+    v.iter().map(|c| c.to_array()).collect()
+}
+
+/// Shading parameters of the mesh pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shading {
+    /// Relative index of refraction of the material (unitless, 1..3); the Fresnel terms use it.
+    pub eta: f32,
+    /// Lights for the highlight, in mesh units (the same ones that gave the irradiance). At
+    /// most [`MAX_LIGHTS`] are used.
+    pub lights: Vec<Light>,
+    /// Scale of the Fresnel-weighted Blinn-Phong highlight; 0 disables it. Default 1 (the
+    /// physically weighted lobe).
+    pub specular: f32,
+    /// Blinn-Phong exponent (> 0). Default 64.
+    pub shininess: f32,
+    /// Scale of the Fresnel-weighted environment reflection; 0 (default) disables it. Has an
+    /// effect only after [`MeshPass::set_environment`].
+    pub environment: f32,
+}
+
+impl Default for Shading {
+    fn default() -> Self {
+        Shading { eta: 1.3, lights: Vec::new(), specular: 1.0, shininess: 64.0, environment: 0.0 }
+    }
+}
+
+/// GPU layout of `Uniforms` in `mesh.wgsl` (std140-compatible by construction: only vec4s).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct MeshUniforms {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 4],
+    params: [f32; 4],
+    counts: [u32; 4],
+    lights: [LightUniform; MAX_LIGHTS],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightUniform {
+    position: [f32; 4],
+    intensity: [f32; 4],
+}
+
+/// The mesh pipeline and its uniforms. Draws into a render pass whose colour target has the
+/// format and sample count given to [`MeshPass::new`] and whose depth target is
+/// [`DEPTH_FORMAT`].
+pub struct MeshPass {
+    pipeline: wgpu::RenderPipeline,
+    uniforms: wgpu::Buffer,
+    uniform_group: wgpu::BindGroup,
+    env_layout: wgpu::BindGroupLayout,
+    env_group: wgpu::BindGroup,
+    sampler: wgpu::Sampler,
+}
+
+impl MeshPass {
+    /// Builds the pipeline for colour targets of `color_format` with `sample_count` samples
+    /// (1 or 4).
+    pub fn new(
+        ctx: &GpuContext,
+        color_format: wgpu::TextureFormat,
+        sample_count: u32,
+    ) -> Result<MeshPass, GpuError> {
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("lucent mesh.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/mesh.wgsl").into()),
+        });
+        let uniform_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lucent mesh uniforms"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<MeshUniforms>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let env_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lucent mesh environment"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lucent mesh"),
+            bind_group_layouts: &[Some(&uniform_layout), Some(&env_layout)],
+            immediate_size: 0,
+        });
+        let buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<GeometryVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: 12,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![2 => Float32x3],
+            }),
+        ];
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lucent mesh"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &buffers,
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                // Open meshes show their inside; the shader flips the normal there.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: sample_count, ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: color_format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lucent mesh uniforms"),
+            size: std::mem::size_of::<MeshUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lucent mesh uniforms"),
+            layout: &uniform_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("lucent environment"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let black = EnvironmentMap::from_rgba_f32(ctx, 1, 1, &[[0.0; 4]])?;
+        let env_group = env_bind_group(device, &env_layout, &black, &sampler);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Device {
+                during: "creating the mesh pipeline".into(),
+                message: e.to_string(),
+            });
+        }
+        Ok(MeshPass { pipeline, uniforms, uniform_group, env_layout, env_group, sampler })
+    }
+
+    /// Sets the environment map the reflection samples (see [`Shading::environment`]).
+    pub fn set_environment(&mut self, ctx: &GpuContext, env: &EnvironmentMap) {
+        self.env_group = env_bind_group(&ctx.device, &self.env_layout, env, &self.sampler);
+    }
+
+    /// Writes the camera and shading uniforms for the next [`MeshPass::draw`].
+    pub fn prepare(&self, ctx: &GpuContext, camera: &CameraView, shading: &Shading) {
+        if shading.lights.len() > MAX_LIGHTS {
+            log::warn!("{} lights given; the highlight uses the first {MAX_LIGHTS}", shading.lights.len());
+        }
+        let mut lights = [LightUniform { position: [0.0; 4], intensity: [0.0; 4] }; MAX_LIGHTS];
+        for (dst, l) in lights.iter_mut().zip(&shading.lights) {
+            *dst = match *l {
+                Light::Point { position, intensity } => LightUniform {
+                    position: position.extend(1.0).to_array(),
+                    intensity: intensity.extend(0.0).to_array(),
+                },
+                Light::Directional { direction, irradiance } => LightUniform {
+                    position: direction.extend(0.0).to_array(),
+                    intensity: irradiance.extend(0.0).to_array(),
+                },
+            };
+        }
+        let u = MeshUniforms {
+            view_proj: camera.view_proj.to_cols_array_2d(),
+            eye: camera.eye.extend(1.0).to_array(),
+            params: [
+                shading.eta,
+                shading.specular.max(0.0),
+                shading.shininess.max(1e-3),
+                shading.environment.max(0.0),
+            ],
+            counts: [shading.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            lights,
+        };
+        ctx.queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+    }
+
+    /// Records the draw of `mesh` into `pass`.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &GpuMesh) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.uniform_group, &[]);
+        pass.set_bind_group(1, &self.env_group, &[]);
+        pass.set_vertex_buffer(0, mesh.geometry.slice(..));
+        pass.set_vertex_buffer(1, mesh.radiance.slice(..));
+        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+    }
+}
+
+fn env_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    env: &EnvironmentMap,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("lucent mesh environment"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&env.view) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(sampler) },
+        ],
+    })
+}
+
+/// An equirectangular HDR environment map on the GPU (`Rgba16Float`, one mip). Direction
+/// `d` maps to `u = atan2(d.x, -d.z) / 2pi + 1/2`, `v = acos(d.y) / pi` (v = 0 is straight up).
+pub struct EnvironmentMap {
+    /// The texture.
+    pub texture: wgpu::Texture,
+    /// A view of it.
+    pub view: wgpu::TextureView,
+}
+
+impl EnvironmentMap {
+    /// Uploads `width * height` RGBA radiance texels (rows top first), converted to f16.
+    pub fn from_rgba_f32(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        texels: &[[f32; 4]],
+    ) -> Result<EnvironmentMap, GpuError> {
+        ctx.check_size(width, height)?;
+        if texels.len() != (width * height) as usize {
+            return Err(GpuError::InvalidInput(format!(
+                "environment map: {} texels for {width}x{height}",
+                texels.len()
+            )));
+        }
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lucent environment"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let bytes: Vec<u8> =
+            texels.iter().flatten().flat_map(|v| half::f16::from_f32(*v).to_bits().to_le_bytes()).collect();
+        ctx.queue.write_texture(
+            texture.as_image_copy(),
+            &bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(width * 8),
+                rows_per_image: Some(height),
+            },
+            size,
+        );
+        let view = texture.create_view(&Default::default());
+        Ok(EnvironmentMap { texture, view })
+    }
+}

@@ -1,0 +1,126 @@
+// Mesh pass (Mertens 2003 §5.4): Gouraud-interpolated per-vertex diffuse radiance B/pi, times
+// the exit Fresnel transmittance F_t(eta, w_o) per pixel (eq. 3), plus a Fresnel-weighted
+// Blinn-Phong highlight for the lights and an optional Fresnel-weighted environment reflection.
+// Output: HDR radiance in rgb, coverage 1 in alpha (the tone-map pass composites the background
+// where alpha is 0).
+
+const PI: f32 = 3.14159265358979;
+const MAX_LIGHTS: u32 = 8u;
+
+struct Light {
+    // xyz: position (mesh units) when w = 1; direction the light travels when w = 0.
+    position: vec4<f32>,
+    // rgb: radiant intensity (point, W/sr) or irradiance (directional, W/m^2).
+    intensity: vec4<f32>,
+};
+
+struct Uniforms {
+    view_proj: mat4x4<f32>,
+    // xyz: eye position, mesh units.
+    eye: vec4<f32>,
+    // x: eta (relative index), y: specular strength (0 = none), z: Blinn-Phong exponent,
+    // w: environment reflection strength (0 = none).
+    params: vec4<f32>,
+    // x: number of lights in use (<= MAX_LIGHTS).
+    counts: vec4<u32>,
+    lights: array<Light, MAX_LIGHTS>,
+};
+
+@group(0) @binding(0) var<uniform> u: Uniforms;
+// Environment hook: an equirectangular HDR map (1x1 black until one is set).
+@group(1) @binding(0) var env_map: texture_2d<f32>;
+@group(1) @binding(1) var env_sampler: sampler;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    // B / pi: diffuse exitant radiance before the exit Fresnel factor (HDR).
+    @location(2) radiance: vec3<f32>,
+};
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) radiance: vec3<f32>,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = u.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.radiance = v.radiance;
+    return o;
+}
+
+// Exact unpolarised dielectric Fresnel reflectance (same formula as lucent-core's
+// bssrdf::fresnel_dielectric), for a direction at cosine cos_i to the normal.
+fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
+    let cos_i = clamp(cos_i_in, 0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0) {
+        return 1.0;
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let r_par = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (r_par * r_par + r_perp * r_perp);
+}
+
+fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
+    let u_ = atan2(d.x, -d.z) / (2.0 * PI) + 0.5;
+    let v_ = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    return vec2<f32>(u_, v_);
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let eta = u.params.x;
+    var n = normalize(in.normal);
+    if (!front) {
+        n = -n;
+    }
+    let v = normalize(u.eye.xyz - in.world);
+    let cos_o = dot(n, v);
+    // L = F_t(eta, w_o) B / pi (Mertens eq. 3, §5.4).
+    var l = (1.0 - fresnel_dielectric(cos_o, eta)) * max(in.radiance, vec3<f32>(0.0));
+
+    // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the
+    // half vector (the light the surface reflects is the light it does not transmit).
+    let spec = u.params.y;
+    let shininess = u.params.z;
+    if (spec > 0.0 && cos_o > 0.0) {
+        let count = min(u.counts.x, MAX_LIGHTS);
+        for (var i = 0u; i < count; i = i + 1u) {
+            let light = u.lights[i];
+            var wi: vec3<f32>;
+            var e: vec3<f32>;
+            if (light.position.w > 0.5) {
+                let d = light.position.xyz - in.world;
+                let d2 = max(dot(d, d), 1e-12);
+                wi = d * inverseSqrt(d2);
+                e = light.intensity.rgb / d2;
+            } else {
+                wi = -normalize(light.position.xyz);
+                e = light.intensity.rgb;
+            }
+            let cos_i = dot(n, wi);
+            if (cos_i > 0.0) {
+                let h = normalize(wi + v);
+                let lobe = (shininess + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), shininess);
+                l += spec * fresnel_dielectric(dot(h, v), eta) * lobe * cos_i * e;
+            }
+        }
+    }
+
+    // Environment reflection hook, weighted by F_r(eta, w_o) like the paper's reflection map.
+    let env = u.params.w;
+    if (env > 0.0 && cos_o > 0.0) {
+        let r = reflect(-v, n);
+        let c = textureSampleLevel(env_map, env_sampler, equirect_uv(r), 0.0).rgb;
+        l += env * fresnel_dielectric(cos_o, eta) * c;
+    }
+    return vec4<f32>(l, 1.0);
+}
