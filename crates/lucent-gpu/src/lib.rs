@@ -11,9 +11,11 @@
 //!   the environment-reflection hook, into an HDR target.
 //! * [`tonemap`]: exposure, gamma curve or ACES fit, background.
 //! * [`offscreen`]: the two passes into offscreen targets and read-back to an image.
+//! * [`htsm`]: Heterogeneous Translucent Shadow Maps (Shopf 2007).
 
 pub mod camera;
 pub mod context;
+pub mod htsm;
 pub mod mesh_pass;
 pub mod offscreen;
 pub mod readback;

@@ -19,9 +19,9 @@ pub struct Veins {
     pub scale: f32,
     /// Turbulence amplitude, radians of phase per unit turbulence. Default 4.
     pub turbulence: f32,
-    /// Exponent that thins the veins: density rises as `(1 - |sin|)^sharpness`. Default 10.
+    /// Exponent that thins the veins: density rises as `(1 - |sin|)^sharpness`. Default 4.
     pub sharpness: f32,
-    /// Density between the veins, in `[0, 1]`. Default 0.05.
+    /// Density between the veins, in `[0, 1]`. Default 0.02.
     pub background: f32,
 }
 
@@ -31,8 +31,8 @@ impl Default for Veins {
             seed: 7,
             scale: 3.0,
             turbulence: 4.0,
-            sharpness: 10.0,
-            background: 0.05,
+            sharpness: 4.0,
+            background: 0.02,
         }
     }
 }

@@ -1,0 +1,447 @@
+//! Heterogeneous Translucent Shadow Maps (Shopf 2007, "Interactive Rendering of Heterogeneous
+//! Translucent Objects", chapter 4).
+//!
+//! A translucent object is a mesh plus a [`DensityVolume`] over its bounding box (§4.2). Each
+//! frame runs four passes ([`passes`]):
+//!
+//! 1. **Reference images** (§4.3, fig. 4.2): the mesh seen from the light into three images, the
+//!    irradiance transmitted through the surface (Schlick's Fresnel) times the light colour, the
+//!    3D texture coordinate of the lit surface (its position in the volume's `[0,1]^3` box) and
+//!    its normal. Alpha holds coverage. A perspective view for a point light, an orthographic
+//!    view fitted to the bounding sphere for a distant one.
+//! 2. **Mips** (§4.3.1): a full chain for each image by 2x2 averaging; the texture coordinate and
+//!    normal are normalised by coverage when sampled, so they average covered texels only.
+//! 3. **Camera pass** (§4.3.1-§4.3.5, table 4.1): for each visible point, `n` = 1, 5, 9 or 13
+//!    samples of the reference images in the hierarchical pattern of fig. 4.3 (the centre at
+//!    level 0, then rings of 4 at doubling radius, one mip level coarser per ring); for each, a
+//!    `K`-step ray cast through the density texture from the point to the sample's lit surface
+//!    gives the absorption `alpha_i` (`sigma_at = sigma_a + density`, eq. 4.1), the ray length is
+//!    `D_i`, and a Henyey-Greenstein table gives the phase `f(theta_i)`. [`TransportModel`]
+//!    turns these into transmitted light; Lambert and Blinn-Phong shading are added on the lit
+//!    side.
+//! 4. **Tone mapping**: exposure and the sRGB curve to an 8-bit image.
+//!
+//! # Units
+//!
+//! *Object units*: mesh units divided by the mesh's largest bounding-box side, so a transport
+//! distance of 0.5 is half the object's size whatever its scale. Ray lengths `D_i`, the transport
+//! distance `T_d`, the kernel radius and the density scale (per object unit) use them.
+//!
+//! # Limits (Shopf §5.4)
+//!
+//! The space between a lit and a visible surface is assumed to be inside the object (convexity):
+//! concave objects absorb light in the gaps. Transport is forward only (no back-scattering).
+
+pub mod passes;
+
+use glam::{Mat4, Vec3};
+use lucent_core::irradiance::Light;
+use lucent_core::mesh::Mesh;
+use lucent_core::volume::DensityVolume;
+
+/// The reference images' texel format: HDR irradiance and texture coordinates need more than
+/// 8 bits, and Rgba32Float is neither filterable nor renderable everywhere (lavapipe, GL).
+pub const REFERENCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The density texture's format: 8 bits per voxel is the thesis's 64^3 budget and is filterable
+/// on every backend, including its 3D mips.
+pub const DENSITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// Entries in the Henyey-Greenstein table (indexed by `cos(theta) * 0.5 + 0.5`).
+pub const PHASE_TABLE_SIZE: u32 = 256;
+
+/// Errors of the HTSM renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum HtsmError {
+    /// A parameter outside its documented range.
+    #[error("invalid HTSM parameter: {0}")]
+    Param(String),
+    /// The mesh cannot be rendered (empty, or a flat bounding box).
+    #[error("mesh unusable for HTSM: {0}")]
+    Mesh(String),
+    /// The light cannot be handled (a point light inside the object's bounding sphere).
+    #[error("light unusable for HTSM: {0}")]
+    Light(String),
+    /// A size beyond the adapter's limits.
+    #[error("{0} exceeds the adapter's limits")]
+    Limits(String),
+    /// Reading the image back from the GPU failed.
+    #[error("reading the image back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// How the transmitted light is computed from `D_i`, `alpha_i` and `f(theta_i)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TransportModel {
+    /// Shopf's table 4.1:
+    /// `L = T_c (1/n) sum_i E_i max(0, (2 T_d - (D_i + alpha_i)) / T_d) f(theta_i)`.
+    /// The printed equation has neither the sample irradiance `E_i` nor the clamp; both are
+    /// needed (the shader says why).
+    Thesis,
+    /// Physically based: `L = (1/n) sum_i E_i exp(-sigma D_i - alpha_i) f(theta_i)` with
+    /// `sigma = -ln(T_c) / T_d` per channel, glTF `KHR_materials_volume`'s definition of
+    /// attenuation colour and distance.
+    #[default]
+    BeerLambert,
+}
+
+/// Material and sampling parameters of an HTSM render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HtsmParams {
+    /// Sample rays per pixel `n`: 1, 5, 9 or 13 (fig. 4.3). Default 9.
+    pub samples: u32,
+    /// Ray-cast steps per sample ray `K`, at least 1. Default 16.
+    pub steps: u32,
+    /// Transport colour `T_c`, each channel in `(0, 1]`: the colour light takes after `T_d`
+    /// through the base material (§4.3.3). Default (0.9, 0.6, 0.3), a wax-like orange.
+    pub transport_colour: Vec3,
+    /// Transport distance `T_d`, object units, > 0. Default 0.5 (half the object's size).
+    pub transport_distance: f32,
+    /// Henyey-Greenstein asymmetry `g` in `(-1, 1)`: > 0 forward scattering. Default 0.3.
+    pub phase_g: f32,
+    /// Extra absorption of density 1, per object unit: the density term of `sigma_at`
+    /// (eq. 4.1) is `density_scale * density`. Default 20.
+    pub density_scale: f32,
+    /// Transport model. Default [`TransportModel::BeerLambert`]: it keeps the thesis's inputs
+    /// but ties colour to path length (thin parts pale, thick parts saturated, the correlation
+    /// §4.1.1 asks for); [`TransportModel::Thesis`] tints everything with `T_c` alike.
+    pub model: TransportModel,
+    /// Radius of the first sampling ring, object units (rings 2 and 3 are 2x and 4x). Default
+    /// 0.04.
+    pub kernel_radius: f32,
+    /// Relative index of refraction for Schlick's Fresnel. Default 1.3.
+    pub eta: f32,
+    /// Weight of the Lambertian surface term on the lit side (times `T_c`). Default 0.3.
+    pub diffuse: f32,
+    /// Weight of the Blinn-Phong specular term. Default 1.
+    pub specular: f32,
+    /// Blinn-Phong exponent. Default 60.
+    pub shininess: f32,
+    /// Shadow-test tolerance: a point is lit when the reference image's surface is within this
+    /// distance of it, object units. Default 0.02.
+    pub shadow_bias: f32,
+    /// Exposure multiplier before the tone curve `1 - exp(-exposure L)`. Default 1.
+    pub exposure: f32,
+    /// Background radiance (linear RGB, before exposure). Default (0.01, 0.01, 0.012).
+    pub background: Vec3,
+}
+
+impl Default for HtsmParams {
+    fn default() -> Self {
+        HtsmParams {
+            samples: 9,
+            steps: 16,
+            transport_colour: Vec3::new(0.9, 0.6, 0.3),
+            transport_distance: 0.5,
+            phase_g: 0.3,
+            density_scale: 20.0,
+            model: TransportModel::BeerLambert,
+            kernel_radius: 0.04,
+            eta: 1.3,
+            diffuse: 0.3,
+            specular: 1.0,
+            shininess: 60.0,
+            shadow_bias: 0.02,
+            exposure: 1.0,
+            background: Vec3::new(0.01, 0.01, 0.012),
+        }
+    }
+}
+
+impl HtsmParams {
+    /// Checks every field against its documented range.
+    pub fn validate(&self) -> Result<(), HtsmError> {
+        let bad = |m: String| Err(HtsmError::Param(m));
+        if ![1, 5, 9, 13].contains(&self.samples) {
+            return bad(format!("samples {} is not 1, 5, 9 or 13", self.samples));
+        }
+        if self.steps == 0 || self.steps > 1024 {
+            return bad(format!("steps {} is not in 1..=1024", self.steps));
+        }
+        let c = self.transport_colour;
+        if !(c.cmpgt(Vec3::ZERO).all() && c.cmple(Vec3::ONE).all()) {
+            return bad(format!(
+                "transport colour {c} must have every channel in (0, 1]"
+            ));
+        }
+        if !(self.transport_distance.is_finite() && self.transport_distance > 0.0) {
+            return bad(format!(
+                "transport distance {} must be > 0",
+                self.transport_distance
+            ));
+        }
+        if !(self.phase_g > -1.0 && self.phase_g < 1.0) {
+            return bad(format!("phase g {} must be in (-1, 1)", self.phase_g));
+        }
+        for (name, v) in [
+            ("density scale", self.density_scale),
+            ("kernel radius", self.kernel_radius),
+            ("diffuse", self.diffuse),
+            ("specular", self.specular),
+            ("shininess", self.shininess),
+            ("shadow bias", self.shadow_bias),
+            ("exposure", self.exposure),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(format!("{name} {v} must be finite and >= 0"));
+            }
+        }
+        if !(self.eta.is_finite() && self.eta >= 1.0) {
+            return bad(format!("eta {} must be >= 1", self.eta));
+        }
+        Ok(())
+    }
+
+    /// Per-channel Beer-Lambert attenuation `sigma = -ln(T_c) / T_d`, per object unit.
+    pub fn sigma(&self) -> Vec3 {
+        -self.transport_colour.map(f32::ln) / self.transport_distance
+    }
+
+    /// Schlick's `F0 = ((eta - 1) / (eta + 1))^2`.
+    pub fn f0(&self) -> f32 {
+        ((self.eta - 1.0) / (self.eta + 1.0)).powi(2)
+    }
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position, mesh units.
+    pub eye: Vec3,
+    /// Point looked at, mesh units.
+    pub target: Vec3,
+    /// Up direction (need not be unit or orthogonal to the view).
+    pub up: Vec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+}
+
+impl Camera {
+    /// A camera looking at the bounding sphere of `mesh` from `direction` (from the target
+    /// towards the eye), far enough for the sphere to fill `fill` of the vertical field of view
+    /// (e.g. 0.8).
+    pub fn framing(mesh: &Mesh, direction: Vec3, fill: f32) -> Camera {
+        let (centre, radius) = bounding_sphere(mesh);
+        let fov_y = 35f32.to_radians();
+        let distance = radius / (0.5 * fov_y * fill.clamp(0.05, 1.0)).sin();
+        let dir = direction.normalize_or(Vec3::Z);
+        Camera {
+            eye: centre + dir * distance,
+            target: centre,
+            up: if dir.dot(Vec3::Y).abs() > 0.99 {
+                Vec3::Z
+            } else {
+                Vec3::Y
+            },
+            fov_y,
+        }
+    }
+
+    /// World to clip (wgpu depth in `[0, 1]`) for an image of `aspect` = width / height.
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        let centre_dist = self.eye.distance(self.target);
+        let near = (centre_dist * 0.01).max(1e-4);
+        let far = centre_dist * 10.0 + 1.0;
+        Mat4::perspective_rh(self.fov_y, aspect, near, far)
+            * Mat4::look_at_rh(self.eye, self.target, self.up)
+    }
+}
+
+/// Centre and radius of the bounding box's circumscribed sphere, mesh units.
+pub fn bounding_sphere(mesh: &Mesh) -> (Vec3, f32) {
+    let (lo, hi) = mesh.bounds();
+    (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+}
+
+/// The light's view and projection for the reference images, and the width of its frustum at
+/// the object's centre (mesh units), used to convert the kernel radius to texels.
+#[derive(Clone, Copy, Debug)]
+pub struct LightFrustum {
+    /// World to light clip.
+    pub view_proj: Mat4,
+    /// Width of the frustum at the bounding sphere's centre, mesh units.
+    pub width_at_centre: f32,
+}
+
+impl LightFrustum {
+    /// Fits the light's frustum to the object's bounding sphere (§4.3: a distant light is
+    /// rendered from the minimum distance that captures the object, a point light from its
+    /// position).
+    /// `sphere` is the object's bounding sphere (centre, radius; mesh units).
+    pub fn fit(sphere: (Vec3, f32), light: &Light) -> Result<LightFrustum, HtsmError> {
+        let (centre, radius) = sphere;
+        let up_for = |d: Vec3| {
+            if d.dot(Vec3::Y).abs() > 0.99 {
+                Vec3::X
+            } else {
+                Vec3::Y
+            }
+        };
+        match *light {
+            Light::Directional { direction, .. } => {
+                let d = direction.normalize_or_zero();
+                if d == Vec3::ZERO {
+                    return Err(HtsmError::Light("distant light has a zero direction".into()));
+                }
+                let eye = centre - d * 2.0 * radius;
+                let view = Mat4::look_at_rh(eye, centre, up_for(d));
+                let proj = Mat4::orthographic_rh(
+                    -radius,
+                    radius,
+                    -radius,
+                    radius,
+                    0.5 * radius,
+                    3.5 * radius,
+                );
+                Ok(LightFrustum {
+                    view_proj: proj * view,
+                    width_at_centre: 2.0 * radius,
+                })
+            }
+            Light::Point { position, .. } => {
+                let to_centre = centre - position;
+                let dist = to_centre.length();
+                if dist <= radius * 1.001 {
+                    return Err(HtsmError::Light(format!(
+                        "point light at {position} is inside the object's bounding sphere \
+                         (centre {centre}, radius {radius}); HTSM renders the object from the light"
+                    )));
+                }
+                let half = (radius / dist).asin() * 1.02;
+                let view = Mat4::look_at_rh(position, centre, up_for(to_centre / dist));
+                let near = ((dist - radius) * 0.9).max(dist * 1e-3);
+                let proj = Mat4::perspective_rh(2.0 * half, 1.0, near, (dist + radius) * 1.1);
+                Ok(LightFrustum {
+                    view_proj: proj * view,
+                    width_at_centre: 2.0 * dist * half.tan(),
+                })
+            }
+        }
+    }
+}
+
+/// Henyey-Greenstein phase function times `4 pi`, so that isotropic scattering weighs 1:
+/// `4 pi p(cos) = (1 - g^2) / (1 + g^2 - 2 g cos)^(3/2)`. `cos` is the cosine between the
+/// sample ray and `-N` (§4.3.4).
+pub fn henyey_greenstein(g: f32, cos: f32) -> f32 {
+    (1.0 - g * g) / (1.0 + g * g - 2.0 * g * cos).max(1e-6).powf(1.5)
+}
+
+/// The phase table uploaded to the GPU: entry `i` is [`henyey_greenstein`] at
+/// `cos = 2 (i + 0.5) / PHASE_TABLE_SIZE - 1` (texel centres of a linear-filtered texture).
+pub fn phase_table(g: f32) -> Vec<f32> {
+    (0..PHASE_TABLE_SIZE)
+        .map(|i| {
+            let cos = 2.0 * (i as f32 + 0.5) / PHASE_TABLE_SIZE as f32 - 1.0;
+            henyey_greenstein(g, cos)
+        })
+        .collect()
+}
+
+/// Where the camera and the light are, and the image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HtsmView {
+    /// The camera.
+    pub camera: Camera,
+    /// The one light HTSM renders from (Shopf: one point or distant light).
+    pub light: Light,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+/// GPU memory held by an [`passes::HtsmRenderer`], bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HtsmMemory {
+    /// The three reference images with their mip chains.
+    pub reference_images: u64,
+    /// The light-view depth buffer used to render them.
+    pub reference_depth: u64,
+    /// The density volume with its mip chain.
+    pub volume: u64,
+    /// The phase table.
+    pub phase_table: u64,
+}
+
+impl HtsmMemory {
+    /// What the thesis counts (§5.2, "~3 MB"): reference images plus the density volume.
+    pub fn thesis_bytes(&self) -> u64 {
+        self.reference_images + self.volume
+    }
+}
+
+pub use passes::HtsmRenderer;
+
+/// Dimensions of a density grid over `mesh`'s bounding box whose largest side has `largest`
+/// voxels and whose other sides follow the box's proportions (at least 4 voxels), so that
+/// voxels are close to cubes.
+pub fn volume_dims_for(mesh: &Mesh, largest: u32) -> [u32; 3] {
+    let (lo, hi) = mesh.bounds();
+    let size = hi - lo;
+    let extent = size.max_element().max(f32::MIN_POSITIVE);
+    [size.x, size.y, size.z].map(|s| ((s / extent * largest as f32).round() as u32).clamp(4.min(largest), largest))
+}
+
+/// Checks that `volume` is usable with a mesh (dimensions within the 3D texture limits).
+pub(crate) fn check_volume(volume: &DensityVolume, limits: &wgpu::Limits) -> Result<(), HtsmError> {
+    let max = limits.max_texture_dimension_3d;
+    if volume.dims.iter().any(|&d| d > max) {
+        return Err(HtsmError::Limits(format!(
+            "density volume {:?} (3D texture side limit {max})",
+            volume.dims
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phase_table_is_normalised_to_isotropic() {
+        // Integral over the sphere of p = 1: with the 4 pi factor, the mean over cos in [-1, 1]
+        // of the table (uniform in cos is uniform in solid angle) must be 1.
+        for g in [-0.5f32, 0.0, 0.3, 0.8] {
+            let t = phase_table(g);
+            let mean = t.iter().map(|&v| v as f64).sum::<f64>() / t.len() as f64;
+            assert!((mean - 1.0).abs() < 0.01, "g {g}: mean {mean}");
+        }
+        assert_eq!(henyey_greenstein(0.0, 0.3), 1.0);
+    }
+
+    #[test]
+    fn beer_lambert_sigma_reproduces_the_transport_colour_at_the_transport_distance() {
+        let p = HtsmParams::default();
+        let t = (-p.sigma() * p.transport_distance).exp();
+        assert!((t - p.transport_colour).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn params_are_validated() {
+        assert!(HtsmParams::default().validate().is_ok());
+        for bad in [
+            HtsmParams {
+                samples: 4,
+                ..Default::default()
+            },
+            HtsmParams {
+                steps: 0,
+                ..Default::default()
+            },
+            HtsmParams {
+                transport_colour: Vec3::new(0.0, 0.5, 0.5),
+                ..Default::default()
+            },
+            HtsmParams {
+                transport_distance: 0.0,
+                ..Default::default()
+            },
+            HtsmParams {
+                phase_g: 1.0,
+                ..Default::default()
+            },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
+        }
+    }
+}

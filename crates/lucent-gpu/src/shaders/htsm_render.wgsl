@@ -1,0 +1,144 @@
+// HTSM pass 2 (Shopf 2007 §4.3.1-§4.3.5): the camera view. For each visible point, sample the
+// reference images in the hierarchical pattern of fig. 4.3, ray cast the density volume from the
+// point to each sample's lit surface (§4.3.2), weight by the phase function (§4.3.4) and sum
+// with table 4.1's light transport approximation, then add surface shading on the lit side.
+
+@group(1) @binding(0) var ref_irradiance: texture_2d<f32>;
+@group(1) @binding(1) var ref_texcoord: texture_2d<f32>;
+@group(1) @binding(2) var ref_normal: texture_2d<f32>;
+@group(1) @binding(3) var ref_sampler: sampler;
+@group(1) @binding(4) var density: texture_3d<f32>;
+@group(1) @binding(5) var density_sampler: sampler;
+// Henyey-Greenstein phase table indexed by cos(theta) * 0.5 + 0.5 (a 256x1 2D texture: GLES,
+// one of our backends, has no 1D textures).
+@group(1) @binding(6) var phase_table: texture_2d<f32>;
+
+struct CameraVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+@vertex
+fn vs_camera(v: VertexIn) -> CameraVarying {
+    var out: CameraVarying;
+    out.clip = g.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    return out;
+}
+
+// Offset (in units of the ring-1 radius) and mip-level increment of sample i of fig. 4.3: the
+// centre at level 0, then rings of 4 at radius 1, 2, 4 and one level coarser per ring, each
+// ring turned against the previous one so that the 13 samples do not line up.
+fn pattern(i: i32) -> vec3<f32> {
+    if (i == 0) {
+        return vec3<f32>(0.0, 0.0, -1.0);
+    }
+    let ring = (i - 1) / 4;
+    let k = f32((i - 1) % 4);
+    let turn = select(select(0.392699082, 0.785398163, ring == 1), 0.0, ring == 0);
+    let a = turn + k * 1.570796327;
+    let radius = f32(1 << u32(ring));
+    return vec3<f32>(radius * cos(a), radius * sin(a), f32(ring));
+}
+
+// Light-space position of world point p: reference-image uv in [0,1]^2.
+fn light_uv(p: vec3<f32>) -> vec2<f32> {
+    let c = g.light_view_proj * vec4<f32>(p, 1.0);
+    let ndc = c.xy / c.w;
+    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+}
+
+@fragment
+fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
+    let n = normalize(in.normal);
+    let tc = texcoord_of(in.world);
+    let uv = light_uv(in.world);
+    let map_size = vec2<f32>(textureDimensions(ref_irradiance, 0));
+    let levels = f32(textureNumLevels(ref_irradiance));
+    let samples = i32(g.counts.x);
+    let steps = i32(g.counts.y);
+    let beer_lambert = g.counts.z > 0.5;
+    let t_d = g.transport.w;
+
+    var transport = vec3<f32>(0.0);
+    for (var i = 0; i < samples; i = i + 1) {
+        let s = pattern(i);
+        let radius_texels = g.kernel.x;
+        let offset = s.xy * radius_texels / map_size;
+        // Ring r covers cells about as wide as its radius: level log2(radius in texels).
+        var level = 0.0;
+        if (s.z >= 0.0) {
+            level = clamp(log2(max(radius_texels, 1.0)) + s.z, 0.0, levels - 1.0);
+        }
+        let suv = uv + offset;
+        let irr = textureSampleLevel(ref_irradiance, ref_sampler, suv, level);
+        let tcc = textureSampleLevel(ref_texcoord, ref_sampler, suv, level);
+        // No lit surface under this sample (outside the silhouette): it brings no light.
+        if (tcc.a < 1e-3) {
+            continue;
+        }
+        let end = tcc.xyz / tcc.a;
+        let dir = end - tc;
+        let ray = tc_to_object(dir);
+        let d_i = length(ray);
+
+        // Fixed-step ray cast through the density volume (§4.3.2), midpoint rule. The mip level
+        // follows the step length so a coarse march averages, rather than aliases, fine detail
+        // (the 3D mip filtering the thesis could not have, §5.1).
+        let step_voxels = length(dir) * g.counts.w / f32(steps);
+        let lod = clamp(log2(max(step_voxels, 1.0)), 0.0, g.kernel.w);
+        var sum = 0.0;
+        for (var j = 0; j < steps; j = j + 1) {
+            let t = (f32(j) + 0.5) / f32(steps);
+            sum = sum + textureSampleLevel(density, density_sampler, tc + dir * t, lod).r;
+        }
+        // alpha_i: density integrated along the ray, as absorption (1 / object units * length).
+        let alpha_i = g.sigma.w * sum * d_i / f32(steps);
+
+        // theta_i: between the sample ray and -N (§4.3.4).
+        var cos_theta = 1.0;
+        if (d_i > 1e-6) {
+            cos_theta = dot(ray / d_i, -n);
+        }
+        let phase = textureSampleLevel(phase_table, ref_sampler, vec2<f32>(cos_theta * 0.5 + 0.5, 0.5), 0.0).r;
+
+        if (beer_lambert) {
+            // Transmittance exp(-sigma D_i - alpha_i), sigma from KHR_materials_volume's
+            // attenuation colour and distance.
+            transport = transport + irr.rgb * exp(-g.sigma.rgb * d_i - alpha_i) * phase;
+        } else {
+            // Table 4.1. The printed equation has no irradiance term, yet light that reaches a
+            // lit surface must scale what comes out: each ray carries its sample's irradiance.
+            // The bracket is negative once D_i + alpha_i > 2 T_d, which would subtract light,
+            // so it is clamped at zero: paths that long transmit nothing.
+            let bracket = max((2.0 * t_d - (d_i + alpha_i)) / t_d, 0.0);
+            transport = transport + irr.rgb * bracket * phase;
+        }
+    }
+    transport = transport / f32(samples);
+    if (!beer_lambert) {
+        transport = transport * g.transport.rgb;
+    }
+    // Exitant radiance of a Lambertian exit: irradiance / pi.
+    var radiance = transport / 3.14159265;
+
+    // Surface shading where the surface faces the light and is not occluded: the lit surface
+    // seen by the light at this point's light-space position must be this point itself.
+    let l = light_at(in.world);
+    let cos_i = dot(n, l.to_light);
+    let ref_tc = textureSampleLevel(ref_texcoord, ref_sampler, uv, 0.0);
+    let seen = ref_tc.a > 0.5 && length(tc_to_object(ref_tc.xyz / ref_tc.a - tc)) < g.kernel.z;
+    if (cos_i > 0.0 && seen) {
+        let v = normalize(g.eye.xyz - in.world);
+        let h = normalize(v + l.to_light);
+        let e = l.irradiance * cos_i;
+        let diffuse = g.shading.x * g.transport.rgb * e * (1.0 - fresnel_schlick(cos_i, g.kernel.y)) / 3.14159265;
+        // Normalised Blinn-Phong with Schlick's Fresnel at the half vector.
+        let shininess = g.shading.z;
+        let spec = g.shading.y * fresnel_schlick(dot(v, h), g.kernel.y) * (shininess + 8.0) / (8.0 * 3.14159265) * pow(max(dot(n, h), 0.0), shininess);
+        radiance = radiance + diffuse + spec * e;
+    }
+    return vec4<f32>(radiance, 1.0);
+}
