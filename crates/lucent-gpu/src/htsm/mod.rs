@@ -66,6 +66,9 @@ pub enum HtsmError {
     /// Reading the image back from the GPU failed.
     #[error("reading the image back from the GPU failed: {0}")]
     Readback(String),
+    /// wgpu reported an error (validation, out of memory, no adapter).
+    #[error(transparent)]
+    Gpu(#[from] crate::context::GpuError),
 }
 
 /// How the transmitted light is computed from `D_i`, `alpha_i` and `f(theta_i)`.

@@ -4,6 +4,7 @@ use super::{
     DENSITY_FORMAT, HtsmError, HtsmMemory, HtsmParams, HtsmView, LightFrustum, PHASE_TABLE_SIZE,
     REFERENCE_FORMAT, TransportModel, bounding_sphere, check_volume, phase_table,
 };
+use crate::context::{DEPTH_FORMAT, GpuContext, HDR_FORMAT, LDR_FORMAT};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use lucent_core::irradiance::Light;
@@ -12,9 +13,6 @@ use lucent_core::volume::DensityVolume;
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const PHASE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 
 /// Uniforms shared by every pass; mirrors `Globals` in `htsm_common.wgsl` field for field.
@@ -249,13 +247,13 @@ impl HtsmRenderer {
     /// chain, every level computed on the CPU), allocates `reference_size`^2 reference images
     /// with full mip chains, and builds the pipelines.
     pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        ctx: &GpuContext,
         mesh: &Mesh,
         volume: &DensityVolume,
         reference_size: u32,
     ) -> Result<Self, HtsmError> {
         validate_mesh(mesh)?;
+        let (device, queue) = (&ctx.device, &ctx.queue);
         let limits = device.limits();
         check_volume(volume, &limits)?;
         if reference_size < 16 || reference_size > limits.max_texture_dimension_2d {
@@ -553,6 +551,7 @@ impl HtsmRenderer {
             ],
         });
 
+        ctx.check("creating the HTSM renderer")?;
         Ok(HtsmRenderer {
             device: device.clone(),
             queue: queue.clone(),
@@ -759,7 +758,7 @@ impl HtsmRenderer {
         if self.phase_g != Some(params.phase_g) {
             let halves: Vec<u16> = phase_table(params.phase_g)
                 .iter()
-                .map(|&v| f32_to_f16(v))
+                .map(|&v| half::f16::from_f32(v).to_bits())
                 .collect();
             self.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
@@ -908,6 +907,7 @@ impl HtsmRenderer {
     /// `view.height`, rows top to bottom.
     pub fn render(
         &mut self,
+        ctx: &GpuContext,
         view: &HtsmView,
         params: &HtsmParams,
     ) -> Result<image::RgbaImage, HtsmError> {
@@ -956,6 +956,7 @@ impl HtsmRenderer {
             }
         }
         t.readback.unmap();
+        ctx.check("rendering HTSM")?;
         image::RgbaImage::from_raw(t.width, t.height, pixels)
             .ok_or_else(|| HtsmError::Readback("image size mismatch".into()))
     }
@@ -964,6 +965,7 @@ impl HtsmRenderer {
     /// (`device.poll(wait)`): the wall time from encoding to completion, for benchmarks.
     pub fn render_timed(
         &mut self,
+        ctx: &GpuContext,
         view: &HtsmView,
         params: &HtsmParams,
     ) -> Result<Duration, HtsmError> {
@@ -976,56 +978,14 @@ impl HtsmRenderer {
                 timeout: None,
             })
             .map_err(|e| HtsmError::Readback(e.to_string()))?;
-        Ok(start.elapsed())
+        let elapsed = start.elapsed();
+        ctx.check("rendering HTSM")?;
+        Ok(elapsed)
     }
 
     /// The three reference images' level-0 texture handles (irradiance, texture coordinate,
     /// normal), e.g. for inspection.
     pub fn reference_textures(&self) -> &[wgpu::Texture; 3] {
         &self.reference_textures
-    }
-}
-
-/// IEEE 754 binary16 from f32, round to nearest even; enough for the phase table (positive,
-/// finite, well inside the half range).
-fn f32_to_f16(v: f32) -> u16 {
-    let bits = v.to_bits();
-    let sign = ((bits >> 16) & 0x8000) as u16;
-    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
-    let mant = bits & 0x7f_ffff;
-    if exp >= 31 {
-        return sign | 0x7c00;
-    }
-    if exp <= 0 {
-        if exp < -10 {
-            return sign;
-        }
-        let m = (mant | 0x80_0000) >> (1 - exp);
-        let round = (m >> 12) & 1;
-        return sign | ((m >> 13) + round) as u16;
-    }
-    let half = sign as u32 | ((exp as u32) << 10) | (mant >> 13);
-    let rem = mant & 0x1fff;
-    let rounded = if rem > 0x1000 || (rem == 0x1000 && (half & 1) == 1) {
-        half + 1
-    } else {
-        half
-    };
-    rounded as u16
-}
-
-#[cfg(test)]
-mod tests {
-    use super::f32_to_f16;
-
-    #[test]
-    fn half_conversion_matches_known_encodings() {
-        // IEEE 754 binary16 encodings.
-        assert_eq!(f32_to_f16(1.0), 0x3c00);
-        assert_eq!(f32_to_f16(2.0), 0x4000);
-        assert_eq!(f32_to_f16(0.5), 0x3800);
-        assert_eq!(f32_to_f16(65504.0), 0x7bff);
-        assert_eq!(f32_to_f16(0.0), 0);
-        assert_eq!(f32_to_f16(1.0 + 1.0 / 1024.0), 0x3c01);
     }
 }
