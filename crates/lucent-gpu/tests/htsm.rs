@@ -96,10 +96,7 @@ fn ellipsoid(half_depth: f32) -> Mesh {
 fn view(mesh: &Mesh, size: u32) -> HtsmView {
     HtsmView {
         camera: Camera::framing(mesh, Vec3::new(0.0, 0.0, 1.0), 0.9),
-        light: Light::Directional {
-            direction: Vec3::new(0.15, -0.2, 1.0),
-            irradiance: Vec3::splat(3.0),
-        },
+        light: Light::Directional { direction: Vec3::new(0.15, -0.2, 1.0), irradiance: Vec3::splat(3.0) },
         width: size,
         height: size,
     }
@@ -170,7 +167,11 @@ fn golden_image_of_the_default_heterogeneous_scene() {
     if mean > 0.01 || p99 > 0.1 {
         let out = std::env::temp_dir().join("htsm_default_actual.png");
         img.save(&out).unwrap();
-        panic!("FLIP mean {mean}, 99th percentile {p99} against {}; actual in {}", path.display(), out.display());
+        panic!(
+            "FLIP mean {mean}, 99th percentile {p99} against {}; actual in {}",
+            path.display(),
+            out.display()
+        );
     }
 }
 
@@ -273,7 +274,12 @@ fn more_sample_rays_give_a_smoother_image() {
     let tv: Vec<f32> = [1, 5, 9, 13]
         .iter()
         .map(|&samples| {
-            interior_total_variation(&render(&ctx, &mesh, &volume, &HtsmParams { samples, ..Default::default() }))
+            interior_total_variation(&render(
+                &ctx,
+                &mesh,
+                &volume,
+                &HtsmParams { samples, ..Default::default() },
+            ))
         })
         .collect();
     for pair in tv.windows(2) {
@@ -311,11 +317,18 @@ fn reference_mips_average_texture_coordinates_over_covered_texels_only() {
                 }
                 let t = texels[y * data.width as usize + x];
                 let coverage = covered / (f * f) as f32;
-                assert!((t[3] - coverage).abs() < 2e-3, "level {level} ({x},{y}): alpha {} vs {coverage}", t[3]);
+                assert!(
+                    (t[3] - coverage).abs() < 2e-3,
+                    "level {level} ({x},{y}): alpha {} vs {coverage}",
+                    t[3]
+                );
                 if covered > 0.0 {
                     let gpu = Vec3::new(t[0], t[1], t[2]) / t[3];
                     let cpu = sum / covered;
-                    assert!((gpu - cpu).abs().max_element() < 4e-3, "level {level} ({x},{y}): {gpu} vs {cpu}");
+                    assert!(
+                        (gpu - cpu).abs().max_element() < 4e-3,
+                        "level {level} ({x},{y}): {gpu} vs {cpu}"
+                    );
                     if covered < (f * f) as f32 {
                         partial += 1;
                     }

@@ -78,11 +78,7 @@ pub enum VolumeSpec {
     /// Uniform density.
     Uniform { density: f32 },
     /// A headerless grid.
-    Raw {
-        path: PathBuf,
-        dims: [u32; 3],
-        format: RawFormat,
-    },
+    Raw { path: PathBuf, dims: [u32; 3], format: RawFormat },
     /// An `LVOL` file.
     File { path: PathBuf },
 }
@@ -91,24 +87,16 @@ impl Default for VolumeSpec {
     /// `veins` with the default seed and scale.
     fn default() -> Self {
         let v = Veins::default();
-        VolumeSpec::Veins {
-            seed: v.seed,
-            scale: v.scale,
-        }
+        VolumeSpec::Veins { seed: v.seed, scale: v.scale }
     }
 }
 
 fn spec_err(spec: &str, reason: impl Into<String>) -> VolumeError {
-    VolumeError::Spec {
-        spec: spec.to_string(),
-        reason: reason.into(),
-    }
+    VolumeError::Spec { spec: spec.to_string(), reason: reason.into() }
 }
 
 fn parse_num<T: FromStr>(spec: &str, what: &str, s: &str) -> Result<T, VolumeError> {
-    s.trim()
-        .parse()
-        .map_err(|_| spec_err(spec, format!("{what} '{s}' is not a number")))
+    s.trim().parse().map_err(|_| spec_err(spec, format!("{what} '{s}' is not a number")))
 }
 
 /// Parses `NXxNYxNZ` (e.g. `64x64x32`).
@@ -184,22 +172,13 @@ impl FromStr for VolumeSpec {
                     "u16" => RawFormat::U16,
                     "f32" => RawFormat::F32,
                     other => {
-                        return Err(spec_err(
-                            spec,
-                            format!("voxel format '{other}' is not u8, u16 or f32"),
-                        ));
+                        return Err(spec_err(spec, format!("voxel format '{other}' is not u8, u16 or f32")));
                     }
                 };
-                Ok(VolumeSpec::Raw {
-                    path: PathBuf::from(path),
-                    dims: parse_dims(spec, dims)?,
-                    format,
-                })
+                Ok(VolumeSpec::Raw { path: PathBuf::from(path), dims: parse_dims(spec, dims)?, format })
             }
             "file" => match rest {
-                Some(p) if !p.is_empty() => Ok(VolumeSpec::File {
-                    path: PathBuf::from(p),
-                }),
+                Some(p) if !p.is_empty() => Ok(VolumeSpec::File { path: PathBuf::from(p) }),
                 _ => Err(spec_err(spec, "expected file:PATH")),
             },
             _ => Err(spec_err(
@@ -215,12 +194,9 @@ impl VolumeSpec {
     /// own dimensions and ignore `dims`.
     pub fn build(&self, dims: [u32; 3]) -> Result<DensityVolume, VolumeError> {
         match self {
-            VolumeSpec::Veins { seed, scale } => Veins {
-                seed: *seed,
-                scale: *scale,
-                ..Veins::default()
+            VolumeSpec::Veins { seed, scale } => {
+                Veins { seed: *seed, scale: *scale, ..Veins::default() }.generate(dims)
             }
-            .generate(dims),
             VolumeSpec::Cube { size } => embedded_cube(dims, *size),
             VolumeSpec::Uniform { density } => DensityVolume::uniform(dims, *density),
             VolumeSpec::Raw { path, dims, format } => load_raw(path, *dims, *format),
@@ -230,24 +206,13 @@ impl VolumeSpec {
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, VolumeError> {
-    std::fs::read(path).map_err(|source| VolumeError::Io {
-        path: path.display().to_string(),
-        source,
-    })
+    std::fs::read(path).map_err(|source| VolumeError::Io { path: path.display().to_string(), source })
 }
 
 /// Checks every density is finite and in `[0, 1]`, naming the file otherwise.
 fn check_values(path: &Path, data: &[f32]) -> Result<(), VolumeError> {
-    match data
-        .iter()
-        .enumerate()
-        .find(|(_, d)| !(0.0..=1.0).contains(*d))
-    {
-        Some((index, &value)) => Err(VolumeError::Value {
-            path: path.display().to_string(),
-            index,
-            value,
-        }),
+    match data.iter().enumerate().find(|(_, d)| !(0.0..=1.0).contains(*d)) {
+        Some((index, &value)) => Err(VolumeError::Value { path: path.display().to_string(), index, value }),
         None => Ok(()),
     }
 }
@@ -261,27 +226,19 @@ pub fn load_raw(path: &Path, dims: [u32; 3], format: RawFormat) -> Result<Densit
     if bytes.len() as u64 != expected {
         return Err(VolumeError::Size {
             path: path.display().to_string(),
-            what: format!(
-                "{}x{}x{} {} voxels",
-                dims[0],
-                dims[1],
-                dims[2],
-                format.name()
-            ),
+            what: format!("{}x{}x{} {} voxels", dims[0], dims[1], dims[2], format.name()),
             expected,
             actual: bytes.len() as u64,
         });
     }
     let data: Vec<f32> = match format {
         RawFormat::U8 => bytes.iter().map(|&v| v as f32 / 255.0).collect(),
-        RawFormat::U16 => bytes
-            .chunks_exact(2)
-            .map(|c| u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0)
-            .collect(),
-        RawFormat::F32 => bytes
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect(),
+        RawFormat::U16 => {
+            bytes.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0).collect()
+        }
+        RawFormat::F32 => {
+            bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+        }
     };
     check_values(path, &data)?;
     Ok(DensityVolume { dims, data })
@@ -290,10 +247,7 @@ pub fn load_raw(path: &Path, dims: [u32; 3], format: RawFormat) -> Result<Densit
 /// Reads an `LVOL` file (module docs).
 pub fn load_lvol(path: &Path) -> Result<DensityVolume, VolumeError> {
     let bytes = read_file(path)?;
-    let header_err = |reason: String| VolumeError::Header {
-        path: path.display().to_string(),
-        reason,
-    };
+    let header_err = |reason: String| VolumeError::Header { path: path.display().to_string(), reason };
     if bytes.len() < LVOL_HEADER_BYTES {
         return Err(header_err(format!(
             "too short for an LVOL header ({} bytes, need {LVOL_HEADER_BYTES})",
@@ -306,9 +260,7 @@ pub fn load_lvol(path: &Path) -> Result<DensityVolume, VolumeError> {
     let word = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
     let version = word(4);
     if version != LVOL_VERSION {
-        return Err(header_err(format!(
-            "LVOL version {version} is not supported (only {LVOL_VERSION})"
-        )));
+        return Err(header_err(format!("LVOL version {version} is not supported (only {LVOL_VERSION})")));
     }
     let dims = [word(8), word(12), word(16)];
     let n = check_dims(dims).map_err(|e| header_err(e.to_string()))?;
@@ -340,8 +292,6 @@ pub fn save_lvol(path: &Path, volume: &DensityVolume) -> Result<(), VolumeError>
     for v in &volume.data {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
-    std::fs::write(path, bytes).map_err(|source| VolumeError::Write {
-        path: path.display().to_string(),
-        source,
-    })
+    std::fs::write(path, bytes)
+        .map_err(|source| VolumeError::Write { path: path.display().to_string(), source })
 }

@@ -42,22 +42,13 @@ pub enum VolumeError {
     },
     /// The file's length does not match its dimensions and voxel format.
     #[error("{path}: expected {expected} bytes for {what}, found {actual}")]
-    Size {
-        path: String,
-        what: String,
-        expected: u64,
-        actual: u64,
-    },
+    Size { path: String, what: String, expected: u64, actual: u64 },
     /// The `LVOL` header is not one lucent understands.
     #[error("{path}: {reason}")]
     Header { path: String, reason: String },
     /// A voxel is not a density in `[0, 1]` (NaN, infinite or out of range).
     #[error("{path}: voxel {index} has density {value}, outside [0, 1]")]
-    Value {
-        path: String,
-        index: usize,
-        value: f32,
-    },
+    Value { path: String, index: usize, value: f32 },
     /// The dimensions are zero, too large, or disagree with the data.
     #[error("bad volume dimensions {dims:?}: {reason}")]
     Dims { dims: [u32; 3], reason: String },
@@ -89,16 +80,8 @@ impl DensityVolume {
                 reason: format!("{} voxels expected, {} given", n, data.len()),
             });
         }
-        if let Some((index, &value)) = data
-            .iter()
-            .enumerate()
-            .find(|(_, d)| !(0.0..=1.0).contains(*d))
-        {
-            return Err(VolumeError::Value {
-                path: "(in memory)".into(),
-                index,
-                value,
-            });
+        if let Some((index, &value)) = data.iter().enumerate().find(|(_, d)| !(0.0..=1.0).contains(*d)) {
+            return Err(VolumeError::Value { path: "(in memory)".into(), index, value });
         }
         Ok(DensityVolume { dims, data })
     }
@@ -106,10 +89,7 @@ impl DensityVolume {
     /// The same density `density` (clamped to `[0, 1]`) everywhere.
     pub fn uniform(dims: [u32; 3], density: f32) -> Result<Self, VolumeError> {
         let n = check_dims(dims)?;
-        Ok(DensityVolume {
-            dims,
-            data: vec![density.clamp(0.0, 1.0); n],
-        })
+        Ok(DensityVolume { dims, data: vec![density.clamp(0.0, 1.0); n] })
     }
 
     /// Number of voxels.
@@ -133,11 +113,7 @@ impl DensityVolume {
     /// Trilinearly filtered density at texture coordinate `tc` (box `[0, 1]^3`), clamp-to-edge,
     /// exactly as a linear-filtered 3D texture samples it: the CPU reference for the GPU fetch.
     pub fn sample_linear(&self, tc: glam::Vec3) -> f32 {
-        let dims = glam::Vec3::new(
-            self.dims[0] as f32,
-            self.dims[1] as f32,
-            self.dims[2] as f32,
-        );
+        let dims = glam::Vec3::new(self.dims[0] as f32, self.dims[1] as f32, self.dims[2] as f32);
         let p = tc * dims - 0.5;
         let base = p.floor();
         let f = p - base;
@@ -200,10 +176,7 @@ impl DensityVolume {
 
     /// The densities quantised to 8 bits (`round(255 d)`), for an `R8Unorm` texture.
     pub fn to_unorm8(&self) -> Vec<u8> {
-        self.data
-            .iter()
-            .map(|&d| (d.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect()
+        self.data.iter().map(|&d| (d.clamp(0.0, 1.0) * 255.0).round() as u8).collect()
     }
 }
 
@@ -215,16 +188,10 @@ pub fn mip_level_count(dims: [u32; 3]) -> u32 {
 /// Checks `dims` (each side in `1..=MAX_DIM`) and returns the voxel count.
 pub(crate) fn check_dims(dims: [u32; 3]) -> Result<usize, VolumeError> {
     if dims.contains(&0) {
-        return Err(VolumeError::Dims {
-            dims,
-            reason: "every side must be at least 1".into(),
-        });
+        return Err(VolumeError::Dims { dims, reason: "every side must be at least 1".into() });
     }
     if dims.iter().any(|&d| d > MAX_DIM) {
-        return Err(VolumeError::Dims {
-            dims,
-            reason: format!("every side must be at most {MAX_DIM}"),
-        });
+        return Err(VolumeError::Dims { dims, reason: format!("every side must be at most {MAX_DIM}") });
     }
     Ok(dims.iter().map(|&d| d as usize).product())
 }

@@ -27,13 +27,7 @@ pub struct Veins {
 
 impl Default for Veins {
     fn default() -> Self {
-        Veins {
-            seed: 7,
-            scale: 3.0,
-            turbulence: 4.0,
-            sharpness: 4.0,
-            background: 0.02,
-        }
+        Veins { seed: 7, scale: 3.0, turbulence: 4.0, sharpness: 4.0, background: 0.02 }
     }
 }
 

@@ -9,42 +9,15 @@ fn temp(name: &str) -> PathBuf {
 
 #[test]
 fn spec_parses_every_source() {
-    assert_eq!(
-        "veins".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::Veins {
-            seed: 7,
-            scale: 3.0
-        }
-    );
-    assert_eq!(
-        "veins:3:5.5".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::Veins {
-            seed: 3,
-            scale: 5.5
-        }
-    );
-    assert_eq!(
-        "cube:0.25".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::Cube { size: 0.25 }
-    );
-    assert_eq!(
-        "uniform:0.5".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::Uniform { density: 0.5 }
-    );
+    assert_eq!("veins".parse::<VolumeSpec>().unwrap(), VolumeSpec::Veins { seed: 7, scale: 3.0 });
+    assert_eq!("veins:3:5.5".parse::<VolumeSpec>().unwrap(), VolumeSpec::Veins { seed: 3, scale: 5.5 });
+    assert_eq!("cube:0.25".parse::<VolumeSpec>().unwrap(), VolumeSpec::Cube { size: 0.25 });
+    assert_eq!("uniform:0.5".parse::<VolumeSpec>().unwrap(), VolumeSpec::Uniform { density: 0.5 });
     assert_eq!(
         "raw:C:/data/a:b.raw:8x16x32:u16".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::Raw {
-            path: "C:/data/a:b.raw".into(),
-            dims: [8, 16, 32],
-            format: RawFormat::U16
-        }
+        VolumeSpec::Raw { path: "C:/data/a:b.raw".into(), dims: [8, 16, 32], format: RawFormat::U16 }
     );
-    assert_eq!(
-        "file:v.lvol".parse::<VolumeSpec>().unwrap(),
-        VolumeSpec::File {
-            path: "v.lvol".into()
-        }
-    );
+    assert_eq!("file:v.lvol".parse::<VolumeSpec>().unwrap(), VolumeSpec::File { path: "v.lvol".into() });
 }
 
 #[test]
@@ -91,23 +64,9 @@ fn lvol_rejects_bad_files_naming_them() {
         ([good.clone(), vec![0; 4]].concat(), "expected"),
         (b"NOPE".iter().chain(&good[4..]).copied().collect(), "magic"),
         (good[..10].to_vec(), "too short"),
-        (
-            good[..4]
-                .iter()
-                .chain(&7u32.to_le_bytes())
-                .chain(&good[8..])
-                .copied()
-                .collect(),
-            "version",
-        ),
-        (
-            [&good[..20], &2.0f32.to_le_bytes()[..], &good[24..]].concat(),
-            "outside [0, 1]",
-        ),
-        (
-            [&good[..20], &f32::NAN.to_le_bytes()[..], &good[24..]].concat(),
-            "outside [0, 1]",
-        ),
+        (good[..4].iter().chain(&7u32.to_le_bytes()).chain(&good[8..]).copied().collect(), "version"),
+        ([&good[..20], &2.0f32.to_le_bytes()[..], &good[24..]].concat(), "outside [0, 1]"),
+        ([&good[..20], &f32::NAN.to_le_bytes()[..], &good[24..]].concat(), "outside [0, 1]"),
     ];
     for (bytes, what) in cases {
         std::fs::write(&path, bytes).unwrap();
@@ -129,18 +88,12 @@ fn raw_formats_decode_and_wrong_sizes_are_rejected() {
     let err = load_raw(&path, [2, 2, 3], RawFormat::U8).unwrap_err().to_string();
     assert!(err.contains("grid.raw") && err.contains("expected 12 bytes"), "{err}");
 
-    let words: Vec<u8> = [0u16, 65535, 13107, 0]
-        .iter()
-        .flat_map(|w| w.to_le_bytes())
-        .collect();
+    let words: Vec<u8> = [0u16, 65535, 13107, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
     std::fs::write(&path, &words).unwrap();
     let v = load_raw(&path, [4, 1, 1], RawFormat::U16).unwrap();
     assert_eq!(v.data, vec![0.0, 1.0, 0.2, 0.0]);
 
-    let floats: Vec<u8> = [0.25f32, 0.5, 1.5, 0.0]
-        .iter()
-        .flat_map(|f| f.to_le_bytes())
-        .collect();
+    let floats: Vec<u8> = [0.25f32, 0.5, 1.5, 0.0].iter().flat_map(|f| f.to_le_bytes()).collect();
     std::fs::write(&path, &floats).unwrap();
     let err = load_raw(&path, [2, 2, 1], RawFormat::F32).unwrap_err().to_string();
     assert!(err.contains("grid.raw") && err.contains("voxel 2"), "{err}");

@@ -161,15 +161,10 @@ impl HtsmParams {
         }
         let c = self.transport_colour;
         if !(c.cmpgt(Vec3::ZERO).all() && c.cmple(Vec3::ONE).all()) {
-            return bad(format!(
-                "transport colour {c} must have every channel in (0, 1]"
-            ));
+            return bad(format!("transport colour {c} must have every channel in (0, 1]"));
         }
         if !(self.transport_distance.is_finite() && self.transport_distance > 0.0) {
-            return bad(format!(
-                "transport distance {} must be > 0",
-                self.transport_distance
-            ));
+            return bad(format!("transport distance {} must be > 0", self.transport_distance));
         }
         if !(self.phase_g > -1.0 && self.phase_g < 1.0) {
             return bad(format!("phase g {} must be in (-1, 1)", self.phase_g));
@@ -229,11 +224,7 @@ impl Camera {
         Camera {
             eye: centre + dir * distance,
             target: centre,
-            up: if dir.dot(Vec3::Y).abs() > 0.99 {
-                Vec3::Z
-            } else {
-                Vec3::Y
-            },
+            up: if dir.dot(Vec3::Y).abs() > 0.99 { Vec3::Z } else { Vec3::Y },
             fov_y,
         }
     }
@@ -243,8 +234,7 @@ impl Camera {
         let centre_dist = self.eye.distance(self.target);
         let near = (centre_dist * 0.01).max(1e-4);
         let far = centre_dist * 10.0 + 1.0;
-        Mat4::perspective_rh(self.fov_y, aspect, near, far)
-            * Mat4::look_at_rh(self.eye, self.target, self.up)
+        Mat4::perspective_rh(self.fov_y, aspect, near, far) * Mat4::look_at_rh(self.eye, self.target, self.up)
     }
 }
 
@@ -272,11 +262,7 @@ impl LightFrustum {
     pub fn fit(sphere: (Vec3, f32), light: &Light) -> Result<LightFrustum, HtsmError> {
         let (centre, radius) = sphere;
         let up_for = |d: Vec3| {
-            if d.dot(Vec3::Y).abs() > 0.99 {
-                Vec3::X
-            } else {
-                Vec3::Y
-            }
+            if d.dot(Vec3::Y).abs() > 0.99 { Vec3::X } else { Vec3::Y }
         };
         match *light {
             Light::Directional { direction, .. } => {
@@ -286,18 +272,9 @@ impl LightFrustum {
                 }
                 let eye = centre - d * 2.0 * radius;
                 let view = Mat4::look_at_rh(eye, centre, up_for(d));
-                let proj = Mat4::orthographic_rh(
-                    -radius,
-                    radius,
-                    -radius,
-                    radius,
-                    0.5 * radius,
-                    3.5 * radius,
-                );
-                Ok(LightFrustum {
-                    view_proj: proj * view,
-                    width_at_centre: 2.0 * radius,
-                })
+                let proj =
+                    Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.5 * radius, 3.5 * radius);
+                Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * radius })
             }
             Light::Point { position, .. } => {
                 let to_centre = centre - position;
@@ -312,10 +289,7 @@ impl LightFrustum {
                 let view = Mat4::look_at_rh(position, centre, up_for(to_centre / dist));
                 let near = ((dist - radius) * 0.9).max(dist * 1e-3);
                 let proj = Mat4::perspective_rh(2.0 * half, 1.0, near, (dist + radius) * 1.1);
-                Ok(LightFrustum {
-                    view_proj: proj * view,
-                    width_at_centre: 2.0 * dist * half.tan(),
-                })
+                Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * dist * half.tan() })
             }
         }
     }
@@ -381,7 +355,8 @@ pub fn volume_dims_for(mesh: &Mesh, largest: u32) -> [u32; 3] {
     let (lo, hi) = mesh.bounds();
     let size = hi - lo;
     let extent = size.max_element().max(f32::MIN_POSITIVE);
-    [size.x, size.y, size.z].map(|s| ((s / extent * largest as f32).round() as u32).clamp(4.min(largest), largest))
+    [size.x, size.y, size.z]
+        .map(|s| ((s / extent * largest as f32).round() as u32).clamp(4.min(largest), largest))
 }
 
 /// Checks that `volume` is usable with a mesh (dimensions within the 3D texture limits).
@@ -423,26 +398,11 @@ mod tests {
     fn params_are_validated() {
         assert!(HtsmParams::default().validate().is_ok());
         for bad in [
-            HtsmParams {
-                samples: 4,
-                ..Default::default()
-            },
-            HtsmParams {
-                steps: 0,
-                ..Default::default()
-            },
-            HtsmParams {
-                transport_colour: Vec3::new(0.0, 0.5, 0.5),
-                ..Default::default()
-            },
-            HtsmParams {
-                transport_distance: 0.0,
-                ..Default::default()
-            },
-            HtsmParams {
-                phase_g: 1.0,
-                ..Default::default()
-            },
+            HtsmParams { samples: 4, ..Default::default() },
+            HtsmParams { steps: 0, ..Default::default() },
+            HtsmParams { transport_colour: Vec3::new(0.0, 0.5, 0.5), ..Default::default() },
+            HtsmParams { transport_distance: 0.0, ..Default::default() },
+            HtsmParams { phase_g: 1.0, ..Default::default() },
         ] {
             assert!(bad.validate().is_err(), "{bad:?}");
         }

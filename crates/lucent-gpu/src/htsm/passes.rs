@@ -236,7 +236,7 @@ fn validate_mesh(mesh: &Mesh) -> Result<(), HtsmError> {
     if mesh.positions.iter().any(|p| !p.is_finite()) {
         return Err(HtsmError::Mesh("a vertex position is not finite".into()));
     }
-    if !(mesh.extent() > 0.0) {
+    if mesh.extent().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(HtsmError::Mesh("its bounding box is a point".into()));
     }
     Ok(())
@@ -269,10 +269,7 @@ impl HtsmRenderer {
             .positions
             .iter()
             .zip(&normals)
-            .map(|(p, n)| Vertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-            })
+            .map(|(p, n)| Vertex { position: p.to_array(), normal: n.to_array() })
             .collect();
         let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("htsm vertices"),
@@ -316,11 +313,7 @@ impl HtsmRenderer {
                     bytes_per_row: Some(v.dims[0]),
                     rows_per_image: Some(v.dims[1]),
                 },
-                wgpu::Extent3d {
-                    width: v.dims[0],
-                    height: v.dims[1],
-                    depth_or_array_layers: v.dims[2],
-                },
+                wgpu::Extent3d { width: v.dims[0], height: v.dims[1], depth_or_array_layers: v.dims[2] },
             );
         }
 
@@ -362,11 +355,7 @@ impl HtsmRenderer {
             .collect();
         let reference_depth = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("htsm light depth"),
-            size: wgpu::Extent3d {
-                width: reference_size,
-                height: reference_size,
-                depth_or_array_layers: 1,
-            },
+            size: wgpu::Extent3d { width: reference_size, height: reference_size, depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -377,11 +366,7 @@ impl HtsmRenderer {
 
         let phase = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("htsm phase table"),
-            size: wgpu::Extent3d {
-                width: PHASE_TABLE_SIZE,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
+            size: wgpu::Extent3d { width: PHASE_TABLE_SIZE, height: 1, depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -410,11 +395,7 @@ impl HtsmRenderer {
         });
         let mip_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("htsm mip source"),
-            entries: &[
-                texture_entry(0, d2, false),
-                texture_entry(1, d2, false),
-                texture_entry(2, d2, false),
-            ],
+            entries: &[texture_entry(0, d2, false), texture_entry(1, d2, false), texture_entry(2, d2, false)],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("htsm tonemap"),
@@ -423,8 +404,7 @@ impl HtsmRenderer {
 
         // Pipelines.
         let light_module = shader(device, "htsm light", include_str!("../shaders/htsm_light.wgsl"));
-        let render_module =
-            shader(device, "htsm render", include_str!("../shaders/htsm_render.wgsl"));
+        let render_module = shader(device, "htsm render", include_str!("../shaders/htsm_render.wgsl"));
         let mip_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("htsm mip"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../shaders/htsm_mip.wgsl").into()),
@@ -485,10 +465,7 @@ impl HtsmRenderer {
         let globals_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("htsm globals"),
             layout: &globals_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() }],
         });
         let exposure = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("htsm exposure"),
@@ -509,9 +486,7 @@ impl HtsmRenderer {
                 })
             })
             .collect();
-        let full_views = reference_textures
-            .each_ref()
-            .map(|t| t.create_view(&Default::default()));
+        let full_views = reference_textures.each_ref().map(|t| t.create_view(&Default::default()));
         let density_view = density.create_view(&Default::default());
         let phase_view = phase.create_view(&Default::default());
         let ref_sampler = linear_sampler(device, "htsm reference sampler");
@@ -532,10 +507,7 @@ impl HtsmRenderer {
                     binding: 2,
                     resource: wgpu::BindingResource::TextureView(&full_views[2]),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&ref_sampler),
-                },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&ref_sampler) },
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::TextureView(&density_view),
@@ -592,16 +564,10 @@ impl HtsmRenderer {
     /// GPU memory of the HTSM data (not counting the camera-side output targets).
     pub fn memory(&self) -> HtsmMemory {
         let texel = 8u64; // Rgba16Float
-        let reference_level_texels: u64 = (0..self.reference_levels)
-            .map(|l| ((self.reference_size >> l).max(1) as u64).pow(2))
-            .sum();
+        let reference_level_texels: u64 =
+            (0..self.reference_levels).map(|l| ((self.reference_size >> l).max(1) as u64).pow(2)).sum();
         let volume: u64 = (0..self.density_levels)
-            .map(|l| {
-                self.density_dims
-                    .iter()
-                    .map(|&d| (d >> l).max(1) as u64)
-                    .product::<u64>()
-            })
+            .map(|l| self.density_dims.iter().map(|&d| (d >> l).max(1) as u64).product::<u64>())
             .sum();
         HtsmMemory {
             reference_images: 3 * texel * reference_level_texels,
@@ -624,11 +590,7 @@ impl HtsmRenderer {
                 "image size {width}x{height} (each side must be in 1..={max})"
             )));
         }
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let make = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
             self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -646,11 +608,7 @@ impl HtsmRenderer {
             HDR_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
-        let depth = make(
-            "htsm depth",
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
+        let depth = make("htsm depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
         let ldr = make(
             "htsm ldr",
             LDR_FORMAT,
@@ -661,18 +619,12 @@ impl HtsmRenderer {
             label: Some("htsm tonemap"),
             layout: &self.tonemap_layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&hdr_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: self.exposure.as_entire_binding(),
-                },
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&hdr_view) },
+                wgpu::BindGroupEntry { binding: 1, resource: self.exposure.as_entire_binding() },
             ],
         });
-        let padded_row = (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row =
+            (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("htsm readback"),
             size: padded_row as u64 * height as u64,
@@ -699,18 +651,14 @@ impl HtsmRenderer {
         let frustum = LightFrustum::fit(self.sphere, &view.light)?;
         let extent = self.box_size.max_element();
         let (light, light_colour) = match view.light {
-            Light::Point {
-                position,
-                intensity,
-            } => (position.extend(1.0), intensity),
-            Light::Directional {
-                direction,
-                irradiance,
-            } => (direction.normalize_or_zero().extend(0.0), irradiance),
+            Light::Point { position, intensity } => (position.extend(1.0), intensity),
+            Light::Directional { direction, irradiance } => {
+                (direction.normalize_or_zero().extend(0.0), irradiance)
+            }
         };
         // Ring-1 radius: object units -> level-0 texels at the object's centre.
-        let kernel_texels = params.kernel_radius * extent / frustum.width_at_centre
-            * self.reference_size as f32;
+        let kernel_texels =
+            params.kernel_radius * extent / frustum.width_at_centre * self.reference_size as f32;
         let sigma = params.sigma();
         let aspect = view.width as f32 / view.height as f32;
         let globals = Globals {
@@ -721,23 +669,10 @@ impl HtsmRenderer {
             eye: view.camera.eye.extend(1.0).to_array(),
             light: light.to_array(),
             light_colour: light_colour.extend(0.0).to_array(),
-            transport: params
-                .transport_colour
-                .extend(params.transport_distance)
-                .to_array(),
+            transport: params.transport_colour.extend(params.transport_distance).to_array(),
             sigma: sigma.extend(params.density_scale).to_array(),
-            kernel: [
-                kernel_texels,
-                params.f0(),
-                params.shadow_bias,
-                (self.density_levels - 1) as f32,
-            ],
-            shading: [
-                params.diffuse,
-                params.specular,
-                params.shininess,
-                params.exposure,
-            ],
+            kernel: [kernel_texels, params.f0(), params.shadow_bias, (self.density_levels - 1) as f32],
+            shading: [params.diffuse, params.specular, params.shininess, params.exposure],
             counts: [
                 params.samples as f32,
                 params.steps as f32,
@@ -748,18 +683,15 @@ impl HtsmRenderer {
                 *self.density_dims.iter().max().expect("three sides") as f32,
             ],
         };
-        self.queue
-            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
+        self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
         self.queue.write_buffer(
             &self.exposure,
             0,
             bytemuck::bytes_of(&Vec4::new(params.exposure, 0.0, 0.0, 0.0)),
         );
         if self.phase_g != Some(params.phase_g) {
-            let halves: Vec<u16> = phase_table(params.phase_g)
-                .iter()
-                .map(|&v| half::f16::from_f32(v).to_bits())
-                .collect();
+            let halves: Vec<u16> =
+                phase_table(params.phase_g).iter().map(|&v| half::f16::from_f32(v).to_bits()).collect();
             self.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &self.phase,
@@ -773,11 +705,7 @@ impl HtsmRenderer {
                     bytes_per_row: Some(2 * PHASE_TABLE_SIZE),
                     rows_per_image: Some(1),
                 },
-                wgpu::Extent3d {
-                    width: PHASE_TABLE_SIZE,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
+                wgpu::Extent3d { width: PHASE_TABLE_SIZE, height: 1, depth_or_array_layers: 1 },
             );
             self.phase_g = Some(params.phase_g);
         }
@@ -789,11 +717,8 @@ impl HtsmRenderer {
         self.ensure_targets(view.width, view.height)?;
         self.upload(view, params)?;
         let targets = self.targets.as_ref().expect("just ensured");
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("htsm frame"),
-            });
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("htsm frame") });
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -857,12 +782,7 @@ impl HtsmRenderer {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bg.x,
-                            g: bg.y,
-                            b: bg.z,
-                            a: 1.0,
-                        }),
+                        load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
@@ -928,11 +848,7 @@ impl HtsmRenderer {
                     rows_per_image: Some(t.height),
                 },
             },
-            wgpu::Extent3d {
-                width: t.width,
-                height: t.height,
-                depth_or_array_layers: 1,
-            },
+            wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 },
         );
         self.queue.submit([encoder.finish()]);
         let slice = t.readback.slice(..);
@@ -948,9 +864,7 @@ impl HtsmRenderer {
             .map_err(|e| HtsmError::Readback(e.to_string()))?;
         let mut pixels = Vec::with_capacity((4 * t.width * t.height) as usize);
         {
-            let data = slice
-                .get_mapped_range()
-                .map_err(|e| HtsmError::Readback(e.to_string()))?;
+            let data = slice.get_mapped_range().map_err(|e| HtsmError::Readback(e.to_string()))?;
             for row in data.chunks(t.padded_row as usize).take(t.height as usize) {
                 pixels.extend_from_slice(&row[..(4 * t.width) as usize]);
             }
@@ -973,10 +887,7 @@ impl HtsmRenderer {
         let encoder = self.encode(view, params)?;
         let index = self.queue.submit([encoder.finish()]);
         self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(index),
-                timeout: None,
-            })
+            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
             .map_err(|e| HtsmError::Readback(e.to_string()))?;
         let elapsed = start.elapsed();
         ctx.check("rendering HTSM")?;
