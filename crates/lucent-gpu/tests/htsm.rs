@@ -12,7 +12,8 @@ use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::{DensityVolume, VolumeSpec};
 use lucent_gpu::GpuContext;
-use lucent_gpu::htsm::{Camera, HtsmParams, HtsmRenderer, HtsmView, TransportModel};
+use lucent_gpu::camera::{OrbitCamera, bounding_sphere};
+use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel};
 use lucent_gpu::readback::read_texture;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -95,7 +96,10 @@ fn ellipsoid(half_depth: f32) -> Mesh {
 /// Seen from +z, lit from behind (the light travels towards the camera, slightly downwards).
 fn view(mesh: &Mesh, size: u32) -> HtsmView {
     HtsmView {
-        camera: Camera::framing(mesh, Vec3::new(0.0, 0.0, 1.0), 0.9),
+        camera: {
+            let (centre, radius) = bounding_sphere(&mesh.positions);
+            OrbitCamera { pitch_deg: 0.0, ..Default::default() }.frame(centre, radius, 1.0)
+        },
         light: Light::Directional { direction: Vec3::new(0.15, -0.2, 1.0), irradiance: Vec3::splat(3.0) },
         width: size,
         height: size,

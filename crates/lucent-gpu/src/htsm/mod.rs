@@ -19,7 +19,7 @@
 //!    `D_i`, and a Henyey-Greenstein table gives the phase `f(theta_i)`. [`TransportModel`]
 //!    turns these into transmitted light; Lambert and Blinn-Phong shading are added on the lit
 //!    side.
-//! 4. **Tone mapping**: exposure and the sRGB curve to an 8-bit image.
+//! 4. **Tone mapping** with lucent's shared pass ([`crate::tonemap`]) to an 8-bit image.
 //!
 //! # Units
 //!
@@ -34,6 +34,8 @@
 
 pub mod passes;
 
+use crate::camera::CameraView;
+use crate::tonemap::ToneMap;
 use glam::{Mat4, Vec3};
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
@@ -121,10 +123,8 @@ pub struct HtsmParams {
     /// Shadow-test tolerance: a point is lit when the reference image's surface is within this
     /// distance of it, object units. Default 0.02.
     pub shadow_bias: f32,
-    /// Exposure multiplier before the tone curve `1 - exp(-exposure L)`. Default 1.
-    pub exposure: f32,
-    /// Background radiance (linear RGB, before exposure). Default (0.01, 0.01, 0.012).
-    pub background: Vec3,
+    /// Exposure, tone curve and background of the final image (the shared tone-map pass).
+    pub tone: ToneMap,
 }
 
 impl Default for HtsmParams {
@@ -143,8 +143,7 @@ impl Default for HtsmParams {
             specular: 1.0,
             shininess: 60.0,
             shadow_bias: 0.02,
-            exposure: 1.0,
-            background: Vec3::new(0.01, 0.01, 0.012),
+            tone: ToneMap::default(),
         }
     }
 }
@@ -176,7 +175,6 @@ impl HtsmParams {
             ("specular", self.specular),
             ("shininess", self.shininess),
             ("shadow bias", self.shadow_bias),
-            ("exposure", self.exposure),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(format!("{name} {v} must be finite and >= 0"));
@@ -197,51 +195,6 @@ impl HtsmParams {
     pub fn f0(&self) -> f32 {
         ((self.eta - 1.0) / (self.eta + 1.0)).powi(2)
     }
-}
-
-/// A pinhole camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Eye position, mesh units.
-    pub eye: Vec3,
-    /// Point looked at, mesh units.
-    pub target: Vec3,
-    /// Up direction (need not be unit or orthogonal to the view).
-    pub up: Vec3,
-    /// Vertical field of view, radians.
-    pub fov_y: f32,
-}
-
-impl Camera {
-    /// A camera looking at the bounding sphere of `mesh` from `direction` (from the target
-    /// towards the eye), far enough for the sphere to fill `fill` of the vertical field of view
-    /// (e.g. 0.8).
-    pub fn framing(mesh: &Mesh, direction: Vec3, fill: f32) -> Camera {
-        let (centre, radius) = bounding_sphere(mesh);
-        let fov_y = 35f32.to_radians();
-        let distance = radius / (0.5 * fov_y * fill.clamp(0.05, 1.0)).sin();
-        let dir = direction.normalize_or(Vec3::Z);
-        Camera {
-            eye: centre + dir * distance,
-            target: centre,
-            up: if dir.dot(Vec3::Y).abs() > 0.99 { Vec3::Z } else { Vec3::Y },
-            fov_y,
-        }
-    }
-
-    /// World to clip (wgpu depth in `[0, 1]`) for an image of `aspect` = width / height.
-    pub fn view_proj(&self, aspect: f32) -> Mat4 {
-        let centre_dist = self.eye.distance(self.target);
-        let near = (centre_dist * 0.01).max(1e-4);
-        let far = centre_dist * 10.0 + 1.0;
-        Mat4::perspective_rh(self.fov_y, aspect, near, far) * Mat4::look_at_rh(self.eye, self.target, self.up)
-    }
-}
-
-/// Centre and radius of the bounding box's circumscribed sphere, mesh units.
-pub fn bounding_sphere(mesh: &Mesh) -> (Vec3, f32) {
-    let (lo, hi) = mesh.bounds();
-    (0.5 * (lo + hi), 0.5 * (hi - lo).length())
 }
 
 /// The light's view and projection for the reference images, and the width of its frustum at
@@ -316,8 +269,8 @@ pub fn phase_table(g: f32) -> Vec<f32> {
 /// Where the camera and the light are, and the image size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HtsmView {
-    /// The camera.
-    pub camera: Camera,
+    /// The camera (e.g. [`crate::camera::OrbitCamera::frame`]), mesh units.
+    pub camera: CameraView,
     /// The one light HTSM renders from (Shopf: one point or distant light).
     pub light: Light,
     /// Image width in pixels.

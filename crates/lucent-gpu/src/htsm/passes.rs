@@ -2,11 +2,13 @@
 
 use super::{
     DENSITY_FORMAT, HtsmError, HtsmMemory, HtsmParams, HtsmView, LightFrustum, PHASE_TABLE_SIZE,
-    REFERENCE_FORMAT, TransportModel, bounding_sphere, check_volume, phase_table,
+    REFERENCE_FORMAT, TransportModel, check_volume, phase_table,
 };
+use crate::camera::bounding_sphere;
 use crate::context::{DEPTH_FORMAT, GpuContext, HDR_FORMAT, LDR_FORMAT};
+use crate::tonemap::ToneMapPass;
 use bytemuck::{Pod, Zeroable};
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::DensityVolume;
@@ -62,11 +64,9 @@ pub struct HtsmRenderer {
     light_pipeline: wgpu::RenderPipeline,
     mip_pipeline: wgpu::RenderPipeline,
     camera_pipeline: wgpu::RenderPipeline,
-    tonemap_pipeline: wgpu::RenderPipeline,
-    tonemap_layout: wgpu::BindGroupLayout,
+    tonemap: ToneMapPass,
     globals: wgpu::Buffer,
     globals_bind_group: wgpu::BindGroup,
-    exposure: wgpu::Buffer,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
@@ -397,10 +397,6 @@ impl HtsmRenderer {
             label: Some("htsm mip source"),
             entries: &[texture_entry(0, d2, false), texture_entry(1, d2, false), texture_entry(2, d2, false)],
         });
-        let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("htsm tonemap"),
-            entries: &[texture_entry(0, d2, false), uniform_entry(1)],
-        });
 
         // Pipelines.
         let light_module = shader(device, "htsm light", include_str!("../shaders/htsm_light.wgsl"));
@@ -408,10 +404,6 @@ impl HtsmRenderer {
         let mip_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("htsm mip"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../shaders/htsm_mip.wgsl").into()),
-        });
-        let tonemap_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("htsm tonemap"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../shaders/htsm_tonemap.wgsl").into()),
         });
         let layout = |label: &str, groups: &[Option<&wgpu::BindGroupLayout>]| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -446,14 +438,7 @@ impl HtsmRenderer {
             "fs_mip",
             &reference_targets,
         );
-        let tonemap_pipeline = fullscreen_pipeline(
-            device,
-            "htsm tonemap pass",
-            &tonemap_module,
-            &layout("htsm tonemap", &[Some(&tonemap_layout)]),
-            "fs_tonemap",
-            &[Some(LDR_FORMAT.into())],
-        );
+        let tonemap = ToneMapPass::new(ctx, LDR_FORMAT)?;
 
         // Bind groups.
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
@@ -466,12 +451,6 @@ impl HtsmRenderer {
             label: Some("htsm globals"),
             layout: &globals_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() }],
-        });
-        let exposure = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("htsm exposure"),
-            size: 16,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
         });
         let mip_bind_groups = (0..reference_levels.saturating_sub(1) as usize)
             .map(|level| {
@@ -530,17 +509,15 @@ impl HtsmRenderer {
             light_pipeline,
             mip_pipeline,
             camera_pipeline,
-            tonemap_pipeline,
-            tonemap_layout,
+            tonemap,
             globals,
             globals_bind_group,
-            exposure,
             vertices: vertex_buffer,
             indices: index_buffer,
             index_count: (mesh.triangles.len() * 3) as u32,
             box_min,
             box_size: box_max - box_min,
-            sphere: bounding_sphere(mesh),
+            sphere: bounding_sphere(&mesh.positions),
             reference_size,
             reference_levels,
             reference_textures,
@@ -577,7 +554,7 @@ impl HtsmRenderer {
         }
     }
 
-    fn ensure_targets(&mut self, width: u32, height: u32) -> Result<(), HtsmError> {
+    fn ensure_targets(&mut self, ctx: &GpuContext, width: u32, height: u32) -> Result<(), HtsmError> {
         if let Some(t) = &self.targets
             && t.width == width
             && t.height == height
@@ -615,14 +592,7 @@ impl HtsmRenderer {
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         );
         let hdr_view = hdr.create_view(&Default::default());
-        let tonemap_bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("htsm tonemap"),
-            layout: &self.tonemap_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&hdr_view) },
-                wgpu::BindGroupEntry { binding: 1, resource: self.exposure.as_entire_binding() },
-            ],
-        });
+        let tonemap_bind_group = self.tonemap.bind(ctx, &hdr_view);
         let padded_row =
             (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -646,7 +616,7 @@ impl HtsmRenderer {
     }
 
     /// Writes the uniforms and the phase table for this frame.
-    fn upload(&mut self, view: &HtsmView, params: &HtsmParams) -> Result<(), HtsmError> {
+    fn upload(&mut self, ctx: &GpuContext, view: &HtsmView, params: &HtsmParams) -> Result<(), HtsmError> {
         params.validate()?;
         let frustum = LightFrustum::fit(self.sphere, &view.light)?;
         let extent = self.box_size.max_element();
@@ -660,9 +630,8 @@ impl HtsmRenderer {
         let kernel_texels =
             params.kernel_radius * extent / frustum.width_at_centre * self.reference_size as f32;
         let sigma = params.sigma();
-        let aspect = view.width as f32 / view.height as f32;
         let globals = Globals {
-            view_proj: view.camera.view_proj(aspect).to_cols_array_2d(),
+            view_proj: view.camera.view_proj.to_cols_array_2d(),
             light_view_proj: frustum.view_proj.to_cols_array_2d(),
             box_min: self.box_min.extend(0.0).to_array(),
             box_size: self.box_size.extend(1.0 / extent).to_array(),
@@ -672,7 +641,7 @@ impl HtsmRenderer {
             transport: params.transport_colour.extend(params.transport_distance).to_array(),
             sigma: sigma.extend(params.density_scale).to_array(),
             kernel: [kernel_texels, params.f0(), params.shadow_bias, (self.density_levels - 1) as f32],
-            shading: [params.diffuse, params.specular, params.shininess, params.exposure],
+            shading: [params.diffuse, params.specular, params.shininess, 0.0],
             counts: [
                 params.samples as f32,
                 params.steps as f32,
@@ -684,11 +653,7 @@ impl HtsmRenderer {
             ],
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
-        self.queue.write_buffer(
-            &self.exposure,
-            0,
-            bytemuck::bytes_of(&Vec4::new(params.exposure, 0.0, 0.0, 0.0)),
-        );
+        self.tonemap.prepare(ctx, &params.tone)?;
         if self.phase_g != Some(params.phase_g) {
             let halves: Vec<u16> =
                 phase_table(params.phase_g).iter().map(|&v| half::f16::from_f32(v).to_bits()).collect();
@@ -713,9 +678,14 @@ impl HtsmRenderer {
     }
 
     /// Records the four passes of one frame.
-    fn encode(&mut self, view: &HtsmView, params: &HtsmParams) -> Result<wgpu::CommandEncoder, HtsmError> {
-        self.ensure_targets(view.width, view.height)?;
-        self.upload(view, params)?;
+    fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        view: &HtsmView,
+        params: &HtsmParams,
+    ) -> Result<wgpu::CommandEncoder, HtsmError> {
+        self.ensure_targets(ctx, view.width, view.height)?;
+        self.upload(ctx, view, params)?;
         let targets = self.targets.as_ref().expect("just ensured");
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("htsm frame") });
@@ -774,7 +744,6 @@ impl HtsmRenderer {
 
         // 3. Camera pass into the HDR target.
         {
-            let bg = params.background.as_dvec3();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("htsm camera pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -782,7 +751,8 @@ impl HtsmRenderer {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
+                        // Alpha 0 is "no object": the tone-map pass puts the background there.
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
@@ -816,9 +786,7 @@ impl HtsmRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.tonemap_pipeline);
-            pass.set_bind_group(0, &targets.tonemap_bind_group, &[]);
-            pass.draw(0..3, 0..1);
+            self.tonemap.draw(&mut pass, &targets.tonemap_bind_group);
         }
         Ok(encoder)
     }
@@ -831,7 +799,7 @@ impl HtsmRenderer {
         view: &HtsmView,
         params: &HtsmParams,
     ) -> Result<image::RgbaImage, HtsmError> {
-        let mut encoder = self.encode(view, params)?;
+        let mut encoder = self.encode(ctx, view, params)?;
         let t = self.targets.as_ref().expect("encode ensures targets");
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
@@ -884,7 +852,7 @@ impl HtsmRenderer {
         params: &HtsmParams,
     ) -> Result<Duration, HtsmError> {
         let start = Instant::now();
-        let encoder = self.encode(view, params)?;
+        let encoder = self.encode(ctx, view, params)?;
         let index = self.queue.submit([encoder.finish()]);
         self.device
             .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })

@@ -24,7 +24,7 @@ struct Globals {
     // x: ring-1 radius (level-0 texels of the reference images); y: Schlick F0;
     // z: shadow bias (object units); w: largest mip level of the density volume.
     kernel: vec4<f32>,
-    // x: diffuse weight; y: specular weight; z: Blinn-Phong exponent; w: exposure.
+    // x: diffuse weight; y: specular weight; z: Blinn-Phong exponent; w: unused.
     shading: vec4<f32>,
     // x: samples n (1, 5, 9, 13); y: steps K; z: model (0 thesis, 1 Beer-Lambert);
     // w: largest side of the density volume (voxels).
