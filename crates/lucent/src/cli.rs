@@ -21,6 +21,8 @@ pub struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
+// Parsed once per process: the size of the render variant (with its HTSM options) is irrelevant.
+#[allow(clippy::large_enum_variant)]
 pub enum Command {
     /// Render a translucent mesh to a PNG image (the default command).
     Render(RenderArgs),
@@ -102,6 +104,59 @@ pub struct RenderArgs {
     /// object just fits the image.
     #[arg(long)]
     pub distance: Option<f32>,
+    /// HTSM options (`--method htsm`, Shopf 2007).
+    #[command(flatten)]
+    pub htsm: HtsmArgs,
+}
+
+/// Options of `--method htsm` (Heterogeneous Translucent Shadow Maps, Shopf 2007). Lengths are in
+/// *object units*: fractions of the mesh's largest bounding-box side.
+#[derive(Args, Debug, Clone)]
+pub struct HtsmArgs {
+    /// Density volume over the mesh's bounding box: `veins[:SEED[:SCALE]]` (marble/mineral
+    /// veins), `cube[:SIZE]` (dense cube inside a clear body, Shopf fig. 5.8), `uniform:D`
+    /// (D in 0..1), `raw:PATH:NXxNYxNZ:u8|u16|f32` or `file:PATH` (lucent's LVOL format).
+    #[arg(long, default_value = "veins", help_heading = "HTSM (--method htsm)")]
+    pub volume: String,
+    /// Voxels along the largest side of procedural volumes (other sides follow the box).
+    #[arg(long, default_value_t = 64, help_heading = "HTSM (--method htsm)")]
+    pub volume_res: u32,
+    /// Sample rays per pixel in the hierarchical pattern: 1, 5, 9 or 13 (Shopf fig. 4.3).
+    #[arg(long, default_value_t = 9, help_heading = "HTSM (--method htsm)")]
+    pub samples: u32,
+    /// Ray-cast steps through the density volume per sample ray.
+    #[arg(long, default_value_t = 16, help_heading = "HTSM (--method htsm)")]
+    pub steps: u32,
+    /// Transport colour r,g,b (each in (0, 1]): the colour light takes after the transport
+    /// distance. Default 0.9,0.6,0.3, or the glTF file's KHR_materials_volume attenuationColor.
+    #[arg(long, alias = "transport-color", help_heading = "HTSM (--method htsm)")]
+    pub transport_colour: Option<String>,
+    /// Transport distance, object units (> 0). Default 0.5, or the glTF file's
+    /// KHR_materials_volume attenuationDistance divided by the mesh's largest side.
+    #[arg(long, help_heading = "HTSM (--method htsm)")]
+    pub transport_distance: Option<f32>,
+    /// Henyey-Greenstein asymmetry g in (-1, 1) of the phase function.
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
+    pub phase_g: f32,
+    /// Extra absorption of density 1, per object unit (sigma_at = sigma_a + scale * density).
+    #[arg(long, default_value_t = 20.0, help_heading = "HTSM (--method htsm)")]
+    pub density_scale: f32,
+    /// Transport model: `thesis` (Shopf table 4.1) or `beer-lambert` (exp(-sigma D - alpha)).
+    #[arg(long, value_enum, default_value_t = HtsmModel::BeerLambert, help_heading = "HTSM (--method htsm)")]
+    pub htsm_model: HtsmModel,
+    /// Side of the light-view reference images, texels (16..=device limit).
+    #[arg(long, default_value_t = 256, help_heading = "HTSM (--method htsm)")]
+    pub htsm_size: u32,
+}
+
+/// HTSM transport model.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HtsmModel {
+    /// Shopf's table 4.1: T_c (1/n) sum E_i max(0, (2 T_d - (D_i + alpha_i)) / T_d) f(theta_i).
+    Thesis,
+    /// (1/n) sum E_i exp(-sigma D_i - alpha_i) f(theta_i), sigma = -ln(T_c) / T_d.
+    #[default]
+    BeerLambert,
 }
 
 /// Tone curve of `lucent render`.
@@ -128,6 +183,8 @@ pub struct BenchArgs {
 pub enum BenchTarget {
     /// Semi-analytic form factor against converged Monte Carlo (Mertens fig. 3).
     Formfactor,
+    /// HTSM frame time for n = 1, 5, 9, 13 at 512^2 and 1024^2 (Shopf fig. 5.9).
+    Htsm,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -4,6 +4,7 @@
 mod bench;
 mod cli;
 mod render;
+mod render_htsm;
 mod view;
 
 use clap::Parser;

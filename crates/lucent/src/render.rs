@@ -257,15 +257,15 @@ fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(i
 }
 
 /// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.
-fn render_htsm(_scene: &Scene, _args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
-    bail!("--method htsm is not implemented yet (Heterogeneous Translucent Shadow Maps)")
+fn render_htsm(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
+    crate::render_htsm::render(scene, args)
 }
 
-fn orbit_camera(args: &RenderArgs) -> OrbitCamera {
+pub(crate) fn orbit_camera(args: &RenderArgs) -> OrbitCamera {
     OrbitCamera { yaw_deg: args.yaw, pitch_deg: args.pitch, distance: args.distance, ..Default::default() }
 }
 
-fn tone_map(args: &RenderArgs) -> ToneMap {
+pub(crate) fn tone_map(args: &RenderArgs) -> ToneMap {
     ToneMap {
         exposure: args.exposure,
         gamma: args.gamma,

@@ -2,8 +2,11 @@
 
 use crate::cli::{BenchArgs, BenchTarget};
 
+mod htsm;
+
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
         BenchTarget::Formfactor => anyhow::bail!("bench formfactor: not implemented yet"),
+        BenchTarget::Htsm => htsm::run(args),
     }
 }

@@ -1,0 +1,228 @@
+//! `lucent render --method htsm`: Heterogeneous Translucent Shadow Maps (Shopf 2007, chapter 4)
+//! through [`lucent_gpu::htsm`].
+//!
+//! The mesh comes from the shared scene loader; the density volume from `--volume`; the material
+//! from `--transport-colour` / `--transport-distance`, else from the glTF file's
+//! `KHR_materials_volume` (attenuation colour, attenuation distance in mesh units, converted to
+//! object units), else the defaults. HTSM renders from one light: the first `--light`.
+
+use crate::cli::{HtsmArgs, HtsmModel, RenderArgs};
+use crate::render::{Scene, Timings, orbit_camera, tone_map};
+use anyhow::{Context, Result, bail};
+use glam::Vec3;
+use lucent_core::mesh::Mesh;
+use lucent_core::volume::{DensityVolume, VolumeSpec};
+use lucent_gpu::GpuContext;
+use lucent_gpu::camera::bounding_sphere;
+use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel, volume_dims_for};
+use std::path::Path;
+use std::time::Instant;
+
+/// Default transport colour `T_c` (a wax-like orange).
+pub const DEFAULT_TRANSPORT_COLOUR: [f32; 3] = [0.9, 0.6, 0.3];
+/// Default transport distance `T_d`, object units (half the object's size).
+pub const DEFAULT_TRANSPORT_DISTANCE: f32 = 0.5;
+/// A transport distance standing in for glTF's infinite attenuation distance (no absorption),
+/// object units: far beyond any path through the object.
+const CLEAR_TRANSPORT_DISTANCE: f32 = 1.0e4;
+
+/// Renders `scene` with HTSM; returns the image and the timings of the summary line.
+pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
+    let gltf = match &args.mesh {
+        Some(path) if is_gltf(path) => gltf_volume_params(path)?,
+        _ => None,
+    };
+    let params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
+    let light = *scene.lights.first().context("HTSM needs a light")?;
+    if scene.lights.len() > 1 {
+        log::warn!("HTSM renders from one light; using the first of {}", scene.lights.len());
+    }
+
+    let ctx = GpuContext::new()?;
+    let t = Instant::now();
+    let volume = build_volume(&args.htsm, &scene.mesh)?;
+    let volume_ms = t.elapsed().as_secs_f64() * 1e3;
+
+    let t = Instant::now();
+    let mut renderer = HtsmRenderer::new(&ctx, &scene.mesh, &volume, args.htsm.htsm_size)
+        .with_context(|| format!("setting up HTSM for {}", scene.source))?;
+    let (centre, radius) = bounding_sphere(&scene.mesh.positions);
+    let view = HtsmView {
+        camera: orbit_camera(args).frame(centre, radius, args.width as f32 / args.height as f32),
+        light,
+        width: args.width,
+        height: args.height,
+    };
+    let image = renderer.render(&ctx, &view, &params)?;
+    let render_ms = t.elapsed().as_secs_f64() * 1e3;
+    let memory = renderer.memory();
+    println!(
+        "lucent: htsm: volume {} {}x{}x{}, n = {}, K = {}, {} model, T_c = {}, T_d = {} object units, \
+         density scale {}; reference images {}^2 + volume = {:.2} MB",
+        args.htsm.volume,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
+        params.samples,
+        params.steps,
+        model_name(params.model),
+        params.transport_colour,
+        params.transport_distance,
+        params.density_scale,
+        renderer.reference_size(),
+        memory.thesis_bytes() as f64 / 1e6,
+    );
+    Ok((image, Timings { solve_ms: volume_ms, render_ms, adapter: ctx.describe() }))
+}
+
+fn model_name(m: TransportModel) -> &'static str {
+    match m {
+        TransportModel::Thesis => "thesis",
+        TransportModel::BeerLambert => "beer-lambert",
+    }
+}
+
+fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// The first material's `KHR_materials_volume` `(attenuation colour, attenuation distance in mesh
+/// units)`, or `None` when there is none.
+pub fn gltf_volume_params(path: &Path) -> Result<Option<([f32; 3], f32)>> {
+    let gltf = gltf::Gltf::open(path).with_context(|| format!("{}: cannot read glTF", path.display()))?;
+    Ok(gltf
+        .document
+        .materials()
+        .next()
+        .and_then(|m| m.volume())
+        .map(|v| (v.attenuation_color(), v.attenuation_distance())))
+}
+
+/// Parses `r,g,b`.
+pub fn parse_rgb(flag: &str, s: &str) -> Result<Vec3> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("{flag} {s:?}: {e}; expected r,g,b"))?;
+    let [r, g, b] = v[..] else {
+        bail!("{flag} {s:?}: {} numbers given; expected r,g,b", v.len());
+    };
+    Ok(Vec3::new(r, g, b))
+}
+
+/// The HTSM parameters from the flags, falling back on the glTF material's
+/// `KHR_materials_volume` (`gltf`) and then on the defaults.
+pub fn htsm_params(
+    h: &HtsmArgs,
+    mesh: &Mesh,
+    gltf: Option<([f32; 3], f32)>,
+    args: &RenderArgs,
+) -> Result<HtsmParams> {
+    let extent = mesh.extent();
+    let (gltf_colour, gltf_distance) = match gltf {
+        // glTF allows 0 in the colour (total absorption) and an infinite distance (none); keep
+        // both inside the model's domain.
+        Some((c, d)) => (
+            Some(Vec3::from(c).clamp(Vec3::splat(1e-4), Vec3::ONE)),
+            Some(if d.is_finite() && d > 0.0 { d / extent } else { CLEAR_TRANSPORT_DISTANCE }),
+        ),
+        None => (None, None),
+    };
+    let transport_colour = match &h.transport_colour {
+        Some(s) => parse_rgb("--transport-colour", s)?,
+        None => gltf_colour.unwrap_or(Vec3::from(DEFAULT_TRANSPORT_COLOUR)),
+    };
+    let params = HtsmParams {
+        samples: h.samples,
+        steps: h.steps,
+        transport_colour,
+        transport_distance: h.transport_distance.or(gltf_distance).unwrap_or(DEFAULT_TRANSPORT_DISTANCE),
+        phase_g: h.phase_g,
+        density_scale: h.density_scale,
+        model: match h.htsm_model {
+            HtsmModel::Thesis => TransportModel::Thesis,
+            HtsmModel::BeerLambert => TransportModel::BeerLambert,
+        },
+        tone: tone_map(args),
+        ..HtsmParams::default()
+    };
+    params.validate()?;
+    Ok(params)
+}
+
+/// The density volume named by `--volume`; procedural ones get `--volume-res` voxels along the
+/// mesh's largest side.
+pub fn build_volume(h: &HtsmArgs, mesh: &Mesh) -> Result<DensityVolume> {
+    if !(1..=lucent_core::volume::MAX_DIM).contains(&h.volume_res) {
+        bail!("--volume-res must be in 1..={}, got {}", lucent_core::volume::MAX_DIM, h.volume_res);
+    }
+    let spec: VolumeSpec = h.volume.parse()?;
+    Ok(spec.build(volume_dims_for(mesh, h.volume_res))?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+
+    fn args(extra: &[&str]) -> RenderArgs {
+        let mut v = vec!["lucent", "render", "--method", "htsm"];
+        v.extend_from_slice(extra);
+        match Cli::parse_from(v).command {
+            Some(Command::Render(a)) => a,
+            _ => unreachable!(),
+        }
+    }
+
+    fn cube() -> Mesh {
+        Mesh::new(vec![Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)], vec![])
+    }
+
+    #[test]
+    fn flags_map_to_parameters_and_gltf_fills_what_is_not_given() {
+        let a = args(&["--samples", "13", "--transport-colour", "0.5,0.6,0.7", "--phase-g", "-0.2"]);
+        let p = htsm_params(&a.htsm, &cube(), None, &a).unwrap();
+        assert_eq!((p.samples, p.phase_g), (13, -0.2));
+        assert_eq!(p.transport_colour, Vec3::new(0.5, 0.6, 0.7));
+        assert_eq!(p.transport_distance, DEFAULT_TRANSPORT_DISTANCE);
+
+        // KHR_materials_volume: distance 0.5 mesh units on a mesh 2 units long = 0.25 object units.
+        let a = args(&[]);
+        let p = htsm_params(&a.htsm, &cube(), Some(([0.2, 0.4, 0.8], 0.5)), &a).unwrap();
+        assert_eq!(p.transport_colour, Vec3::new(0.2, 0.4, 0.8));
+        assert_eq!(p.transport_distance, 0.25);
+        // Explicit flags win over the file.
+        let a = args(&["--transport-distance", "0.8"]);
+        let p = htsm_params(&a.htsm, &cube(), Some(([0.2, 0.4, 0.8], 0.5)), &a).unwrap();
+        assert_eq!(p.transport_distance, 0.8);
+        // The extension's defaults: white and infinitely far, i.e. no absorption.
+        let p = htsm_params(&a.htsm, &cube(), Some(([1.0; 3], f32::INFINITY)), &args(&[])).unwrap();
+        assert!(p.sigma().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn bad_flags_are_rejected_with_the_flag_named() {
+        for (extra, what) in [
+            (&["--samples", "4"][..], "samples"),
+            (&["--transport-colour", "1,2"][..], "--transport-colour"),
+            (&["--transport-colour", "0,0.5,0.5"][..], "transport colour"),
+            (&["--transport-distance", "0"][..], "transport distance"),
+            (&["--phase-g", "1"][..], "phase g"),
+            (&["--steps", "0"][..], "steps"),
+        ] {
+            let a = args(extra);
+            let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, &a).unwrap_err());
+            assert!(e.contains(what), "{extra:?}: {e}");
+        }
+        let a = args(&["--volume", "marble"]);
+        let e = format!("{:#}", build_volume(&a.htsm, &cube()).unwrap_err());
+        assert!(e.contains("marble"), "{e}");
+        let a = args(&["--volume", "file:/nonexistent/v.lvol"]);
+        let e = format!("{:#}", build_volume(&a.htsm, &cube()).unwrap_err());
+        assert!(e.contains("/nonexistent/v.lvol"), "{e}");
+    }
+}
