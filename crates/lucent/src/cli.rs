@@ -188,8 +188,43 @@ pub enum BenchTarget {
 }
 
 #[derive(Args, Debug, Clone)]
+#[command(after_help = "Mouse: left-drag orbits (or dents / picks, per the panel's tool), right or \
+    middle drag pans, the wheel zooms. Keys: F12 or P saves a screenshot \
+    (lucent-YYYYMMDD-HHMMSS.png), Escape quits.\n\n\
+    Examples:\n  \
+    lucent view --mesh bunny.obj --material marble --scale 0.1\n  \
+    xvfb-run -a lucent view --frames 20 --script \"dent:0.1,0.2,0.3;light:0,1,-2\" --screenshot out.png\n\n\
+    Script actions (separated by ';'; each runs once the previous one's solution is drawn):\n  \
+    dent:x,y,z  light:x,y,z  twist:k  material:NAME  scale:M  camera:YAW,PITCH,DIST\n  \
+    exposure:K  clusters:x,y,z  shot:PATH\n\
+    Positions are in normalised mesh units: the mesh is centred with a bounding-box side of 1.")]
 pub struct ViewArgs {
-    /// Mesh file; the embedded bunny when absent.
+    /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the built-in mesh when absent.
     #[arg(long)]
     pub mesh: Option<PathBuf>,
+    /// Material preset (case-insensitive), as for `lucent render`.
+    #[arg(long, default_value = "skimmilk")]
+    pub material: String,
+    /// Model scale: the largest side of the mesh's bounding box, in metres.
+    #[arg(long, default_value_t = 0.05)]
+    pub scale: f64,
+    /// Scene file (TOML) with mesh, material, lights and environment.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Save a PNG of the final frame (3D view and panel) to this path, then exit (scripted run).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Scripted run: draw at least N frames (default 10 when --script or --screenshot is given),
+    /// then exit once every scripted action's solution has been drawn.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Scripted actions, e.g. "dent:0.1,0.2,0.3;light:0,1,-2" (see below).
+    #[arg(long)]
+    pub script: Option<String>,
+    /// Window width, logical pixels.
+    #[arg(long, default_value_t = 1100)]
+    pub width: u32,
+    /// Window height, logical pixels.
+    #[arg(long, default_value_t = 700)]
+    pub height: u32,
 }

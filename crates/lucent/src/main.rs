@@ -6,6 +6,7 @@ mod cli;
 mod render;
 mod render_htsm;
 mod view;
+mod viewer;
 
 use clap::Parser;
 

@@ -1,7 +1,56 @@
-//! `lucent view`: the interactive viewer.
+//! `lucent view`: the interactive viewer (see [`crate::viewer`] for its parts).
 
 use crate::cli::ViewArgs;
+use crate::viewer::app::{App, Options, WorkerWake};
+use crate::viewer::script::{self, Automation};
+use crate::viewer::state::ViewState;
+use anyhow::Context as _;
+use lucent_core::bssrdf::Material;
+use winit::event_loop::EventLoop;
 
-pub fn run(_args: &ViewArgs) -> anyhow::Result<()> {
-    anyhow::bail!("view: not implemented yet")
+/// Opens the viewer and runs until the window closes (or a scripted run finishes).
+pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
+    let options = options(args)?;
+    let event_loop = EventLoop::<WorkerWake>::with_user_event()
+        .build()
+        .context("opening a window needs a display (X11 or Wayland); headless, run it under `xvfb-run -a`")?;
+    let mut app = App::new(options, event_loop.create_proxy());
+    event_loop.run_app(&mut app).context("the event loop failed")?;
+    match app.error.take() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// Checks the arguments and builds the start-up options (before any window opens, so bad input
+/// fails fast with a clear message).
+fn options(args: &ViewArgs) -> anyhow::Result<Options> {
+    if let Some(scene) = &args.scene {
+        anyhow::bail!("--scene {}: scene files are not supported by the viewer yet", scene.display());
+    }
+    if let Some(path) = &args.mesh {
+        if !path.is_file() {
+            anyhow::bail!("--mesh {}: no such file", path.display());
+        }
+    }
+    if !(args.scale.is_finite() && args.scale > 0.0) {
+        anyhow::bail!("--scale must be a positive number of metres, got {}", args.scale);
+    }
+    if args.width < 200 || args.height < 150 {
+        anyhow::bail!("--width/--height must be at least 200x150, got {}x{}", args.width, args.height);
+    }
+    let material = Material::by_name(&args.material).context("--material")?;
+    let actions = match &args.script {
+        Some(s) => script::parse(s)?,
+        None => Vec::new(),
+    };
+    let scripted = args.frames.is_some() || args.script.is_some() || args.screenshot.is_some();
+    let automation =
+        scripted.then(|| Automation::new(args.frames.unwrap_or(10), actions, args.screenshot.clone()));
+    Ok(Options {
+        mesh: args.mesh.clone(),
+        state: ViewState::new(material, args.scale),
+        automation,
+        size: (args.width, args.height),
+    })
 }

@@ -1,0 +1,568 @@
+//! The winit application: owns the window, the GPU state, the egui integration, the worker and
+//! the scene, and runs one frame per redraw: take worker replies, run the UI, send the new state
+//! to the worker, draw, take screenshots, advance the script.
+
+use super::camera::OrbitCamera;
+use super::core_adapter::CAPABILITIES;
+use super::gfx::Gfx;
+use super::input::{self, Input, ViewportRect};
+use super::mesh_pass::{DrawParams, MeshPass, Viewport};
+use super::scene::Scene;
+use super::screenshot::{self, Offscreen};
+use super::script::{Action, Automation, Step};
+use super::state::ViewState;
+use super::ui::{self, Status};
+use super::worker::{Request, Worker};
+use anyhow::Context as _;
+use glam::Vec2;
+use lucent_core::bssrdf::Material;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoopProxy};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// Wakes the event loop when the worker has a reply.
+#[derive(Clone, Copy, Debug)]
+pub struct WorkerWake;
+
+/// How the viewer starts.
+pub struct Options {
+    /// Mesh file; the built-in mesh when `None`.
+    pub mesh: Option<PathBuf>,
+    /// Initial state (material, scale, lights...).
+    pub state: ViewState,
+    /// Scripted run, if any.
+    pub automation: Option<Automation>,
+    /// Window inner size, logical pixels.
+    pub size: (u32, u32),
+}
+
+/// Frame pacing for continuous redraws (animations, scripted runs): about 60 Hz.
+const FRAME_INTERVAL: Duration = Duration::from_millis(16);
+/// A scripted run fails if it makes no progress for this long.
+const SCRIPT_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// Window, GPU and egui state, created on `resumed`.
+struct Surface {
+    window: Arc<Window>,
+    gfx: Gfx,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    mesh_pass: MeshPass,
+}
+
+/// Smoothed frame statistics.
+#[derive(Debug)]
+struct FrameStats {
+    last_frame: Instant,
+    fps: f64,
+    draw_ms: f64,
+}
+
+/// The application.
+pub struct App {
+    mesh_path: Option<PathBuf>,
+    size: (u32, u32),
+    proxy: EventLoopProxy<WorkerWake>,
+    worker: Option<Worker>,
+    scene: Scene,
+    camera: OrbitCamera,
+    input: Input,
+    automation: Option<Automation>,
+    last_progress: Instant,
+    surface: Option<Surface>,
+    viewport: ViewportRect,
+    stats: FrameStats,
+    pending_shot: Option<PathBuf>,
+    exit_after_shot: bool,
+    /// The first error that ends the run (returned by [`super::run`]).
+    pub error: Option<anyhow::Error>,
+}
+
+impl App {
+    /// An app that will open its window when the event loop resumes.
+    pub fn new(options: Options, proxy: EventLoopProxy<WorkerWake>) -> Self {
+        App {
+            mesh_path: options.mesh,
+            size: options.size,
+            proxy,
+            worker: None,
+            scene: Scene::new(options.state),
+            camera: OrbitCamera::default(),
+            input: Input::default(),
+            automation: options.automation,
+            last_progress: Instant::now(),
+            surface: None,
+            viewport: (Vec2::ZERO, Vec2::ONE),
+            stats: FrameStats { last_frame: Instant::now(), fps: 0.0, draw_ms: 0.0 },
+            pending_shot: None,
+            exit_after_shot: false,
+            error: None,
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: anyhow::Error) {
+        if self.error.is_none() {
+            self.error = Some(error);
+        }
+        event_loop.exit();
+    }
+
+    fn open_window(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let attrs = Window::default_attributes()
+            .with_title("lucent — translucent objects (Mertens et al. 2003)")
+            .with_inner_size(winit::dpi::LogicalSize::new(self.size.0, self.size.1));
+        let window = Arc::new(event_loop.create_window(attrs).context("creating the window")?);
+        let gfx = Gfx::new(window.clone(), event_loop.owned_display_handle(), self.automation.is_some())?;
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            window.theme(),
+            Some(gfx.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(&gfx.device, gfx.config.format, Default::default());
+        let mesh_pass = MeshPass::new(&gfx.device, gfx.config.format);
+        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, mesh_pass });
+        Ok(())
+    }
+
+    fn start_worker(&mut self) {
+        let proxy = self.proxy.clone();
+        let worker = Worker::spawn(move || {
+            let _ = proxy.send_event(WorkerWake);
+        });
+        worker.send(Request::Load(self.mesh_path.clone()));
+        self.worker = Some(worker);
+    }
+
+    fn status(&self) -> Status {
+        let s = &self.scene;
+        Status {
+            adapter: self.surface.as_ref().map_or(String::new(), |w| {
+                let i = &w.gfx.adapter_info;
+                format!("{} ({:?})", i.name, i.backend)
+            }),
+            mesh_size: s.mesh.as_ref().map(|m| (m.positions.len(), m.triangles.len())),
+            load_error: s.load_error.clone(),
+            solving: s.solving(),
+            solving_for_s: s.solving_for_s(),
+            timings: s.solution.timings,
+            links: s.solution.links,
+            solver: s.solution.solver,
+            draw_ms: self.stats.draw_ms,
+            fps: self.stats.fps,
+            caps: CAPABILITIES,
+        }
+    }
+
+    /// One frame: see the module docs.
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(worker) = &self.worker else { return };
+        self.scene.receive(worker);
+        if let Some(e) = &self.scene.load_error {
+            if self.automation.is_some() {
+                let e = anyhow::anyhow!("{e}");
+                return self.fail(event_loop, e.context("loading the mesh"));
+            }
+        }
+        self.input.update(&mut self.scene.state);
+        let d = &mut self.scene.state.deform;
+        if d.noise_animated && d.noise_amplitude != 0.0 {
+            d.noise_offset += self.stats.last_frame.elapsed().as_secs_f32() * 0.5;
+        }
+        let frame_start = Instant::now();
+        let status = self.status();
+        let Some(surface) = &mut self.surface else { return };
+        let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.camera);
+        self.viewport = viewport;
+        if requests.reset_camera {
+            self.camera = OrbitCamera::default();
+        }
+        if requests.screenshot {
+            self.pending_shot = Some(screenshot::timestamped_path());
+        }
+        self.scene.sync(self.worker.as_ref().expect("checked above"));
+        upload_scene(surface, &mut self.scene);
+
+        let ppp = output.pixels_per_point;
+        let jobs = surface.egui_ctx.tessellate(output.shapes, ppp);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [surface.gfx.config.width, surface.gfx.config.height],
+            pixels_per_point: ppp,
+        };
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                surface.egui_renderer.update_texture(&surface.gfx.device, &surface.gfx.queue, *id, delta);
+            }
+        }
+        let params = draw_params(&self.camera, &self.scene.state, viewport);
+        if let Some(frame) = surface.gfx.acquire() {
+            let view = frame.texture.create_view(&Default::default());
+            encode_and_submit(surface, &view, viewport, &params, &jobs, &screen);
+            surface.gfx.queue.present(frame);
+            self.scene.mark_drawn();
+        }
+        if let Some(path) = self.pending_shot.take() {
+            if let Err(e) = save_screenshot(surface, &path, viewport, &params, &jobs, &screen) {
+                return self.fail(event_loop, e);
+            }
+            if self.exit_after_shot {
+                return event_loop.exit();
+            }
+        }
+        for id in &output.textures_delta.free {
+            surface.egui_renderer.free_texture(id);
+        }
+        self.update_stats(frame_start);
+        self.advance_script(event_loop);
+    }
+
+    fn update_stats(&mut self, frame_start: Instant) {
+        let s = &mut self.stats;
+        s.draw_ms = frame_start.elapsed().as_secs_f64() * 1e3;
+        let dt = s.last_frame.elapsed().as_secs_f64().max(1e-6);
+        s.fps = if s.fps == 0.0 { 1.0 / dt } else { 0.9 * s.fps + 0.1 / dt };
+        s.last_frame = Instant::now();
+    }
+
+    fn advance_script(&mut self, event_loop: &ActiveEventLoop) {
+        let settled = self.scene.settled();
+        let Some(auto) = &mut self.automation else { return };
+        let step = auto.step(settled);
+        match step {
+            Step::Wait if self.last_progress.elapsed() > SCRIPT_TIMEOUT => {
+                let e = anyhow::anyhow!(
+                    "scripted run made no progress for {} s (the solve did not finish)",
+                    SCRIPT_TIMEOUT.as_secs()
+                );
+                self.fail(event_loop, e)
+            }
+            Step::Wait => {}
+            Step::Run(action) => {
+                self.last_progress = Instant::now();
+                if let Err(e) = self.apply(action) {
+                    self.fail(event_loop, e)
+                }
+            }
+            Step::Finish => match auto.screenshot.take() {
+                Some(path) => {
+                    self.pending_shot = Some(path);
+                    self.exit_after_shot = true;
+                }
+                None => event_loop.exit(),
+            },
+        }
+    }
+
+    /// Applies one scripted action to the state or camera.
+    fn apply(&mut self, action: Action) -> anyhow::Result<()> {
+        let state = &mut self.scene.state;
+        match action {
+            Action::Dent(p) => {
+                let mesh = self.scene.mesh.as_ref().context("dent: no mesh")?;
+                let dent = input::scripted_dent(mesh, p).context("dent: the mesh has no vertices")?;
+                state.deform.dents.push(dent);
+            }
+            Action::Light(p) => match state.params.lights.first_mut() {
+                Some(l) => l.position = p,
+                None => state.params.lights.push(super::state::LightSpec::point(p)),
+            },
+            Action::Twist(k) => state.deform.twist = k,
+            Action::Material(name) => {
+                state.params.material = Material::by_name(&name)?;
+            }
+            Action::Scale(m) => state.params.scale_m = m,
+            Action::Camera(yaw, pitch, distance) => {
+                self.camera.yaw = yaw.to_radians();
+                self.camera.pitch = pitch.to_radians();
+                self.camera.distance = distance;
+            }
+            Action::Exposure(k) => state.exposure = k,
+            Action::Clusters(p) => {
+                let mesh = self.scene.mesh.as_ref().context("clusters: no mesh")?;
+                state.show_clusters = true;
+                state.picked_face = nearest_face(mesh, p);
+            }
+            Action::Shot(path) => self.pending_shot = Some(path),
+        }
+        Ok(())
+    }
+
+    /// Whether frames must keep coming without input.
+    fn animating(&self) -> bool {
+        let d = &self.scene.state.deform;
+        self.automation.is_some() || self.input.animating() || (d.noise_animated && d.noise_amplitude != 0.0)
+    }
+
+    fn window_input(&mut self, event: &WindowEvent) {
+        let mesh = self.scene.mesh.clone();
+        match event {
+            WindowEvent::MouseInput { state, button, .. } => {
+                let inside = self.cursor_in_viewport();
+                if *state == ElementState::Released || inside {
+                    self.input.button(
+                        *button,
+                        *state,
+                        self.viewport,
+                        &self.camera,
+                        &mut self.scene.state,
+                        mesh.as_deref(),
+                    );
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = Vec2::new(position.x as f32, position.y as f32);
+                self.input.moved(p, self.viewport, &mut self.camera);
+            }
+            WindowEvent::MouseWheel { delta, .. } if self.cursor_in_viewport() => {
+                self.input.wheel(*delta, &mut self.camera)
+            }
+            WindowEvent::CursorLeft { .. } | WindowEvent::Focused(false) => self.input.release_all(),
+            _ => {}
+        }
+    }
+
+    fn cursor_in_viewport(&self) -> bool {
+        let Some(s) = &self.surface else { return false };
+        let over_ui = s.egui_ctx.is_pointer_over_egui() || s.egui_ctx.egui_wants_pointer_input();
+        !over_ui
+    }
+
+    /// Keys that act on the whole app; true if handled.
+    fn shortcut(&mut self, event_loop: &ActiveEventLoop, event: &WindowEvent) -> bool {
+        let WindowEvent::KeyboardInput { event: key, .. } = event else {
+            return false;
+        };
+        if key.state != ElementState::Pressed || key.repeat {
+            return false;
+        }
+        match &key.logical_key {
+            Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Named(NamedKey::F12) => self.pending_shot = Some(screenshot::timestamped_path()),
+            Key::Character(c) if c.eq_ignore_ascii_case("p") => {
+                self.pending_shot = Some(screenshot::timestamped_path())
+            }
+            _ => return false,
+        }
+        true
+    }
+}
+
+/// The 3D pass's parameters for the camera, the state and the viewport's aspect ratio.
+fn draw_params(camera: &OrbitCamera, state: &ViewState, (_, size): ViewportRect) -> DrawParams {
+    DrawParams {
+        view_proj: camera.projection(size.x / size.y.max(1.0)) * camera.view(),
+        eye: camera.eye(),
+        eta: state.params.material.eta as f32,
+        exposure: state.exposure,
+        flat_colours: false,
+    }
+}
+
+/// The face whose centroid is nearest to `p`.
+fn nearest_face(mesh: &lucent_core::mesh::Mesh, p: glam::Vec3) -> Option<u32> {
+    (0..mesh.triangles.len())
+        .min_by(|&a, &b| {
+            let da = (mesh.face_centroid(a) - p).length_squared();
+            let db = (mesh.face_centroid(b) - p).length_squared();
+            da.total_cmp(&db)
+        })
+        .map(|f| f as u32)
+}
+
+/// Runs the egui pass: the side panel and light markers. Returns egui's output, the panel's
+/// requests and the 3D viewport in physical pixels.
+fn run_ui(
+    surface: &mut Surface,
+    state: &mut ViewState,
+    status: &Status,
+    camera: &OrbitCamera,
+) -> (egui::FullOutput, ui::UiRequests, ViewportRect) {
+    let raw = surface.egui_state.take_egui_input(&surface.window);
+    let mut requests = ui::UiRequests::default();
+    let mut central = egui::Rect::NOTHING;
+    let output = surface.egui_ctx.run_ui(raw, |root| {
+        requests = ui::side_panel(root, state, status);
+        central = root.available_rect_before_wrap();
+        ui::light_markers(root, central, camera, &state.params.lights);
+    });
+    surface.egui_state.handle_platform_output(&surface.window, output.platform_output.clone());
+    let ppp = output.pixels_per_point;
+    let (w, h) = (surface.gfx.config.width as f32, surface.gfx.config.height as f32);
+    let min = Vec2::new(central.min.x * ppp, central.min.y * ppp).clamp(Vec2::ZERO, Vec2::new(w, h));
+    let max = Vec2::new(central.max.x * ppp, central.max.y * ppp).clamp(min, Vec2::new(w, h));
+    (output, requests, (min, (max - min).max(Vec2::ONE)))
+}
+
+/// Uploads geometry and radiance that changed since the last frame.
+fn upload_scene(surface: &mut Surface, scene: &mut Scene) {
+    let gfx = &surface.gfx;
+    if scene.geometry_dirty {
+        if let Some(mesh) = &scene.mesh {
+            surface.mesh_pass.set_geometry(&gfx.device, &gfx.queue, mesh);
+            // Radiance of the previous geometry still matches vertex for vertex.
+            scene.radiance_dirty = true;
+        }
+        scene.geometry_dirty = false;
+    }
+    if scene.radiance_dirty {
+        surface.mesh_pass.set_radiance(&gfx.queue, &scene.solution.vertex_radiance);
+        scene.radiance_dirty = false;
+    }
+}
+
+/// Records the 3D pass and the egui pass into `target` and submits them.
+fn encode_and_submit(
+    surface: &mut Surface,
+    target: &wgpu::TextureView,
+    (origin, size): ViewportRect,
+    params: &DrawParams,
+    jobs: &[egui::ClippedPrimitive],
+    screen: &egui_wgpu::ScreenDescriptor,
+) {
+    let gfx = &surface.gfx;
+    let mut encoder = gfx.device.create_command_encoder(&Default::default());
+    let viewport = Viewport { x: origin.x, y: origin.y, width: size.x, height: size.y };
+    surface.mesh_pass.draw(
+        &gfx.device,
+        &gfx.queue,
+        &mut encoder,
+        target,
+        (gfx.config.width, gfx.config.height),
+        viewport,
+        params,
+    );
+    let extra = surface.egui_renderer.update_buffers(&gfx.device, &gfx.queue, &mut encoder, jobs, screen);
+    {
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                ..Default::default()
+            })
+            .forget_lifetime();
+        surface.egui_renderer.render(&mut pass, jobs, screen);
+    }
+    gfx.queue.submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+}
+
+/// Draws the frame again into an offscreen texture and writes it to `path` as a PNG.
+fn save_screenshot(
+    surface: &mut Surface,
+    path: &std::path::Path,
+    viewport: ViewportRect,
+    params: &DrawParams,
+    jobs: &[egui::ClippedPrimitive],
+    screen: &egui_wgpu::ScreenDescriptor,
+) -> anyhow::Result<()> {
+    let gfx = &surface.gfx;
+    let offscreen = Offscreen::new(&gfx.device, gfx.config.format, gfx.config.width, gfx.config.height);
+    encode_and_submit(surface, &offscreen.view, viewport, params, jobs, screen);
+    offscreen.save_png(&surface.gfx.device, &surface.gfx.queue, path)?;
+    let (o, s) = viewport;
+    println!(
+        "lucent view: saved {} ({}x{}, 3D viewport {} {} {} {})",
+        path.display(),
+        surface.gfx.config.width,
+        surface.gfx.config.height,
+        o.x as u32,
+        o.y as u32,
+        s.x as u32,
+        s.y as u32
+    );
+    Ok(())
+}
+
+impl ApplicationHandler<WorkerWake> for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.surface.is_some() {
+            return;
+        }
+        if let Err(e) = self.open_window(event_loop) {
+            return self.fail(event_loop, e);
+        }
+        if self.worker.is_none() {
+            self.start_worker();
+        }
+        if let Some(s) = &self.surface {
+            s.window.request_redraw();
+        }
+    }
+
+    fn user_event(&mut self, _: &ActiveEventLoop, _: WorkerWake) {
+        if let Some(s) = &self.surface {
+            s.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(surface) = &mut self.surface else { return };
+        let response = surface.egui_state.on_window_event(&surface.window, &event);
+        if response.repaint {
+            surface.window.request_redraw();
+        }
+        match &event {
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => return event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                surface.gfx.resize(size.width, size.height);
+                surface.window.request_redraw();
+                return;
+            }
+            WindowEvent::RedrawRequested => return self.redraw(event_loop),
+            _ => {}
+        }
+        let keyboard_taken = surface.egui_ctx.egui_wants_keyboard_input();
+        if !(keyboard_taken && matches!(event, WindowEvent::KeyboardInput { .. }))
+            && self.shortcut(event_loop, &event)
+        {
+            return;
+        }
+        if !response.consumed {
+            self.window_input(&event);
+            if let Some(s) = &self.surface {
+                s.window.request_redraw();
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(s) = &self.surface else { return };
+        if !self.animating() && !self.scene.solving() {
+            event_loop.set_control_flow(ControlFlow::Wait);
+            return;
+        }
+        if !self.animating() {
+            // Only waiting for the worker: its reply wakes the loop; redraw once a second for
+            // the elapsed-time display.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_secs(1)));
+            return;
+        }
+        let next = self.stats.last_frame + FRAME_INTERVAL;
+        if Instant::now() >= next {
+            s.window.request_redraw();
+        } else {
+            event_loop.set_control_flow(ControlFlow::WaitUntil(next));
+        }
+    }
+
+    fn new_events(&mut self, _: &ActiveEventLoop, cause: winit::event::StartCause) {
+        if let winit::event::StartCause::ResumeTimeReached { .. } = cause {
+            if let Some(s) = &self.surface {
+                s.window.request_redraw();
+            }
+        }
+    }
+}

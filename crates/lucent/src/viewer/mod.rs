@@ -1,0 +1,27 @@
+//! The interactive viewer (`lucent view`): Mertens et al. 2003 §5.5 ("Interactivity") and the
+//! interactive results of figure 6: lighting, material, scale and geometry change while the
+//! per-vertex solution is recomputed on a worker thread, and the window stays responsive.
+//!
+//! * [`app`]: the winit application and the per-frame sequence.
+//! * [`gfx`]: adapter, device and window surface (format, present mode, resize, minimise).
+//! * [`mesh_pass`]: the 3D pass (per-vertex `B/pi`, exit Fresnel per pixel, gamma tone curve).
+//! * [`ui`]: the egui side panel.
+//! * [`camera`], [`input`], [`pick`]: orbit camera, mouse handling, ray picking.
+//! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
+//! * [`worker`]: the solve thread (coalesced requests).
+//! * [`core_adapter`]: every call into `lucent-core`, in one place.
+//! * [`script`], [`screenshot`]: scripted runs and PNG screenshots.
+
+pub mod app;
+pub mod camera;
+pub mod core_adapter;
+pub mod gfx;
+pub mod input;
+pub mod mesh_pass;
+pub mod pick;
+pub mod scene;
+pub mod screenshot;
+pub mod script;
+pub mod state;
+pub mod ui;
+pub mod worker;

@@ -1,0 +1,292 @@
+//! The egui side panel: material, scale, lights, environment, solver, deformation tools,
+//! timings and the figure 6.9 view. It edits a [`ViewState`] in place and reports one-off
+//! requests (screenshot, resets) in [`UiRequests`]; it never touches the GPU or the worker.
+
+use super::camera::OrbitCamera;
+use super::core_adapter::{Capabilities, Timings};
+use super::state::{EnvChoice, LightKind, LightSpec, SolverMode, Tool, ViewState};
+use egui::{Color32, ComboBox, Slider, Ui};
+use glam::{Vec2, Vec3};
+use lucent_core::bssrdf::{Material, PRESETS};
+
+/// Read-only facts the panel displays.
+#[derive(Clone, Debug, Default)]
+pub struct Status {
+    /// Adapter name and backend.
+    pub adapter: String,
+    /// Vertex and triangle counts of the current mesh (`None` while loading).
+    pub mesh_size: Option<(usize, usize)>,
+    /// A loading error to show instead of the mesh.
+    pub load_error: Option<String>,
+    /// True while the worker is solving a state newer than the one shown.
+    pub solving: bool,
+    /// Seconds the current solve has been running.
+    pub solving_for_s: f64,
+    /// Timings of the solve shown.
+    pub timings: Timings,
+    /// Link count of the solve shown (hierarchical solver only).
+    pub links: Option<usize>,
+    /// Solver that produced the solve shown.
+    pub solver: &'static str,
+    /// CPU time to record and submit the last frame, milliseconds.
+    pub draw_ms: f64,
+    /// Frames per second, smoothed.
+    pub fps: f64,
+    /// What the linked core modules can do.
+    pub caps: Capabilities,
+}
+
+/// One-off requests from the panel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UiRequests {
+    /// Save a screenshot.
+    pub screenshot: bool,
+    /// Reset the camera.
+    pub reset_camera: bool,
+}
+
+/// Width of the side panel, points.
+pub const PANEL_WIDTH: f32 = 300.0;
+
+/// Draws the side panel inside `ui` (the root) and returns the requests made this frame.
+pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status) -> UiRequests {
+    let mut req = UiRequests::default();
+    egui::Panel::left("lucent-panel").resizable(false).exact_size(PANEL_WIDTH).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            header(ui, status, &mut req);
+            section(ui, "Material", true, |ui| material(ui, state));
+            section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights, status));
+            section(ui, "Environment", false, |ui| environment(ui, state, status));
+            section(ui, "Solver", true, |ui| solver(ui, state, status));
+            section(ui, "Deformation", true, |ui| deformation(ui, state, status));
+            section(ui, "Timings", true, |ui| timings(ui, status));
+        });
+    });
+    req
+}
+
+fn section(ui: &mut Ui, title: &str, open: bool, body: impl FnOnce(&mut Ui)) {
+    egui::CollapsingHeader::new(title).default_open(open).show(ui, body);
+}
+
+fn header(ui: &mut Ui, status: &Status, req: &mut UiRequests) {
+    ui.heading("lucent");
+    ui.small(&status.adapter);
+    match (&status.load_error, status.mesh_size) {
+        (Some(e), _) => {
+            ui.colored_label(Color32::LIGHT_RED, e);
+        }
+        (None, None) => {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("loading mesh…");
+            });
+        }
+        (None, Some((v, t))) => {
+            ui.horizontal(|ui| {
+                ui.label(format!("{v} vertices, {t} triangles"));
+                if status.solving {
+                    ui.spinner();
+                    ui.small(format!("solving {:.1} s", status.solving_for_s));
+                }
+            });
+        }
+    }
+    ui.horizontal(|ui| {
+        req.screenshot = ui.button("Screenshot (F12)").clicked();
+        req.reset_camera = ui.button("Reset view").clicked();
+    });
+}
+
+fn material(ui: &mut Ui, state: &mut ViewState) {
+    let m = &mut state.params.material;
+    ComboBox::from_label("preset").selected_text(m.name.clone()).show_ui(ui, |ui| {
+        for (name, _, _) in PRESETS {
+            if ui.selectable_label(m.name == *name, *name).clicked() {
+                if let Ok(preset) = Material::by_name(name) {
+                    *m = preset;
+                }
+            }
+        }
+    });
+    let before = m.clone();
+    ui.label("reduced scattering σs' (1/mm)");
+    for (v, c) in m.sigma_s_prime.iter_mut().zip(["R", "G", "B"]) {
+        ui.add(Slider::new(v, 0.01..=50.0).logarithmic(true).text(c));
+    }
+    ui.label("absorption σa (1/mm)");
+    for (v, c) in m.sigma_a.iter_mut().zip(["R", "G", "B"]) {
+        ui.add(Slider::new(v, 1e-4..=10.0).logarithmic(true).text(c));
+    }
+    ui.add(Slider::new(&mut m.eta, 1.0..=2.0).text("η"));
+    if *m != before && !m.name.ends_with(" (edited)") {
+        m.name = format!("{} (edited)", m.name);
+    }
+    ui.add(Slider::new(&mut state.params.scale_m, 0.001..=2.0).logarithmic(true).text("scale (m)"));
+    ui.add(Slider::new(&mut state.exposure, 0.05..=50.0).logarithmic(true).text("exposure"));
+}
+
+fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>, status: &Status) {
+    let mut remove = None;
+    for (i, l) in lights.iter_mut().enumerate() {
+        ui.push_id(i, |ui| {
+            ui.horizontal(|ui| {
+                ComboBox::from_id_salt("kind").selected_text(l.kind.label()).width(100.0).show_ui(ui, |ui| {
+                    for k in LightKind::ALL {
+                        ui.selectable_value(&mut l.kind, k, k.label());
+                    }
+                });
+                let mut rgb = l.color.to_array();
+                if ui.color_edit_button_rgb(&mut rgb).changed() {
+                    l.color = Vec3::from_array(rgb);
+                }
+                if ui.small_button("remove").clicked() {
+                    remove = Some(i);
+                }
+            });
+            if l.kind != LightKind::Directional {
+                vec3_sliders(ui, &mut l.position, -3.0..=3.0, "pos");
+            }
+            if l.kind != LightKind::Point {
+                vec3_sliders(ui, &mut l.direction, -1.0..=1.0, "dir");
+            }
+            if l.kind == LightKind::Spot {
+                ui.add(Slider::new(&mut l.spot_angle_deg, 1.0..=90.0).text("cone (°)"));
+                if !status.caps.spot_lights {
+                    ui.weak("spot cone not modelled yet: lit as a point light");
+                }
+            }
+            ui.add(Slider::new(&mut l.power, 0.01..=100.0).logarithmic(true).text("power"));
+            ui.separator();
+        });
+    }
+    if let Some(i) = remove {
+        lights.remove(i);
+    }
+    if ui.button("Add light").clicked() {
+        lights.push(LightSpec::point(Vec3::new(0.0, 1.2, 1.2)));
+    }
+}
+
+fn vec3_sliders(ui: &mut Ui, v: &mut Vec3, range: std::ops::RangeInclusive<f32>, label: &str) {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        for c in [&mut v.x, &mut v.y, &mut v.z] {
+            ui.add(egui::DragValue::new(c).speed(0.01).range(range.clone()));
+        }
+    });
+}
+
+fn environment(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+    let p = &mut state.params;
+    ComboBox::from_label("map").selected_text(p.env.label()).show_ui(ui, |ui| {
+        for e in EnvChoice::ALL {
+            ui.selectable_value(&mut p.env, e, e.label());
+        }
+    });
+    ui.add(Slider::new(&mut p.env_rotation_deg, 0.0..=360.0).text("rotation (°)"));
+    ui.add(Slider::new(&mut p.env_strength, 0.0..=10.0).text("strength"));
+    if let Some(path) = p.env.path() {
+        if !std::path::Path::new(path).is_file() {
+            ui.weak(format!("{path} not found (run from the repository root)"));
+        }
+    }
+    if !status.caps.environment {
+        ui.weak("environment lighting is not in this build's solver yet");
+    }
+    ui.checkbox(&mut p.shadows, "shadows");
+    if !status.caps.shadows {
+        ui.weak("shadows are not in this build's solver yet");
+    }
+}
+
+fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+    let p = &mut state.params;
+    ui.horizontal(|ui| {
+        for m in SolverMode::ALL {
+            ui.radio_value(&mut p.mode, m, m.label());
+        }
+    });
+    ui.add(Slider::new(&mut p.epsilon1, 1e-6..=1e-1).logarithmic(true).text("ε1"));
+    ui.add(Slider::new(&mut p.epsilon2, 1e-5..=1.0).logarithmic(true).text("ε2"));
+    if !status.caps.hierarchical {
+        ui.weak("hierarchical solver not linked yet: every mode runs the exact O(N²) solve");
+    }
+    ui.checkbox(&mut state.show_clusters, "figure 6.9: clusters gathered by a triangle");
+    if state.show_clusters {
+        state.tool = Tool::PickTriangle;
+        match state.picked_face {
+            Some(f) => ui.label(format!("triangle {f}; colours: hierarchy level")),
+            None => ui.label("click a triangle"),
+        };
+    }
+}
+
+fn deformation(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+    ui.horizontal(|ui| {
+        ui.label("left drag:");
+        ui.radio_value(&mut state.tool, Tool::Orbit, "orbit");
+        ui.radio_value(&mut state.tool, Tool::Dent, "dent");
+        ui.radio_value(&mut state.tool, Tool::PickTriangle, "pick");
+    });
+    let d = &mut state.deform;
+    ui.add(Slider::new(&mut d.twist, -6.0..=6.0).text("twist (rad/unit)"));
+    ui.add(Slider::new(&mut d.noise_amplitude, 0.0..=0.1).text("noise"));
+    ui.checkbox(&mut d.noise_animated, "animate noise");
+    if !status.caps.perlin_noise {
+        ui.weak("noise: smooth stand-in until Perlin noise lands");
+    }
+    ui.horizontal(|ui| {
+        ui.label(format!("{} dents", d.dents.len()));
+        if ui.button("Undo dent").clicked() {
+            d.dents.pop();
+        }
+        if ui.button("Reset geometry").clicked() {
+            *d = Default::default();
+        }
+    });
+}
+
+fn timings(ui: &mut Ui, status: &Status) {
+    let t = &status.timings;
+    egui::Grid::new("timings").num_columns(2).show(ui, |ui| {
+        for (name, ms) in [
+            ("irradiance", t.irradiance_ms),
+            ("linking", t.link_ms),
+            ("pull", t.pull_ms),
+            ("gather", t.gather_ms),
+            ("push", t.push_ms),
+            ("solve total", t.total_ms()),
+            ("draw (CPU)", status.draw_ms),
+        ] {
+            ui.label(name);
+            ui.label(format!("{ms:8.2} ms"));
+            ui.end_row();
+        }
+        ui.label("links");
+        ui.label(status.links.map_or("–".to_string(), |l| l.to_string()));
+        ui.end_row();
+        ui.label("frame rate");
+        ui.label(format!("{:.1} fps", status.fps));
+        ui.end_row();
+    });
+    ui.small(format!("solver: {}", status.solver));
+}
+
+/// Draws a marker for every positional light over the 3D view (`rect`, points).
+pub fn light_markers(ui: &Ui, rect: egui::Rect, camera: &OrbitCamera, lights: &[LightSpec]) {
+    let painter = ui.ctx().layer_painter(egui::LayerId::background());
+    let size = Vec2::new(rect.width(), rect.height());
+    let view_proj = camera.projection(size.x / size.y) * camera.view();
+    for l in lights.iter().filter(|l| l.kind != LightKind::Directional) {
+        let clip = view_proj * l.position.extend(1.0);
+        if clip.w <= 0.0 {
+            continue;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let pos =
+            egui::pos2(rect.left() + (ndc.x + 1.0) * 0.5 * size.x, rect.top() + (1.0 - ndc.y) * 0.5 * size.y);
+        let c = (l.color.normalize_or_zero() * 255.0).to_array().map(|v| v as u8);
+        painter.circle(pos, 5.0, Color32::from_rgb(c[0], c[1], c[2]), (1.0, Color32::WHITE));
+    }
+}

@@ -1,0 +1,101 @@
+//! The viewer end to end: `lucent view` in a real window under Xvfb (Mesa's lavapipe or
+//! llvmpipe draws it), driven by a script that dents the mesh and moves a light, with a
+//! screenshot before and after. Needs `xvfb-run` (Debian: `apt-get install xvfb xauth`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Background of the 3D view in the PNG: `viewer::mesh_pass::BACKGROUND` (0.055, 0.06, 0.07)
+/// written as 8-bit display values.
+const BACKGROUND: [u8; 3] = [14, 15, 18];
+
+fn find_on_path(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|dir| dir.join(name)).find(|p| p.is_file())
+}
+
+/// The 3D viewport `(x, y, width, height)` that the viewer reports for a saved screenshot.
+fn viewport_of(stdout: &str, file: &str) -> [u32; 4] {
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("lucent view: saved") && l.contains(file))
+        .unwrap_or_else(|| panic!("no 'saved {file}' line in the viewer's output:\n{stdout}"));
+    let tail = line.split("3D viewport").nth(1).expect("viewport in the line");
+    let v: Vec<u32> = tail
+        .trim()
+        .trim_end_matches(')')
+        .split_whitespace()
+        .map(|n| n.parse().expect("viewport numbers"))
+        .collect();
+    [v[0], v[1], v[2], v[3]]
+}
+
+fn load(path: &Path) -> image::RgbImage {
+    image::open(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display())).into_rgb8()
+}
+
+fn differs_from_background(p: &image::Rgb<u8>) -> bool {
+    p.0.iter().zip(BACKGROUND).any(|(a, b)| a.abs_diff(b) > 8)
+}
+
+#[test]
+fn scripted_dent_and_light_move_change_the_image() {
+    let xvfb = find_on_path("xvfb-run").unwrap_or_else(|| {
+        panic!(
+            "xvfb-run is not installed: the viewer test needs a virtual X server. Install it \
+             with `apt-get install xvfb xauth` (CI does this in .ci/run)."
+        )
+    });
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_xvfb");
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["before.png", "after.png"] {
+        let _ = std::fs::remove_file(dir.join(f));
+    }
+    let output = Command::new(xvfb)
+        .args(["-a", "-s", "-screen 0 1280x1024x24"])
+        .arg(env!("CARGO_BIN_EXE_lucent"))
+        .args(["view", "--width", "720", "--height", "480", "--frames", "6"])
+        .args(["--script", "shot:before.png;dent:0.1,0.15,0.5;light:0,1,-2"])
+        .args(["--screenshot", "after.png"])
+        .current_dir(&dir)
+        // Xvfb is an X server: keep winit from choosing a Wayland compositor of the caller's.
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("running xvfb-run");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "lucent view failed ({}):\nstdout:\n{stdout}\nstderr:\n{stderr}",
+        output.status
+    );
+
+    let before = load(&dir.join("before.png"));
+    let after = load(&dir.join("after.png"));
+    assert_eq!(before.dimensions(), after.dimensions());
+    let [x, y, w, h] = viewport_of(&stdout, "after.png");
+    assert_eq!([x, y, w, h], viewport_of(&stdout, "before.png"));
+    assert!(w > 100 && h > 100, "3D viewport too small: {w}x{h}");
+
+    // The object is visible: the viewport's centre is not background, its corner is.
+    let (cx, cy) = (x + w / 2, y + h / 2);
+    for img in [&before, &after] {
+        let centre_lit = (0..5)
+            .flat_map(|dy| (0..5).map(move |dx| (cx - 2 + dx, cy - 2 + dy)))
+            .filter(|&(px, py)| differs_from_background(img.get_pixel(px, py)))
+            .count();
+        assert!(centre_lit >= 20, "centre of the 3D view looks like background");
+        assert!(!differs_from_background(img.get_pixel(x + w - 3, y + 3)));
+    }
+
+    // The dent and the light move changed the 3D view.
+    let changed = (y..y + h)
+        .flat_map(|py| (x..x + w).map(move |px| (px, py)))
+        .filter(|&(px, py)| {
+            let (a, b) = (before.get_pixel(px, py), after.get_pixel(px, py));
+            a.0.iter().zip(b.0).any(|(p, q)| p.abs_diff(q) > 8)
+        })
+        .count();
+    let fraction = changed as f64 / (w * h) as f64;
+    assert!(fraction > 0.01, "only {:.3}% of the 3D view changed", 100.0 * fraction);
+}
