@@ -28,10 +28,10 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     if let Some(scene) = &args.scene {
         anyhow::bail!("--scene {}: scene files are not supported by the viewer yet", scene.display());
     }
-    if let Some(path) = &args.mesh {
-        if !path.is_file() {
-            anyhow::bail!("--mesh {}: no such file", path.display());
-        }
+    if let Some(path) = &args.mesh
+        && !path.is_file()
+    {
+        anyhow::bail!("--mesh {}: no such file", path.display());
     }
     if !(args.scale.is_finite() && args.scale > 0.0) {
         anyhow::bail!("--scale must be a positive number of metres, got {}", args.scale);

@@ -3,10 +3,10 @@
 //! to the worker, draw, take screenshots, advance the script.
 
 use super::camera::OrbitCamera;
-use super::core_adapter::CAPABILITIES;
+use super::core_adapter::{self, CAPABILITIES};
 use super::gfx::Gfx;
 use super::input::{self, Input, ViewportRect};
-use super::mesh_pass::{DrawParams, MeshPass, Viewport};
+use super::render::{self, DrawParams, ViewRenderer, Viewport};
 use super::scene::Scene;
 use super::screenshot::{self, Offscreen};
 use super::script::{Action, Automation, Step};
@@ -16,6 +16,7 @@ use super::worker::{Request, Worker};
 use anyhow::Context as _;
 use glam::Vec2;
 use lucent_core::bssrdf::Material;
+use lucent_gpu::mesh_pass::Shading;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -53,7 +54,7 @@ struct Surface {
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
-    mesh_pass: MeshPass,
+    renderer: ViewRenderer,
 }
 
 /// Smoothed frame statistics.
@@ -126,11 +127,11 @@ impl App {
             &window,
             Some(window.scale_factor() as f32),
             window.theme(),
-            Some(gfx.device.limits().max_texture_dimension_2d as usize),
+            Some(gfx.ctx.device.limits().max_texture_dimension_2d as usize),
         );
-        let egui_renderer = egui_wgpu::Renderer::new(&gfx.device, gfx.config.format, Default::default());
-        let mesh_pass = MeshPass::new(&gfx.device, gfx.config.format);
-        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, mesh_pass });
+        let egui_renderer = egui_wgpu::Renderer::new(&gfx.ctx.device, gfx.config.format, Default::default());
+        let renderer = ViewRenderer::new(&gfx.ctx, gfx.config.format)?;
+        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, renderer });
         Ok(())
     }
 
@@ -147,7 +148,7 @@ impl App {
         let s = &self.scene;
         Status {
             adapter: self.surface.as_ref().map_or(String::new(), |w| {
-                let i = &w.gfx.adapter_info;
+                let i = &w.gfx.ctx.adapter_info;
                 format!("{} ({:?})", i.name, i.backend)
             }),
             mesh_size: s.mesh.as_ref().map(|m| (m.positions.len(), m.triangles.len())),
@@ -163,24 +164,32 @@ impl App {
         }
     }
 
-    /// One frame: see the module docs.
+    /// One frame: see the module docs. Any error ends the run.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
-        let Some(worker) = &self.worker else { return };
+        let frame_start = Instant::now();
+        if let Err(e) = self.frame() {
+            return self.fail(event_loop, e);
+        }
+        if self.exit_after_shot && self.pending_shot.is_none() {
+            return event_loop.exit();
+        }
+        self.update_stats(frame_start);
+        self.advance_script(event_loop);
+    }
+
+    fn frame(&mut self) -> anyhow::Result<()> {
+        let Some(worker) = &self.worker else { return Ok(()) };
         self.scene.receive(worker);
-        if let Some(e) = &self.scene.load_error {
-            if self.automation.is_some() {
-                let e = anyhow::anyhow!("{e}");
-                return self.fail(event_loop, e.context("loading the mesh"));
-            }
+        if let (Some(e), Some(_)) = (&self.scene.load_error, &self.automation) {
+            anyhow::bail!("loading the mesh: {e}");
         }
         self.input.update(&mut self.scene.state);
         let d = &mut self.scene.state.deform;
         if d.noise_animated && d.noise_amplitude != 0.0 {
             d.noise_offset += self.stats.last_frame.elapsed().as_secs_f32() * 0.5;
         }
-        let frame_start = Instant::now();
         let status = self.status();
-        let Some(surface) = &mut self.surface else { return };
+        let Some(surface) = &mut self.surface else { return Ok(()) };
         let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.camera);
         self.viewport = viewport;
         if requests.reset_camera {
@@ -189,40 +198,21 @@ impl App {
         if requests.screenshot {
             self.pending_shot = Some(screenshot::timestamped_path());
         }
-        self.scene.sync(self.worker.as_ref().expect("checked above"));
-        upload_scene(surface, &mut self.scene);
-
-        let ppp = output.pixels_per_point;
-        let jobs = surface.egui_ctx.tessellate(output.shapes, ppp);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [surface.gfx.config.width, surface.gfx.config.height],
-            pixels_per_point: ppp,
-        };
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                surface.egui_renderer.update_texture(&surface.gfx.device, &surface.gfx.queue, *id, delta);
-            }
-        }
+        self.scene.sync(worker);
+        upload_scene(surface, &mut self.scene)?;
+        let ui = EguiFrame::new(surface, output);
         let params = draw_params(&self.camera, &self.scene.state, viewport);
         if let Some(frame) = surface.gfx.acquire() {
             let view = frame.texture.create_view(&Default::default());
-            encode_and_submit(surface, &view, viewport, &params, &jobs, &screen);
-            surface.gfx.queue.present(frame);
+            encode_and_submit(surface, &view, viewport, &params, &ui)?;
+            surface.gfx.ctx.queue.present(frame);
             self.scene.mark_drawn();
         }
         if let Some(path) = self.pending_shot.take() {
-            if let Err(e) = save_screenshot(surface, &path, viewport, &params, &jobs, &screen) {
-                return self.fail(event_loop, e);
-            }
-            if self.exit_after_shot {
-                return event_loop.exit();
-            }
+            save_screenshot(surface, &path, viewport, &params, &ui)?;
         }
-        for id in &output.textures_delta.free {
-            surface.egui_renderer.free_texture(id);
-        }
-        self.update_stats(frame_start);
-        self.advance_script(event_loop);
+        ui.free_textures(surface);
+        Ok(())
     }
 
     fn update_stats(&mut self, frame_start: Instant) {
@@ -358,12 +348,15 @@ impl App {
 
 /// The 3D pass's parameters for the camera, the state and the viewport's aspect ratio.
 fn draw_params(camera: &OrbitCamera, state: &ViewState, (_, size): ViewportRect) -> DrawParams {
+    let proj = camera.projection(size.x / size.y.max(1.0));
     DrawParams {
-        view_proj: camera.projection(size.x / size.y.max(1.0)) * camera.view(),
-        eye: camera.eye(),
-        eta: state.params.material.eta as f32,
-        exposure: state.exposure,
-        flat_colours: false,
+        camera: render::camera_view(camera.view(), proj, camera.eye()),
+        shading: Shading {
+            eta: state.params.material.eta as f32,
+            lights: core_adapter::core_lights(&state.params.lights),
+            ..Default::default()
+        },
+        tone: render::tone_map(state.exposure),
     }
 }
 
@@ -402,21 +395,57 @@ fn run_ui(
     (output, requests, (min, (max - min).max(Vec2::ONE)))
 }
 
+/// egui's tessellated output for one frame, with its textures uploaded.
+struct EguiFrame {
+    jobs: Vec<egui::ClippedPrimitive>,
+    screen: egui_wgpu::ScreenDescriptor,
+    free: Vec<egui::TextureId>,
+}
+
+impl EguiFrame {
+    /// Tessellates `output` and uploads the textures it sets.
+    fn new(surface: &mut Surface, mut output: egui::FullOutput) -> Self {
+        let ppp = output.pixels_per_point;
+        let gfx = &surface.gfx;
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                surface.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
+            }
+        }
+        EguiFrame {
+            jobs: surface.egui_ctx.tessellate(output.shapes, ppp),
+            screen: egui_wgpu::ScreenDescriptor {
+                size_in_pixels: [gfx.config.width, gfx.config.height],
+                pixels_per_point: ppp,
+            },
+            free: std::mem::take(&mut output.textures_delta.free).into_iter().collect(),
+        }
+    }
+
+    /// Frees the textures egui no longer needs (after the frame's draws).
+    fn free_textures(self, surface: &mut Surface) {
+        for id in &self.free {
+            surface.egui_renderer.free_texture(id);
+        }
+    }
+}
+
 /// Uploads geometry and radiance that changed since the last frame.
-fn upload_scene(surface: &mut Surface, scene: &mut Scene) {
-    let gfx = &surface.gfx;
+fn upload_scene(surface: &mut Surface, scene: &mut Scene) -> anyhow::Result<()> {
+    let ctx = &surface.gfx.ctx;
     if scene.geometry_dirty {
         if let Some(mesh) = &scene.mesh {
-            surface.mesh_pass.set_geometry(&gfx.device, &gfx.queue, mesh);
+            surface.renderer.set_geometry(ctx, mesh)?;
             // Radiance of the previous geometry still matches vertex for vertex.
             scene.radiance_dirty = true;
         }
         scene.geometry_dirty = false;
     }
     if scene.radiance_dirty {
-        surface.mesh_pass.set_radiance(&gfx.queue, &scene.solution.vertex_radiance);
+        surface.renderer.set_radiance(ctx, &scene.solution.vertex_radiance)?;
         scene.radiance_dirty = false;
     }
+    Ok(())
 }
 
 /// Records the 3D pass and the egui pass into `target` and submits them.
@@ -425,22 +454,16 @@ fn encode_and_submit(
     target: &wgpu::TextureView,
     (origin, size): ViewportRect,
     params: &DrawParams,
-    jobs: &[egui::ClippedPrimitive],
-    screen: &egui_wgpu::ScreenDescriptor,
-) {
+    ui: &EguiFrame,
+) -> anyhow::Result<()> {
+    let (jobs, screen) = (&ui.jobs, &ui.screen);
     let gfx = &surface.gfx;
-    let mut encoder = gfx.device.create_command_encoder(&Default::default());
+    let mut encoder = gfx.ctx.device.create_command_encoder(&Default::default());
     let viewport = Viewport { x: origin.x, y: origin.y, width: size.x, height: size.y };
-    surface.mesh_pass.draw(
-        &gfx.device,
-        &gfx.queue,
-        &mut encoder,
-        target,
-        (gfx.config.width, gfx.config.height),
-        viewport,
-        params,
-    );
-    let extra = surface.egui_renderer.update_buffers(&gfx.device, &gfx.queue, &mut encoder, jobs, screen);
+    let target_size = (gfx.config.width, gfx.config.height);
+    surface.renderer.draw(&gfx.ctx, &mut encoder, target, target_size, viewport, params)?;
+    let extra =
+        surface.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, jobs, screen);
     {
         let mut pass = encoder
             .begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -456,7 +479,9 @@ fn encode_and_submit(
             .forget_lifetime();
         surface.egui_renderer.render(&mut pass, jobs, screen);
     }
-    gfx.queue.submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+    gfx.ctx.queue.submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+    gfx.ctx.check("drawing the frame")?;
+    Ok(())
 }
 
 /// Draws the frame again into an offscreen texture and writes it to `path` as a PNG.
@@ -465,13 +490,12 @@ fn save_screenshot(
     path: &std::path::Path,
     viewport: ViewportRect,
     params: &DrawParams,
-    jobs: &[egui::ClippedPrimitive],
-    screen: &egui_wgpu::ScreenDescriptor,
+    ui: &EguiFrame,
 ) -> anyhow::Result<()> {
     let gfx = &surface.gfx;
-    let offscreen = Offscreen::new(&gfx.device, gfx.config.format, gfx.config.width, gfx.config.height);
-    encode_and_submit(surface, &offscreen.view, viewport, params, jobs, screen);
-    offscreen.save_png(&surface.gfx.device, &surface.gfx.queue, path)?;
+    let offscreen = Offscreen::new(&gfx.ctx.device, gfx.config.format, gfx.config.width, gfx.config.height);
+    encode_and_submit(surface, &offscreen.view, viewport, params, ui)?;
+    offscreen.save_png(&surface.gfx.ctx.device, &surface.gfx.ctx.queue, path)?;
     let (o, s) = viewport;
     println!(
         "lucent view: saved {} ({}x{}, 3D viewport {} {} {} {})",
@@ -559,10 +583,10 @@ impl ApplicationHandler<WorkerWake> for App {
     }
 
     fn new_events(&mut self, _: &ActiveEventLoop, cause: winit::event::StartCause) {
-        if let winit::event::StartCause::ResumeTimeReached { .. } = cause {
-            if let Some(s) = &self.surface {
-                s.window.request_redraw();
-            }
+        if let winit::event::StartCause::ResumeTimeReached { .. } = cause
+            && let Some(s) = &self.surface
+        {
+            s.window.request_redraw();
         }
     }
 }

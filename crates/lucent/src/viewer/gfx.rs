@@ -3,6 +3,7 @@
 //! step with resizes and minimisation.
 
 use anyhow::Context as _;
+use lucent_gpu::GpuContext;
 use std::sync::Arc;
 use winit::window::Window;
 
@@ -10,12 +11,8 @@ use winit::window::Window;
 pub struct Gfx {
     /// The window's surface (owns an `Arc` of the window, so it lives as long as needed).
     pub surface: wgpu::Surface<'static>,
-    /// The logical device.
-    pub device: wgpu::Device,
-    /// Its queue.
-    pub queue: wgpu::Queue,
-    /// Adapter name and backend, for the UI and logs.
-    pub adapter_info: wgpu::AdapterInfo,
+    /// Device, queue and adapter description, shared with `lucent-gpu`'s passes.
+    pub ctx: GpuContext,
     /// Current surface configuration; `width`/`height` are never 0.
     pub config: wgpu::SurfaceConfiguration,
     /// False while the window is minimised (size 0): nothing is drawn then.
@@ -102,7 +99,12 @@ impl Gfx {
             adapter_info.name,
             adapter_info.backend
         );
-        Ok(Gfx { surface, device, queue, adapter_info, config, visible: size.width > 0 && size.height > 0 })
+        Ok(Gfx {
+            surface,
+            ctx: GpuContext::from_device(device, queue, adapter_info),
+            config,
+            visible: size.width > 0 && size.height > 0,
+        })
     }
 
     /// Follows a window resize; a zero size (minimised) stops drawing until the next resize.
@@ -111,7 +113,7 @@ impl Gfx {
         if self.visible && (width, height) != (self.config.width, self.config.height) {
             self.config.width = width;
             self.config.height = height;
-            self.surface.configure(&self.device, &self.config);
+            self.surface.configure(&self.ctx.device, &self.config);
         }
     }
 
@@ -129,7 +131,7 @@ impl Gfx {
                     return Some(t);
                 }
                 wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                    self.surface.configure(&self.device, &self.config);
+                    self.surface.configure(&self.ctx.device, &self.config);
                 }
                 wgpu::CurrentSurfaceTexture::Timeout
                 | wgpu::CurrentSurfaceTexture::Occluded
@@ -155,10 +157,8 @@ fn choose_format(formats: &[wgpu::TextureFormat]) -> Option<wgpu::TextureFormat>
 /// Immediate/Mailbox offered, so frames are not paced by a display that may not exist.
 fn choose_present_mode(modes: &[wgpu::PresentMode], low_latency: bool) -> wgpu::PresentMode {
     use wgpu::PresentMode::{Fifo, Immediate, Mailbox};
-    if low_latency {
-        if let Some(m) = [Immediate, Mailbox].into_iter().find(|m| modes.contains(m)) {
-            return m;
-        }
+    if low_latency && let Some(m) = [Immediate, Mailbox].into_iter().find(|m| modes.contains(m)) {
+        return m;
     }
     Fifo
 }

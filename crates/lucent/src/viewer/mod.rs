@@ -4,7 +4,7 @@
 //!
 //! * [`app`]: the winit application and the per-frame sequence.
 //! * [`gfx`]: adapter, device and window surface (format, present mode, resize, minimise).
-//! * [`mesh_pass`]: the 3D pass (per-vertex `B/pi`, exit Fresnel per pixel, gamma tone curve).
+//! * [`render`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
 //! * [`ui`]: the egui side panel.
 //! * [`camera`], [`input`], [`pick`]: orbit camera, mouse handling, ray picking.
 //! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
@@ -17,8 +17,8 @@ pub mod camera;
 pub mod core_adapter;
 pub mod gfx;
 pub mod input;
-pub mod mesh_pass;
 pub mod pick;
+pub mod render;
 pub mod scene;
 pub mod screenshot;
 pub mod script;

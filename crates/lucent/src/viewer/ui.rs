@@ -102,10 +102,10 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
     let m = &mut state.params.material;
     ComboBox::from_label("preset").selected_text(m.name.clone()).show_ui(ui, |ui| {
         for (name, _, _) in PRESETS {
-            if ui.selectable_label(m.name == *name, *name).clicked() {
-                if let Ok(preset) = Material::by_name(name) {
-                    *m = preset;
-                }
+            if ui.selectable_label(m.name == *name, *name).clicked()
+                && let Ok(preset) = Material::by_name(name)
+            {
+                *m = preset;
             }
         }
     });
@@ -186,10 +186,10 @@ fn environment(ui: &mut Ui, state: &mut ViewState, status: &Status) {
     });
     ui.add(Slider::new(&mut p.env_rotation_deg, 0.0..=360.0).text("rotation (°)"));
     ui.add(Slider::new(&mut p.env_strength, 0.0..=10.0).text("strength"));
-    if let Some(path) = p.env.path() {
-        if !std::path::Path::new(path).is_file() {
-            ui.weak(format!("{path} not found (run from the repository root)"));
-        }
+    if let Some(path) = p.env.path()
+        && !std::path::Path::new(path).is_file()
+    {
+        ui.weak(format!("{path} not found (run from the repository root)"));
     }
     if !status.caps.environment {
         ui.weak("environment lighting is not in this build's solver yet");

@@ -1,0 +1,211 @@
+//! The 3D view (Mertens §5.4) drawn with `lucent-gpu`'s passes into the window: the mesh pass
+//! (per-vertex `B/pi`, exit Fresnel per pixel, highlight) into an HDR target with 4x MSAA, then
+//! the tone-map pass (exposure, gamma curve, background) into the colour target, both restricted
+//! to the viewport beside the panel. The HDR targets have the size of the whole colour target so
+//! that the tone-map pass reads the texel under each pixel.
+
+use glam::Vec3;
+use lucent_core::Rgb;
+use lucent_core::mesh::Mesh;
+use lucent_gpu::camera::CameraView;
+use lucent_gpu::mesh_pass::{GpuMesh, MeshPass, Shading};
+use lucent_gpu::tonemap::{ToneMap, ToneMapPass};
+use lucent_gpu::{DEPTH_FORMAT, GpuContext, HDR_FORMAT};
+
+/// Background of the 3D view, display values 0..1 (the Xvfb test compares against it).
+pub const BACKGROUND: [f32; 3] = [0.055, 0.06, 0.07];
+
+/// Samples per pixel of the mesh pass.
+const MSAA_SAMPLES: u32 = 4;
+
+/// Viewport rectangle in physical pixels of the colour target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viewport {
+    /// Left edge.
+    pub x: f32,
+    /// Top edge.
+    pub y: f32,
+    /// Width (>= 1).
+    pub width: f32,
+    /// Height (>= 1).
+    pub height: f32,
+}
+
+/// Everything one draw of the 3D view needs besides the mesh.
+#[derive(Clone, Debug)]
+pub struct DrawParams {
+    /// Camera matrices for the viewport's aspect ratio.
+    pub camera: CameraView,
+    /// Mesh-pass shading (eta, lights for the highlight).
+    pub shading: Shading,
+    /// Exposure and tone curve.
+    pub tone: ToneMap,
+}
+
+/// HDR, resolve and depth targets of one size, with the tone-map bind group reading them.
+struct Targets {
+    size: (u32, u32),
+    msaa: wgpu::TextureView,
+    resolved: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    tone_group: wgpu::BindGroup,
+}
+
+/// The view's passes, the mesh on the GPU, and the targets.
+pub struct ViewRenderer {
+    mesh_pass: MeshPass,
+    tone_pass: ToneMapPass,
+    mesh: Option<GpuMesh>,
+    topology: (usize, usize),
+    targets: Option<Targets>,
+    srgb_target: bool,
+}
+
+impl ViewRenderer {
+    /// Builds the passes for colour targets of `format`.
+    pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> anyhow::Result<Self> {
+        Ok(ViewRenderer {
+            mesh_pass: MeshPass::new(ctx, HDR_FORMAT, MSAA_SAMPLES)?,
+            tone_pass: ToneMapPass::new(ctx, format)?,
+            mesh: None,
+            topology: (0, 0),
+            targets: None,
+            srgb_target: format.is_srgb(),
+        })
+    }
+
+    /// Uploads `mesh`'s positions and normals: in place when the topology is unchanged
+    /// (deformation), else as a new GPU mesh with zero radiance.
+    pub fn set_geometry(&mut self, ctx: &GpuContext, mesh: &Mesh) -> anyhow::Result<()> {
+        let normals = mesh.vertex_normals();
+        let topology = (mesh.positions.len(), mesh.triangles.len());
+        match &self.mesh {
+            Some(gpu) if self.topology == topology => {
+                gpu.update_geometry(ctx, &mesh.positions, &normals)?;
+            }
+            _ => {
+                let zeros = vec![Rgb::ZERO; mesh.positions.len()];
+                self.mesh = Some(GpuMesh::new(ctx, &mesh.positions, &normals, &zeros, &mesh.triangles)?);
+                self.topology = topology;
+            }
+        }
+        Ok(())
+    }
+
+    /// Uploads per-vertex radiance `B/pi`; a result for another topology (a mesh replaced
+    /// while it was solved) is skipped.
+    pub fn set_radiance(&mut self, ctx: &GpuContext, radiance: &[Rgb]) -> anyhow::Result<()> {
+        if let Some(gpu) = &self.mesh
+            && radiance.len() == self.topology.0
+        {
+            gpu.update_radiance(ctx, radiance)?;
+        }
+        Ok(())
+    }
+
+    /// Records the mesh pass and the tone-map pass into `target` (of `size` pixels), inside
+    /// `viewport`; the rest of the target is cleared to [`BACKGROUND`].
+    pub fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        size: (u32, u32),
+        viewport: Viewport,
+        params: &DrawParams,
+    ) -> anyhow::Result<()> {
+        self.ensure_targets(ctx, size);
+        let t = self.targets.as_ref().expect("just made");
+        self.mesh_pass.prepare(ctx, &params.camera, &params.shading);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("viewer mesh"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &t.msaa,
+                    depth_slice: None,
+                    resolve_target: Some(&t.resolved),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &t.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            if let Some(mesh) = &self.mesh {
+                set_viewport(&mut pass, viewport);
+                self.mesh_pass.draw(&mut pass, mesh);
+            }
+        }
+        self.tone_pass.prepare(ctx, &params.tone)?;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("viewer tone map"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear_colour(self.srgb_target)),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        set_viewport(&mut pass, viewport);
+        self.tone_pass.draw(&mut pass, &t.tone_group);
+        Ok(())
+    }
+
+    fn ensure_targets(&mut self, ctx: &GpuContext, size: (u32, u32)) {
+        if self.targets.as_ref().is_some_and(|t| t.size == size) {
+            return;
+        }
+        let make = |label, format, samples, usage| {
+            ctx.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: samples,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let msaa = make("viewer hdr msaa", HDR_FORMAT, MSAA_SAMPLES, attach);
+        let resolved = make("viewer hdr", HDR_FORMAT, 1, attach | wgpu::TextureUsages::TEXTURE_BINDING);
+        let depth = make("viewer depth", DEPTH_FORMAT, MSAA_SAMPLES, attach);
+        let tone_group = self.tone_pass.bind(ctx, &resolved);
+        self.targets = Some(Targets { size, msaa, resolved, depth, tone_group });
+    }
+}
+
+/// The tone curve the viewer uses: the paper's gamma curve over [`BACKGROUND`].
+pub fn tone_map(exposure: f32) -> ToneMap {
+    ToneMap { exposure, background: BACKGROUND, ..Default::default() }
+}
+
+/// A camera view from eye, view and projection matrices.
+pub fn camera_view(view: glam::Mat4, proj: glam::Mat4, eye: Vec3) -> CameraView {
+    CameraView { view, proj, view_proj: proj * view, eye }
+}
+
+fn set_viewport(pass: &mut wgpu::RenderPass<'_>, v: Viewport) {
+    pass.set_viewport(v.x, v.y, v.width.max(1.0), v.height.max(1.0), 0.0, 1.0);
+}
+
+/// [`BACKGROUND`] as a clear value (linearised for an sRGB target, which re-encodes it).
+fn clear_colour(srgb: bool) -> wgpu::Color {
+    let c = BACKGROUND.map(|v| if srgb { (v as f64).powf(2.2) } else { v as f64 });
+    wgpu::Color { r: c[0], g: c[1], b: c[2], a: 1.0 }
+}
