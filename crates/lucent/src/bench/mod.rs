@@ -2,11 +2,12 @@
 
 use crate::cli::{BenchArgs, BenchTarget};
 
+mod formfactor;
 mod htsm;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
-        BenchTarget::Formfactor => anyhow::bail!("bench formfactor: not implemented yet"),
+        BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
     }
 }
