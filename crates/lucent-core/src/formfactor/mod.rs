@@ -13,7 +13,8 @@
 //! ```
 //!
 //! `Σ_e Δθ_e` is `2π` when `d'` is inside the polygon, `0` outside (and the interior angle when
-//! `d'` lies on the boundary), so the I1 terms need one `atan2` per edge. The I2 integral along
+//! `d'` lies on the boundary), so the I1 terms need only the winding number of the polygon
+//! around `d'` (the angles themselves only when `d'` is on an edge's line). The I2 integral along
 //! an edge, `z R ∫ e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (eq. 13), is split into
 //! segments under condition (19) (`L / r_0 < ratio`, `σ L < limit`) as in the paper, laid out outwards from the
 //! foot point `t = 0`, but each
@@ -37,7 +38,7 @@
 //!   edge contributes nothing (the limit of `I1 - I2` as `R → 0` is 0 from both sides).
 //! * Source (nearly) in the polygon's plane (`h → 0`): the true integral diverges like `1/h`
 //!   when `d'` is inside the polygon (the dipole model breaks down there), so `h` is clamped to
-//!   [`HEIGHT_FLOOR`]` · z`. When `d'` is outside, the angle sum is snapped to exactly 0 and the
+//!   [`HEIGHT_FLOOR`]` · z`. When `d'` is outside, the angle sum is exactly 0 (a winding number) and the
 //!   finite result is the difference of the I2 terms, with no `1/h` cancellation.
 //! * Degenerate polygons (fewer than 3 vertices, zero area) and non-finite input give 0;
 //!   round-off below 0 is clamped to 0. Never NaN.
@@ -169,7 +170,8 @@ pub fn form_factor_counted(
                 h,
                 z,
                 sigma,
-                theta: 0.0,
+                winding: 0,
+                on_line: false,
                 i2: 0.0,
             };
         }
@@ -193,12 +195,23 @@ pub fn form_factor_counted(
             // counter-clockwise around n_p, i.e. when the edge is a back-facing one.
             let r_s = w.perp_dot(u);
             if r_s == 0.0 {
+                // d' on this edge's line: the edge adds nothing, but the angle sum is no longer
+                // a multiple of 2π if d' is on the edge itself (see below).
+                s.on_line = true;
                 continue;
+            }
+            // Winding number of the polygon around d' (Sunday's crossing rule; the sign of
+            // r_s is the side of d'), which gives Σ Δθ_e = 2π · winding without an atan2.
+            if a2.y <= s.d.y {
+                if b2.y > s.d.y && r_s > 0.0 {
+                    s.winding += 1;
+                }
+            } else if b2.y <= s.d.y && r_s < 0.0 {
+                s.winding -= 1;
             }
             let t_a = w.dot(u);
             let t_b = t_a + len;
             let r2 = r_s * r_s;
-            s.theta += (len * r_s).atan2(r2 + t_a * t_b);
             let (i2, segs) = edge_i2(r_s.abs(), r2 + s.h2, s.sigma, t_a, t_b, &seg);
             s.i2 += i2.copysign(r_s);
             segments += segs;
@@ -207,10 +220,7 @@ pub fn form_factor_counted(
 
     let mut f = [0.0; 3];
     for (k, s) in src.iter().enumerate() {
-        // Snap the angle sum to the winding number (0 outside, 2π inside): removes the
-        // round-off of ~1e-16 · z/h that would otherwise survive when h is tiny.
-        let k_wind = (s.theta / TAU).round();
-        let theta = if (s.theta - k_wind * TAU).abs() < WINDING_SNAP { k_wind * TAU } else { s.theta };
+        let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
         let i1 = theta * (-s.sigma * s.h).exp() / s.h;
         let c = k / 2;
         f[c] += s.z * (i1 - s.i2);
@@ -233,9 +243,39 @@ struct Source {
     /// `z_r` or `z_v` (mesh units) and `sigma_tr` (per mesh unit).
     z: f64,
     sigma: f64,
-    /// Running sum of the signed edge angles (radians) and of the signed I2 terms (over `z`).
-    theta: f64,
+    /// Winding number of the polygon around `d'`, whether `d'` lies on some edge's line, and
+    /// the running sum of the signed I2 terms (over `z`).
+    winding: i32,
+    on_line: bool,
     i2: f64,
+}
+
+/// `Σ_e Δθ_e`, the signed angle the polygon's edges subtend at `d'` (2D), for the rare case
+/// that `d'` lies on an edge's supporting line, where it may be a fraction of `2π` (`π` on an
+/// edge, the interior angle at a vertex). Edges whose line holds `d'` subtend nothing.
+#[cold]
+fn boundary_angle(polygon: &[DVec3], to_2d: &impl Fn(DVec3) -> DVec2, d: DVec2) -> f64 {
+    let n = polygon.len();
+    let mut theta = 0.0;
+    for i in 0..n {
+        // The same arithmetic as the main loop, so that exactly the same edges are skipped.
+        let a2 = to_2d(polygon[i]);
+        let e = to_2d(polygon[(i + 1) % n]) - a2;
+        let len = e.length();
+        if len <= 0.0 {
+            continue;
+        }
+        let w = a2 - d;
+        let r_s = w.perp_dot(e / len);
+        if r_s != 0.0 {
+            let t_a = w.dot(e / len);
+            theta += (len * r_s).atan2(r_s * r_s + t_a * (t_a + len));
+        }
+    }
+    // Snap to a multiple of 2π when d' is on an edge's line but off the polygon's boundary
+    // (removes the round-off of ~1e-16 · z/h that would otherwise survive when h is tiny).
+    let k = (theta / TAU).round();
+    if (theta - k * TAU).abs() < WINDING_SNAP { k * TAU } else { theta }
 }
 
 /// `∫_{t_a}^{t_b} R e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (Mertens eq. 13 without `z`) for
@@ -316,7 +356,7 @@ fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) ->
     let mut t_sum = 0.0;
     while pos < b {
         // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along can matter.
-        if sigma * ((s2 + pos * pos).sqrt() - s) > 40.0 {
+        if sigma * pos > 40.0 && sigma * ((s2 + pos * pos).sqrt() - s) > 40.0 {
             break;
         }
         let l_ratio = if seg.kappa > 0.0 {
