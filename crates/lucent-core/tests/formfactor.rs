@@ -248,9 +248,16 @@ fn robust_on_edges_vertices_in_plane_and_degenerate() {
     let tri = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(4.0, 0.0, 0.0), DVec3::new(0.0, 3.0, 0.0)];
     let finite = |f: [f64; 3]| f.iter().all(|v| v.is_finite() && *v >= 0.0);
 
-    // Receiver exactly above an edge's interior and above a vertex (the projected sources lie
-    // on the edge / vertex): finite, and continuous with the receiver moved by 1e-9 and 1e-4.
-    for x_o in [DVec3::new(2.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 0.0), DVec3::new(2.0, 1.5, 0.0)] {
+    // Receiver exactly above an edge's interior, a vertex, the hypotenuse, and an edge's line
+    // outside the triangle (the projected sources lie there): finite, and continuous with the
+    // receiver moved by 1e-9 and 1e-4.
+    let on_lines = [
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(2.0, 1.5, 0.0),
+        DVec3::new(6.0, 0.0, 0.0),
+    ];
+    for x_o in on_lines {
         let f = ff(&tri, x_o, DVec3::Z, &dipole);
         assert!(finite(f), "{x_o}: {f:?}");
         let reference = adaptive_cubature(&tri, x_o, DVec3::Z, &dipole, 1e-9);
