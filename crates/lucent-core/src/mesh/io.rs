@@ -1,15 +1,473 @@
-//! Loading meshes from files (stub).
+//! Loading meshes from OBJ, PLY (ASCII and binary), OFF, glTF and GLB files.
+//!
+//! This is input plumbing, not a paper section: Mertens et al. 2003 (§3) and Shopf 2007 both
+//! start from a closed triangle mesh, which is what this module delivers and checks.
+//!
+//! - The format comes from the file extension (case-insensitive): `.obj`, `.ply`, `.off`,
+//!   `.gltf`, `.glb`. Any other extension is an error that lists the supported ones.
+//! - OBJ vertices come in the order of their first use by a face (`tobj`'s order; vertices no
+//!   face uses are dropped); the other formats keep the file's order.
+//! - Polygons are split into triangle fans (exact for convex polygons, which is what mesh
+//!   files hold in practice).
+//! - Vertices are kept as the file gives them, with one exception: OBJ and glTF may split a
+//!   vertex by its normal or texture coordinate, which would cut the surface into unconnected
+//!   pieces, so for those two formats vertices at bitwise-equal positions are welded into one
+//!   (the hierarchy and the edge statistics need connectivity). PLY and OFF are index-shared
+//!   formats and are taken as given.
+//! - Every loaded mesh passes [`validate`](super::validate::validate): fatal problems (empty,
+//!   out-of-range indices, non-finite coordinates) are errors; degenerate faces are removed
+//!   and, with open or non-manifold edges and the component count, reported in a
+//!   [`MeshReport`].
+//! - No input panics the loader: malformed files are errors naming the file and the reason.
+//!   The third-party parsers are additionally run under `catch_unwind` as a last line of
+//!   defence.
+
 use super::Mesh;
+use super::validate::{MeshReport, validate, weld_exact_duplicates};
+use glam::{Mat4, Vec3};
+use std::io::{BufReader, Cursor};
 use std::path::Path;
 
-/// Why a mesh could not be loaded; always names the file.
+/// Why a mesh could not be loaded. Its `Display` is one line: the file, then the reason.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
+    /// The file could not be loaded or its content is not an acceptable mesh.
     #[error("{path}: {reason}")]
-    Invalid { path: String, reason: String },
+    Invalid {
+        /// The file (or source name, for in-memory data) as given by the caller.
+        path: String,
+        /// What is wrong, in words (no trailing period).
+        reason: String,
+    },
 }
 
-/// Loads a mesh from an OBJ, PLY, OFF, glTF or GLB file.
+impl MeshError {
+    /// An [`MeshError::Invalid`] for `path` with `reason`.
+    /// Line breaks in the reason (some parsers' messages have them) become spaces.
+    pub fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
+        let reason: String = reason.into();
+        MeshError::Invalid {
+            path: path.into(),
+            reason: reason.split_whitespace().collect::<Vec<_>>().join(" "),
+        }
+    }
+
+    /// The reason alone, without the file name.
+    pub fn reason(&self) -> &str {
+        match self {
+            MeshError::Invalid { reason, .. } => reason,
+        }
+    }
+}
+
+/// A mesh file format, chosen from the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (text), read with `tobj`.
+    Obj,
+    /// Stanford PLY, ASCII or binary (either endianness), read with `ply-rs-bw`.
+    Ply,
+    /// Object File Format (text), read by hand.
+    Off,
+    /// glTF 2.0, JSON (`.gltf`, buffers embedded as data URIs or next to the file) or binary
+    /// (`.glb`); both are read with the `gltf` crate.
+    Gltf,
+}
+
+impl MeshFormat {
+    /// The supported extensions, for messages.
+    pub const SUPPORTED: &'static str = ".obj, .ply, .off, .gltf, .glb";
+
+    /// The format for a file extension without the dot, case-insensitive.
+    pub fn from_extension(ext: &str) -> Option<Self> {
+        match ext.to_ascii_lowercase().as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            "off" => Some(MeshFormat::Off),
+            "gltf" | "glb" => Some(MeshFormat::Gltf),
+            _ => None,
+        }
+    }
+
+    /// The format of `path`, or an error naming the file and the supported extensions.
+    pub fn from_path(path: &Path) -> Result<Self, MeshError> {
+        let name = path.display().to_string();
+        match path.extension().and_then(|e| e.to_str()) {
+            Some(ext) => Self::from_extension(ext).ok_or_else(|| {
+                MeshError::invalid(
+                    name,
+                    format!("unknown mesh file extension '.{ext}' (supported: {})", Self::SUPPORTED),
+                )
+            }),
+            None => Err(MeshError::invalid(
+                name,
+                format!("no file extension to tell the mesh format (supported: {})", Self::SUPPORTED),
+            )),
+        }
+    }
+}
+
+/// Loads a mesh from an OBJ, PLY, OFF, glTF or GLB file (format from the extension),
+/// validates it and removes degenerate faces. See [`load_mesh_with_report`] for what was found.
 pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
-    Err(MeshError::Invalid { path: path.display().to_string(), reason: "not implemented".into() })
+    load_mesh_with_report(path).map(|(mesh, _)| mesh)
+}
+
+/// Loads and validates a mesh like [`load_mesh`], and also returns the [`MeshReport`]:
+/// degenerate faces removed, welded vertices, boundary and non-manifold edges, components.
+pub fn load_mesh_with_report(path: &Path) -> Result<(Mesh, MeshReport), MeshError> {
+    let format = MeshFormat::from_path(path)?;
+    let name = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|e| MeshError::invalid(&name, format!("cannot read file: {e}")))?;
+    parse_mesh_inner(&bytes, format, &name, path.parent())
+}
+
+/// Parses and validates a mesh held in memory. `name` stands for the file in error messages.
+/// glTF data may only reference buffers embedded in the file (GLB chunk or data URIs).
+pub fn parse_mesh(bytes: &[u8], format: MeshFormat, name: &str) -> Result<(Mesh, MeshReport), MeshError> {
+    parse_mesh_inner(bytes, format, name, None)
+}
+
+fn parse_mesh_inner(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &str,
+    base_dir: Option<&Path>,
+) -> Result<(Mesh, MeshReport), MeshError> {
+    let parsed = guard(name, || match format {
+        MeshFormat::Obj => parse_obj(bytes),
+        MeshFormat::Ply => parse_ply(bytes),
+        MeshFormat::Off => parse_off(bytes),
+        MeshFormat::Gltf => parse_gltf(bytes, base_dir),
+    })?;
+    let mut mesh = parsed.map_err(|reason| MeshError::invalid(name, reason))?;
+    let welded = match format {
+        MeshFormat::Obj | MeshFormat::Gltf => weld_exact_duplicates(&mut mesh),
+        MeshFormat::Ply | MeshFormat::Off => 0,
+    };
+    let (mesh, mut report) = validate(mesh, name)?;
+    report.welded_vertices = welded;
+    Ok((mesh, report))
+}
+
+/// Runs a third-party parser and turns a panic into an error naming the file.
+fn guard<T>(name: &str, f: impl FnOnce() -> T) -> Result<T, MeshError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        MeshError::invalid(name, format!("malformed file (parser failed: {what})"))
+    })
+}
+
+/// Appends a polygon as a triangle fan `(v0, v_i, v_i+1)`.
+fn push_fan(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
+    for i in 1..polygon.len().saturating_sub(1) {
+        triangles.push([polygon[0], polygon[i], polygon[i + 1]]);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ
+
+fn parse_obj(bytes: &[u8]) -> Result<Mesh, String> {
+    // `..Default` keeps this compiling if another crate enables tobj's optional fields.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = BufReader::new(Cursor::new(bytes));
+    // Materials are irrelevant to the geometry: never open .mtl files.
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
+        .map_err(|e| format!("not a valid OBJ file: {e}"))?;
+    let mut mesh = Mesh::default();
+    for model in &models {
+        let m = &model.mesh;
+        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
+            return Err(format!("OBJ object '{}' is malformed", model.name));
+        }
+        let base = mesh.positions.len() as u32;
+        let count = m.positions.len() / 3;
+        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        for t in m.indices.chunks_exact(3) {
+            if t.iter().any(|&i| i as usize >= count) {
+                return Err(format!("OBJ object '{}' has a face index out of range", model.name));
+            }
+            mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
+        }
+    }
+    Ok(mesh)
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY
+
+fn parse_ply(bytes: &[u8]) -> Result<Mesh, String> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+
+    let mut reader = BufReader::new(Cursor::new(bytes));
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut reader)
+        .map_err(|e| format!("not a valid PLY file: {e}"))?;
+
+    let scalar = |p: &Property| -> Option<f64> {
+        Some(match *p {
+            Property::Char(v) => v as f64,
+            Property::UChar(v) => v as f64,
+            Property::Short(v) => v as f64,
+            Property::UShort(v) => v as f64,
+            Property::Int(v) => v as f64,
+            Property::UInt(v) => v as f64,
+            Property::Float(v) => v as f64,
+            Property::Double(v) => v,
+            _ => return None,
+        })
+    };
+    fn list(p: &Property) -> Option<Vec<i64>> {
+        Some(match p {
+            Property::ListChar(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUChar(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListShort(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUShort(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListInt(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUInt(v) => v.iter().map(|&x| x as i64).collect(),
+            _ => return None,
+        })
+    }
+
+    let vertices = ply.payload.get("vertex").ok_or("PLY file has no 'vertex' element")?;
+    let mut positions = Vec::with_capacity(vertices.len());
+    for (i, v) in vertices.iter().enumerate() {
+        let mut xyz = [0.0f32; 3];
+        for (k, key) in ["x", "y", "z"].iter().enumerate() {
+            let p = v.get(*key).ok_or_else(|| format!("PLY vertex {i} has no '{key}' property"))?;
+            xyz[k] = scalar(p)
+                .ok_or_else(|| format!("PLY vertex property '{key}' is a list, not a number"))?
+                as f32;
+        }
+        positions.push(Vec3::from_array(xyz));
+    }
+
+    let faces = ply.payload.get("face").ok_or("PLY file has no 'face' element")?;
+    let mut triangles = Vec::with_capacity(faces.len());
+    let mut polygon = Vec::new();
+    for (i, f) in faces.iter().enumerate() {
+        let p = f
+            .get("vertex_indices")
+            .or_else(|| f.get("vertex_index"))
+            .ok_or_else(|| format!("PLY face {i} has no 'vertex_indices' or 'vertex_index' list"))?;
+        let idx = list(p).ok_or("PLY face indices are not an integer list")?;
+        if idx.len() < 3 {
+            return Err(format!("PLY face {i} has {} vertices (at least 3 needed)", idx.len()));
+        }
+        polygon.clear();
+        for &k in &idx {
+            polygon
+                .push(u32::try_from(k).map_err(|_| format!("PLY face {i} has an invalid vertex index {k}"))?);
+        }
+        push_fan(&polygon, &mut triangles);
+    }
+    Ok(Mesh::new(positions, triangles))
+}
+
+// ---------------------------------------------------------------------------------------------
+// OFF
+
+/// Object File Format: `OFF` header (optionally prefixed `C`, `N`, `ST`, e.g. `COFF`, `NOFF`:
+/// extra per-vertex values are ignored), counts `V F E`, `V` lines `x y z ...`, `F` lines
+/// `n i_1 ... i_n [colour]`. `#` starts a comment. Binary OFF and dimensions other than 3
+/// (`4OFF`, `nOFF`) are rejected.
+fn parse_off(bytes: &[u8]) -> Result<Mesh, String> {
+    let text = std::str::from_utf8(bytes).map_err(|_| "not a text OFF file (invalid UTF-8)")?;
+    // Non-empty lines with comments stripped, with their 1-based line numbers.
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
+        .filter(|(_, l)| !l.is_empty());
+
+    let (_, header) = lines.next().ok_or("empty file (expected an OFF header)")?;
+    let mut tokens = header.split_whitespace();
+    let keyword = tokens.next().unwrap_or("");
+    let prefix = keyword
+        .strip_suffix("OFF")
+        .ok_or_else(|| format!("not an OFF file (first word is '{keyword}', expected 'OFF')"))?;
+    if !prefix.trim_start_matches("ST").chars().all(|c| c == 'C' || c == 'N') {
+        return Err(format!("unsupported OFF variant '{keyword}'"));
+    }
+    let mut rest: Vec<&str> = tokens.collect();
+    if rest.first() == Some(&"BINARY") {
+        return Err("binary OFF is not supported".into());
+    }
+    if rest.is_empty() {
+        let (_, counts) = lines.next().ok_or("truncated OFF file: missing counts line")?;
+        rest = counts.split_whitespace().collect();
+    }
+    let count = |i: usize, what: &str| -> Result<usize, String> {
+        rest.get(i)
+            .ok_or_else(|| format!("truncated OFF header: missing {what} count"))?
+            .parse::<usize>()
+            .map_err(|_| format!("invalid OFF {what} count '{}'", rest[i]))
+    };
+    let nv = count(0, "vertex")?;
+    let nf = count(1, "face")?;
+
+    // Never trust the counts for allocation: a garbage header must not exhaust memory.
+    let cap = |n: usize| n.min(bytes.len() / 4 + 1);
+    let mut positions = Vec::with_capacity(cap(nv));
+    for i in 0..nv {
+        let (ln, l) = lines.next().ok_or_else(|| format!("truncated OFF file: {i} of {nv} vertices"))?;
+        let mut xyz = [0.0f32; 3];
+        let mut t = l.split_whitespace();
+        for c in &mut xyz {
+            let s = t.next().ok_or_else(|| format!("line {ln}: vertex {i} has fewer than 3 coordinates"))?;
+            *c = s.parse().map_err(|_| format!("line {ln}: invalid coordinate '{s}'"))?;
+        }
+        positions.push(Vec3::from_array(xyz));
+    }
+    let mut triangles = Vec::with_capacity(cap(nf));
+    let mut polygon = Vec::new();
+    for i in 0..nf {
+        let (ln, l) = lines.next().ok_or_else(|| format!("truncated OFF file: {i} of {nf} faces"))?;
+        let mut t = l.split_whitespace();
+        let n: usize =
+            t.next().unwrap_or("").parse().map_err(|_| format!("line {ln}: invalid face vertex count"))?;
+        if n < 3 {
+            return Err(format!("line {ln}: face {i} has {n} vertices (at least 3 needed)"));
+        }
+        polygon.clear();
+        for _ in 0..n {
+            let s = t.next().ok_or_else(|| format!("line {ln}: face {i} lists fewer than {n} indices"))?;
+            polygon.push(s.parse::<u32>().map_err(|_| format!("line {ln}: invalid vertex index '{s}'"))?);
+        }
+        push_fan(&polygon, &mut triangles);
+    }
+    Ok(Mesh::new(positions, triangles))
+}
+
+// ---------------------------------------------------------------------------------------------
+// glTF / GLB
+
+/// All triangle-mode primitives of the default scene (or the first scene; or every mesh
+/// untransformed when there is no scene), with each node's world transform applied.
+/// Primitives of other modes (points, lines, strips, fans) are skipped.
+fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, String> {
+    let gltf = read_gltf(bytes)?;
+    let document = gltf.document;
+    let buffers = gltf::import_buffers(&document, base_dir, gltf.blob)
+        .map_err(|e| format!("cannot load glTF buffers: {e}"))?;
+
+    let mut mesh = Mesh::default();
+    let mut add = |m: gltf::Mesh<'_>, world: Mat4| -> Result<(), String> {
+        // A mirroring transform turns counter-clockwise faces clockwise (glTF spec §3.7.4).
+        let flip = world.determinant() < 0.0;
+        for prim in m.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(pos) = reader.read_positions() else {
+                continue;
+            };
+            let base = mesh.positions.len();
+            mesh.positions.extend(pos.map(|p| world.transform_point3(Vec3::from_array(p))));
+            let count = (mesh.positions.len() - base) as u32;
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..count).collect(),
+            };
+            if let Some(&bad) = indices.iter().find(|&&i| i >= count) {
+                return Err(format!(
+                    "glTF mesh {} has index {bad} out of range ({count} vertices)",
+                    m.index()
+                ));
+            }
+            for t in indices.chunks_exact(3) {
+                let b = base as u32;
+                mesh.triangles.push(if flip {
+                    [b + t[0], b + t[2], b + t[1]]
+                } else {
+                    [b + t[0], b + t[1], b + t[2]]
+                });
+            }
+        }
+        Ok(())
+    };
+
+    let scene = document.default_scene().or_else(|| document.scenes().next());
+    match scene {
+        Some(scene) => {
+            // Explicit stack with a depth bound: a (invalid) cyclic node graph must not hang.
+            let max_depth = document.nodes().len();
+            let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+                scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+            while let Some((node, parent, depth)) = stack.pop() {
+                if depth > max_depth {
+                    return Err("glTF node hierarchy contains a cycle".into());
+                }
+                let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+                if let Some(m) = node.mesh() {
+                    add(m, world)?;
+                }
+                stack.extend(node.children().map(|c| (c, world, depth + 1)));
+            }
+        }
+        None => {
+            for m in document.meshes() {
+                add(m, Mat4::IDENTITY)?;
+            }
+        }
+    }
+    Ok(mesh)
+}
+
+/// Parses and validates glTF JSON or GLB. gltf-json 1.4.1's validation indexes the accessor
+/// array with a primitive's POSITION index unchecked (a panic on a bad file), so that index is
+/// checked first.
+fn read_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    let invalid = |e: gltf::Error| format!("not a valid glTF file: {e}");
+    let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    let root = raw.document.into_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, accessor) in &prim.attributes {
+                if accessor.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "not a valid glTF file: meshes[{m}].primitives[{p}] attribute {semantic:?} refers to missing accessor {}",
+                        accessor.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(gltf::Gltf { document: gltf::Document::from_json(root).map_err(invalid)?, blob: raw.blob })
+}
+
+/// The `KHR_materials_volume` parameters of the first material of a glTF/GLB file:
+/// `(attenuation_color, attenuation_distance)`, the colour (linear RGB in [0, 1]) that white
+/// light becomes after travelling `attenuation_distance` (mesh units; `+inf` when absent, the
+/// extension's default) through the medium. `None` when the file has no material or the first
+/// material has no volume extension. Used by the HTSM renderer (Shopf 2007) to derive
+/// extinction from the asset.
+pub fn load_gltf_volume_params(path: &Path) -> Result<Option<([f32; 3], f32)>, MeshError> {
+    let name = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|e| MeshError::invalid(&name, format!("cannot read file: {e}")))?;
+    guard(&name, || {
+        let gltf = read_gltf(&bytes).map_err(|reason| MeshError::invalid(&name, reason))?;
+        Ok(gltf
+            .document
+            .materials()
+            .next()
+            .and_then(|m| m.volume())
+            .map(|v| (v.attenuation_color(), v.attenuation_distance())))
+    })?
 }

@@ -4,10 +4,13 @@
 use glam::Vec3;
 
 pub mod deform;
+pub mod embedded;
 pub mod generate;
 pub mod io;
+pub mod validate;
 
-pub use io::{MeshError, load_mesh};
+pub use io::{MeshError, MeshFormat, load_gltf_volume_params, load_mesh, load_mesh_with_report};
+pub use validate::MeshReport;
 
 /// An indexed triangle mesh. Faces are counter-clockwise seen from outside.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -19,7 +22,7 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// A mesh from its parts (not validated; see [`io::validate`]).
+    /// A mesh from its parts (not validated; see [`validate::validate`]).
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
         Mesh { positions, triangles }
     }

@@ -1,0 +1,259 @@
+//! Mesh validation and topology statistics.
+//!
+//! Mertens et al. 2003 (§3.1-3.2) integrate over a closed triangle mesh and build a
+//! subdivision hierarchy over it, which needs finite positions, valid indices, faces with area
+//! and, ideally, a closed 2-manifold. This module rejects what cannot be used and reports what
+//! can be used but may degrade results:
+//!
+//! - fatal ([`MeshError`]): no vertices, no triangles, non-finite coordinates, indices out of
+//!   range, or nothing left after removing degenerate faces;
+//! - removed and reported: degenerate faces (a repeated index or zero area);
+//! - reported only: boundary edges (one face), non-manifold edges (more than two faces),
+//!   inconsistently oriented edges, unreferenced vertices, connected components.
+
+use super::{Mesh, MeshError};
+use std::collections::HashMap;
+use std::fmt;
+
+/// What validation found in a mesh (counts refer to the returned mesh unless noted).
+/// A closed, consistently oriented 2-manifold has `boundary_edges == 0`,
+/// `nonmanifold_edges == 0` and `inconsistent_edges == 0`; see [`MeshReport::is_closed_manifold`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MeshReport {
+    /// Vertices in the returned mesh (unreferenced ones included).
+    pub vertices: usize,
+    /// Triangles in the returned mesh (degenerate ones already removed).
+    pub triangles: usize,
+    /// Vertices merged into an earlier vertex at a bitwise-equal position after loading
+    /// (OBJ and glTF only, where files split vertices by normal or texture coordinate).
+    pub welded_vertices: usize,
+    /// Degenerate faces (a repeated vertex index, or zero area) found and *removed*.
+    pub degenerate_faces: usize,
+    /// Undirected edges used by exactly one face (holes, open borders).
+    pub boundary_edges: usize,
+    /// Undirected edges used by more than two faces.
+    pub nonmanifold_edges: usize,
+    /// Edges shared by exactly two faces that traverse it in the same direction (the two faces
+    /// disagree about which side is outside).
+    pub inconsistent_edges: usize,
+    /// Vertices no face refers to (kept, so that indices stay as given).
+    pub unreferenced_vertices: usize,
+    /// Connected components, counting vertices connected through face edges (unreferenced
+    /// vertices are not counted).
+    pub components: usize,
+    /// Euler characteristic `V - E + F` over referenced vertices: 2 per closed genus-0
+    /// component.
+    pub euler_characteristic: i64,
+}
+
+impl MeshReport {
+    /// True when every edge is shared by exactly two faces with opposite directions.
+    pub fn is_closed_manifold(&self) -> bool {
+        self.boundary_edges == 0 && self.nonmanifold_edges == 0 && self.inconsistent_edges == 0
+    }
+
+    /// True when nothing was removed and the mesh is one closed, consistently oriented
+    /// component.
+    pub fn is_clean(&self) -> bool {
+        self.degenerate_faces == 0 && self.is_closed_manifold() && self.components == 1
+    }
+}
+
+impl fmt::Display for MeshReport {
+    /// One line, e.g. `1839 vertices, 3674 triangles, 1 component, closed manifold` or
+    /// `..., removed 2 degenerate faces, 12 boundary edges`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} vertices, {} triangles, {} component{}",
+            self.vertices,
+            self.triangles,
+            self.components,
+            if self.components == 1 { "" } else { "s" }
+        )?;
+        if self.welded_vertices > 0 {
+            write!(f, ", welded {} duplicate vertices", self.welded_vertices)?;
+        }
+        if self.degenerate_faces > 0 {
+            write!(f, ", removed {} degenerate faces", self.degenerate_faces)?;
+        }
+        if self.is_closed_manifold() {
+            write!(f, ", closed manifold")?;
+        }
+        for (n, what) in [
+            (self.boundary_edges, "boundary edges"),
+            (self.nonmanifold_edges, "non-manifold edges"),
+            (self.inconsistent_edges, "inconsistently oriented edges"),
+            (self.unreferenced_vertices, "unreferenced vertices"),
+        ] {
+            if n > 0 {
+                write!(f, ", {n} {what}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks `mesh` (see the module doc), removes degenerate faces, and returns the cleaned mesh
+/// with its report. `source` names the mesh (its file) in errors.
+pub fn validate(mut mesh: Mesh, source: &str) -> Result<(Mesh, MeshReport), MeshError> {
+    let fail = |reason: String| MeshError::invalid(source, reason);
+    if mesh.positions.is_empty() {
+        return Err(fail("empty mesh: no vertices".into()));
+    }
+    if mesh.triangles.is_empty() {
+        return Err(fail("empty mesh: no triangles".into()));
+    }
+    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(fail(format!(
+            "vertex {i} has a non-finite coordinate {:?}",
+            mesh.positions[i].to_array()
+        )));
+    }
+    let n = mesh.positions.len();
+    if let Some((f, t)) = mesh.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&i| i as usize >= n))
+    {
+        return Err(fail(format!("face {f} has vertex index out of range: {t:?} with {n} vertices")));
+    }
+
+    let before = mesh.triangles.len();
+    let positions = &mesh.positions;
+    mesh.triangles.retain(|t| !is_degenerate(positions, t));
+    let degenerate_faces = before - mesh.triangles.len();
+    if mesh.triangles.is_empty() {
+        return Err(fail(format!("all {before} triangles are degenerate (zero area or repeated vertex)")));
+    }
+
+    let mut report = analyze(&mesh);
+    report.degenerate_faces = degenerate_faces;
+    Ok((mesh, report))
+}
+
+/// Whether a face repeats a vertex index or has zero area. The area test is relative to the
+/// face's longest edge, in f64, so it flags exactly collinear corners and slivers whose angle
+/// is below ~1e-12 rad, and nothing that merely is small.
+pub fn is_degenerate(positions: &[glam::Vec3], t: &[u32; 3]) -> bool {
+    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+        return true;
+    }
+    let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+    let cross = (b - a).cross(c - a).length();
+    let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+    cross <= 1e-12 * longest
+}
+
+/// Edge, orientation and component statistics of `mesh` (indices must be in range).
+/// `welded_vertices` and `degenerate_faces` are left at zero.
+pub fn analyze(mesh: &Mesh) -> MeshReport {
+    // Each face edge as (min, max, forward?); sorting groups the uses of each undirected edge.
+    let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(mesh.triangles.len() * 3);
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.push((a.min(b), a.max(b), a < b));
+        }
+    }
+    edges.sort_unstable();
+    let (mut unique, mut boundary, mut nonmanifold, mut inconsistent) = (0, 0, 0, 0);
+    for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
+        unique += 1;
+        match run.len() {
+            1 => boundary += 1,
+            2 => inconsistent += usize::from(run[0].2 == run[1].2),
+            _ => nonmanifold += 1,
+        }
+    }
+
+    // Union-find over vertices joined by face edges.
+    let n = mesh.positions.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    let mut referenced = vec![false; n];
+    for t in &mesh.triangles {
+        for &v in t {
+            referenced[v as usize] = true;
+        }
+        let r0 = find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let r = find(&mut parent, v);
+            if r != r0 {
+                parent[r as usize] = r0;
+            }
+        }
+    }
+    let used = referenced.iter().filter(|&&r| r).count();
+    let components = (0..n as u32).filter(|&v| referenced[v as usize] && find(&mut parent, v) == v).count();
+
+    MeshReport {
+        vertices: n,
+        triangles: mesh.triangles.len(),
+        welded_vertices: 0,
+        degenerate_faces: 0,
+        boundary_edges: boundary,
+        nonmanifold_edges: nonmanifold,
+        inconsistent_edges: inconsistent,
+        unreferenced_vertices: n - used,
+        components,
+        euler_characteristic: used as i64 - unique as i64 + mesh.triangles.len() as i64,
+    }
+}
+
+/// Merges vertices at bitwise-equal positions (`-0.0` and `0.0` count as equal) into the
+/// first one, re-indexes the faces and drops the merged vertices. Returns how many vertices
+/// were merged. Faces that become degenerate are left for [`validate`] to remove; a mesh with
+/// out-of-range indices is left unchanged.
+pub fn weld_exact_duplicates(mesh: &mut Mesh) -> usize {
+    // Leave a mesh with invalid indices untouched, so validate() reports them as given.
+    let n = mesh.positions.len();
+    if mesh.triangles.iter().flatten().any(|&v| v as usize >= n) {
+        return 0;
+    }
+    let key = |p: glam::Vec3| (p + glam::Vec3::ZERO).to_array().map(f32::to_bits);
+    let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
+    let mut remap = Vec::with_capacity(mesh.positions.len());
+    let mut kept = Vec::with_capacity(mesh.positions.len());
+    for &p in &mesh.positions {
+        let next = kept.len() as u32;
+        let id = *first.entry(key(p)).or_insert(next);
+        if id == next {
+            kept.push(p);
+        }
+        remap.push(id);
+    }
+    let merged = mesh.positions.len() - kept.len();
+    if merged > 0 {
+        mesh.positions = kept;
+        for t in &mut mesh.triangles {
+            for v in t.iter_mut() {
+                *v = remap[*v as usize];
+            }
+        }
+    }
+    merged
+}
+
+impl Mesh {
+    /// Signed volume enclosed by the mesh, in mesh units^3 (divergence theorem, sum of
+    /// `a . (b x c) / 6` over faces, in f64). Positive for a closed mesh with outward
+    /// counter-clockwise faces; meaningless for an open mesh.
+    pub fn signed_volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize].as_dvec3());
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// Edge, orientation and component statistics (see [`analyze`]).
+    pub fn topology(&self) -> MeshReport {
+        analyze(self)
+    }
+}
