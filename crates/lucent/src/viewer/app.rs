@@ -201,7 +201,8 @@ impl App {
         self.scene.sync(worker);
         upload_scene(surface, &mut self.scene)?;
         let ui = EguiFrame::new(surface, output);
-        let params = draw_params(&self.camera, &self.scene.state, viewport);
+        let false_colour = self.scene.solution.clusters.is_some();
+        let params = draw_params(&self.camera, &self.scene.state, viewport, false_colour);
         if let Some(frame) = surface.gfx.acquire() {
             let view = frame.texture.create_view(&Default::default());
             encode_and_submit(surface, &view, viewport, &params, &ui)?;
@@ -346,17 +347,24 @@ impl App {
     }
 }
 
-/// The 3D pass's parameters for the camera, the state and the viewport's aspect ratio.
-fn draw_params(camera: &OrbitCamera, state: &ViewState, (_, size): ViewportRect) -> DrawParams {
+/// The 3D pass's parameters for the camera, the state and the viewport's aspect ratio;
+/// `false_colour` shows the uploaded colours as they are (no highlight, exposure 1).
+fn draw_params(
+    camera: &OrbitCamera,
+    state: &ViewState,
+    (_, size): ViewportRect,
+    false_colour: bool,
+) -> DrawParams {
     let proj = camera.projection(size.x / size.y.max(1.0));
     DrawParams {
         camera: render::camera_view(camera.view(), proj, camera.eye()),
         shading: Shading {
             eta: state.params.material.eta as f32,
             lights: core_adapter::core_lights(&state.params.lights),
+            specular: if false_colour { 0.0 } else { 1.0 },
             ..Default::default()
         },
-        tone: render::tone_map(state.exposure),
+        tone: render::tone_map(if false_colour { 1.0 } else { state.exposure }),
     }
 }
 
@@ -442,7 +450,9 @@ fn upload_scene(surface: &mut Surface, scene: &mut Scene) -> anyhow::Result<()> 
         scene.geometry_dirty = false;
     }
     if scene.radiance_dirty {
-        surface.renderer.set_radiance(ctx, &scene.solution.vertex_radiance)?;
+        // The figure 6.9 false colours replace the radiance while that view is on.
+        let colours = scene.solution.clusters.as_ref().unwrap_or(&scene.solution.vertex_radiance);
+        surface.renderer.set_radiance(ctx, colours)?;
         scene.radiance_dirty = false;
     }
     Ok(())

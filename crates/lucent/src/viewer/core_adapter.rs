@@ -11,6 +11,7 @@ use lucent_core::mesh::Mesh;
 use lucent_core::shading::diffuse_radiance;
 use lucent_core::solver::exact;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Per-phase wall-clock times of one solve, milliseconds. Phases the active solver does not
@@ -47,6 +48,9 @@ pub struct Solution {
     pub links: Option<usize>,
     /// Name of the solver that ran, for the UI.
     pub solver: &'static str,
+    /// Figure 6.9 false colours per vertex: the clusters the picked face gathers from, coloured
+    /// by hierarchy level ([`level_colour`]); `None` when that view is off or unsupported.
+    pub clusters: Option<Vec<Rgb>>,
 }
 
 /// What the linked core modules can do; the panel greys out or explains what they cannot.
@@ -75,7 +79,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
 
 /// The mesh shown when no `--mesh` is given.
 pub fn default_mesh() -> Mesh {
-    icosphere(3)
+    icosphere(2)
 }
 
 /// Loads a mesh file (naming the file in the error).
@@ -145,8 +149,35 @@ pub fn core_lights(lights: &[LightSpec]) -> Vec<Light> {
         .collect()
 }
 
-/// Solves for the per-vertex radiance of `mesh` under `params`.
-pub fn solve(mesh: &Mesh, params: &SolveParams) -> Solution {
+/// Solver state the worker keeps between requests (the hierarchy and links that render and
+/// incremental modes reuse live here).
+#[derive(Default)]
+pub struct SolverSession {}
+
+impl SolverSession {
+    /// Solves for the per-vertex radiance of `mesh` under `params`.
+    pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
+        solve_exact(mesh, params)
+    }
+}
+
+/// A distinct display colour for hierarchy level `level` (0 = root), for the figure 6.9 view.
+pub fn level_colour(level: usize) -> Rgb {
+    const PALETTE: [[f32; 3]; 8] = [
+        [0.90, 0.10, 0.10],
+        [0.95, 0.55, 0.05],
+        [0.90, 0.85, 0.10],
+        [0.20, 0.75, 0.20],
+        [0.10, 0.70, 0.80],
+        [0.15, 0.30, 0.90],
+        [0.60, 0.20, 0.85],
+        [0.90, 0.40, 0.70],
+    ];
+    Rgb::from_array(PALETTE[level % PALETTE.len()])
+}
+
+/// The exact O(N^2) solve (every face against every face).
+fn solve_exact(mesh: &Mesh, params: &SolveParams) -> Solution {
     let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
     let mut timings = Timings::default();
 
@@ -163,7 +194,7 @@ pub fn solve(mesh: &Mesh, params: &SolveParams) -> Solution {
     let vertex_radiance = diffuse_radiance(&mesh.face_to_vertex(&b));
     timings.push_ms = ms_since(t);
 
-    Solution { vertex_radiance, timings, links: None, solver: "exact O(N^2)" }
+    Solution { vertex_radiance, timings, links: None, solver: "exact O(N^2)", clusters: None }
 }
 
 fn ms_since(t: Instant) -> f64 {

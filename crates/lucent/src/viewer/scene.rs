@@ -81,6 +81,8 @@ impl Scene {
     /// when the mesh or the parameters changed. Cheap when nothing changed.
     pub fn sync(&mut self, worker: &Worker) {
         let Some(base) = &self.base else { return };
+        let st = &mut self.state;
+        st.params.cluster_face = if st.show_clusters { st.picked_face } else { None };
         let mut changed = false;
         if self.deform_of_mesh.as_ref() != Some(&self.state.deform) {
             let mesh = if self.state.deform.is_identity() {
@@ -134,5 +136,50 @@ impl Scene {
             && self.drawn_generation == self.sent_generation
             && self.deform_of_mesh.as_ref() == Some(&self.state.deform)
             && self.sent.as_ref() == Some(&self.state.params)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lucent_core::bssrdf::Material;
+    use std::time::Duration;
+
+    /// Polls `scene` until `done` holds (the worker runs on its own thread).
+    fn wait_for(scene: &mut Scene, worker: &Worker, done: impl Fn(&Scene) -> bool) {
+        let start = Instant::now();
+        while !done(scene) {
+            assert!(start.elapsed() < Duration::from_secs(120), "the worker did not reply");
+            scene.receive(worker);
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    /// The image is settled only once the solution for the newest state is drawn, and any edit
+    /// unsettles it until the worker delivers again.
+    #[test]
+    fn settles_after_the_latest_state_is_solved_and_drawn() {
+        let worker = Worker::spawn(|| {});
+        let mut scene = Scene::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05));
+        worker.send(Request::Load(None));
+        wait_for(&mut scene, &worker, |s| s.base.is_some());
+        scene.sync(&worker);
+        assert!(scene.solving() && !scene.settled());
+        wait_for(&mut scene, &worker, |s| !s.solving());
+        let n = scene.mesh.as_ref().unwrap().positions.len();
+        assert_eq!(scene.solution.vertex_radiance.len(), n);
+        assert!(!scene.settled(), "not drawn yet");
+        scene.mark_drawn();
+        assert!(scene.settled());
+
+        // Two quick edits: only the newest needs to arrive for the image to settle.
+        scene.state.params.lights[0].position.x += 0.5;
+        scene.sync(&worker);
+        scene.state.deform.twist = 1.0;
+        scene.sync(&worker);
+        assert!(!scene.settled());
+        wait_for(&mut scene, &worker, |s| !s.solving());
+        scene.mark_drawn();
+        assert!(scene.settled());
     }
 }

@@ -183,6 +183,9 @@ pub struct SolveParams {
     pub epsilon2: f64,
     /// Whether lights are shadowed by the mesh.
     pub shadows: bool,
+    /// Figure 6.9: the face whose gathered-from clusters are shown, if that view is on (set
+    /// from [`ViewState::show_clusters`] and [`ViewState::picked_face`]).
+    pub cluster_face: Option<u32>,
 }
 
 /// The whole editable state of the viewer.
@@ -232,6 +235,7 @@ impl ViewState {
                 epsilon1: 1e-3,
                 epsilon2: 1e-2,
                 shadows: true,
+                cluster_face: None,
             },
             deform: Deformations::default(),
             exposure: 1.0,

@@ -3,7 +3,7 @@
 //! requests (screenshot, resets) in [`UiRequests`]; it never touches the GPU or the worker.
 
 use super::camera::OrbitCamera;
-use super::core_adapter::{Capabilities, Timings};
+use super::core_adapter::{Capabilities, Timings, level_colour};
 use super::state::{EnvChoice, LightKind, LightSpec, SolverMode, Tool, ViewState};
 use egui::{Color32, ComboBox, Slider, Ui};
 use glam::{Vec2, Vec3};
@@ -216,10 +216,21 @@ fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
     if state.show_clusters {
         state.tool = Tool::PickTriangle;
         match state.picked_face {
-            Some(f) => ui.label(format!("triangle {f}; colours: hierarchy level")),
+            Some(f) => ui.label(format!("triangle {f}; colour = level of the emitter cluster:")),
             None => ui.label("click a triangle"),
         };
+        level_legend(ui);
     }
+}
+
+/// Swatches of the level colours of the figure 6.9 view (level 0 is the root).
+fn level_legend(ui: &mut Ui) {
+    ui.horizontal_wrapped(|ui| {
+        for level in 0..8 {
+            let c = (level_colour(level) * 255.0).to_array().map(|v| v as u8);
+            ui.colored_label(Color32::from_rgb(c[0], c[1], c[2]), format!("■ {level}"));
+        }
+    });
 }
 
 fn deformation(ui: &mut Ui, state: &mut ViewState, status: &Status) {

@@ -3,7 +3,7 @@
 //! always drains its queue and solves only the newest state (Mertens §5.5 interactivity: a
 //! stale solution is never worth finishing when a newer one is wanted).
 
-use super::core_adapter::{self, Solution};
+use super::core_adapter::{self, Solution, SolverSession};
 use super::state::SolveParams;
 use lucent_core::mesh::Mesh;
 use std::path::PathBuf;
@@ -73,11 +73,23 @@ impl Worker {
 }
 
 fn run(requests: Receiver<Request>, replies: Sender<Reply>, wake: impl Fn()) {
+    let mut session = SolverSession::default();
     while let Some(request) = next_coalesced(&requests) {
         let reply = match request {
             Request::Load(path) => Reply::Loaded(load(path.as_deref())),
             Request::Solve { generation, mesh, params } => {
-                Reply::Solved { generation, solution: core_adapter::solve(&mesh, &params) }
+                let solution = session.solve(&mesh, &params);
+                let t = &solution.timings;
+                log::info!(
+                    "solve {generation}: {} faces, {:.1} ms (irradiance {:.1}, link {:.1}, gather {:.1}, push {:.1})",
+                    mesh.triangles.len(),
+                    t.total_ms(),
+                    t.irradiance_ms,
+                    t.link_ms,
+                    t.gather_ms,
+                    t.push_ms
+                );
+                Reply::Solved { generation, solution }
             }
         };
         if replies.send(reply).is_err() {
