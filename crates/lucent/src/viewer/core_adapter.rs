@@ -7,7 +7,8 @@ use lucent_core::Rgb;
 use lucent_core::bssrdf::Dipole;
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::irradiance::{Light, face_irradiance};
-use lucent_core::mesh::Mesh;
+use lucent_core::mesh::deform::{self, Deformer as _};
+use lucent_core::mesh::{Mesh, embedded, generate};
 use lucent_core::shading::diffuse_radiance;
 use lucent_core::solver::exact;
 use std::path::Path;
@@ -64,22 +65,16 @@ pub struct Capabilities {
     pub environment: bool,
     /// Spot-light cones.
     pub spot_lights: bool,
-    /// True Perlin noise deformation (else a smooth stand-in).
-    pub perlin_noise: bool,
 }
 
 /// This build's capabilities.
-pub const CAPABILITIES: Capabilities = Capabilities {
-    hierarchical: false,
-    shadows: false,
-    environment: false,
-    spot_lights: false,
-    perlin_noise: false,
-};
+pub const CAPABILITIES: Capabilities =
+    Capabilities { hierarchical: false, shadows: false, environment: false, spot_lights: false };
 
-/// The mesh shown when no `--mesh` is given.
+/// The mesh shown when no `--mesh` is given: the embedded Stanford bunny when the
+/// hierarchical solver is linked, else a coarse sphere the O(N^2) solve handles interactively.
 pub fn default_mesh() -> Mesh {
-    icosphere(2)
+    if CAPABILITIES.hierarchical { embedded::bunny() } else { generate::icosphere(2) }
 }
 
 /// Loads a mesh file (naming the file in the error).
@@ -99,38 +94,25 @@ pub fn normalise(mut mesh: Mesh) -> Mesh {
     mesh
 }
 
-/// `base` with the deformations applied (dents, then twist, then noise along the normal).
+/// Spatial frequency of the noise deformation, noise cells per mesh unit (the mesh has extent 1).
+const NOISE_FREQUENCY: f32 = 4.0;
+
+/// `base` with the deformations applied in order: dents (bumps of negative height along the
+/// vertex normal), twist about the vertical axis through the origin, Perlin noise along the
+/// normal (Mertens figures 6.5-6.8).
 pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
     let mut mesh = base.clone();
     for dent in &d.dents {
-        for p in &mut mesh.positions {
-            let r2 = (*p - dent.center).length_squared() / (dent.radius * dent.radius);
-            // Smooth bump exp(-r^2 / (2 s^2)) with s = radius / 2, cut off beyond the radius.
-            if r2 < 1.0 {
-                *p += dent.normal * dent.height * (-2.0 * r2).exp() * (1.0 - r2);
-            }
-        }
+        mesh = deform::bump(dent.center, dent.radius, dent.height).deformed(&mesh);
     }
     if d.twist != 0.0 {
-        for p in &mut mesh.positions {
-            let (s, c) = (d.twist * p.y).sin_cos();
-            *p = Vec3::new(c * p.x + s * p.z, p.y, -s * p.x + c * p.z);
-        }
+        mesh = deform::twist(Vec3::ZERO, Vec3::Y, d.twist).deformed(&mesh);
     }
     if d.noise_amplitude != 0.0 {
-        let normals = mesh.vertex_normals();
-        for (p, n) in mesh.positions.iter_mut().zip(normals) {
-            *p += n * d.noise_amplitude * smooth_noise(*p * 4.0 + Vec3::splat(d.noise_offset));
-        }
+        let offset = Vec3::splat(d.noise_offset);
+        mesh = deform::noise(d.noise_amplitude, NOISE_FREQUENCY, offset).deformed(&mesh);
     }
     mesh
-}
-
-/// A smooth band-limited pseudo-noise in -1..1 (a stand-in for 3D Perlin noise).
-fn smooth_noise(p: Vec3) -> f32 {
-    let a = (p.x * 1.7 + p.y * 0.3).sin() * (p.y * 1.3 - p.z * 0.7).sin();
-    let b = (p.z * 2.1 + p.x * 0.5).sin() * (p.x * 0.9 + p.y * 1.9).cos();
-    0.5 * (a + b)
 }
 
 /// The core's lights for the UI's list. A spot light is a point light whose cone is not yet
@@ -201,69 +183,6 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// A unit-radius icosphere with `subdivisions` levels (20 * 4^n triangles).
-fn icosphere(subdivisions: u32) -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut midpoint = std::collections::HashMap::new();
-        let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| -> u32 {
-            *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let p = (positions[a as usize] + positions[b as usize]).normalize();
-                positions.push(p);
-                positions.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(triangles.len() * 4);
-        for [a, b, c] in triangles {
-            let ab = mid(a, b, &mut positions);
-            let bc = mid(b, c, &mut positions);
-            let ca = mid(c, a, &mut positions);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        triangles = next;
-    }
-    Mesh::new(positions, triangles)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -274,16 +193,5 @@ mod tests {
         let (lo, hi) = m.bounds();
         assert!((m.extent() - 1.0).abs() < 1e-6);
         assert!((lo + hi).length() < 1e-6);
-    }
-
-    #[test]
-    fn icosphere_is_closed_with_euler_characteristic_two() {
-        let m = icosphere(2);
-        // V - E + F = 2 for a sphere; every edge is shared by two faces, so E = 3F/2.
-        let (v, f) = (m.positions.len() as i64, m.triangles.len() as i64);
-        assert_eq!(f, 320);
-        assert_eq!(v - 3 * f / 2 + f, 2);
-        // Counter-clockwise from outside: normals point away from the centre.
-        assert!((0..m.triangles.len()).all(|i| m.face_normal(i).dot(m.face_centroid(i)) > 0.0));
     }
 }

@@ -65,12 +65,7 @@ impl Input {
                 });
                 match (state.tool, hit) {
                     (Tool::Dent, Some(h)) => {
-                        state.deform.dents.push(Dent {
-                            center: h.point,
-                            normal: h.normal,
-                            radius: DENT_RADIUS,
-                            height: 0.0,
-                        });
+                        state.deform.dents.push(Dent { center: h.point, radius: DENT_RADIUS, height: 0.0 });
                         self.dent =
                             Some(DentDrag { index: state.deform.dents.len() - 1, started: Instant::now() });
                     }
@@ -121,10 +116,5 @@ impl Input {
 
 /// A dent made by a script at the surface point nearest `p`, at full depth.
 pub fn scripted_dent(mesh: &Mesh, p: glam::Vec3) -> Option<Dent> {
-    pick::nearest_vertex(mesh, p).map(|(center, normal)| Dent {
-        center,
-        normal,
-        radius: DENT_RADIUS * 1.5,
-        height: -DENT_MAX,
-    })
+    pick::nearest_vertex(mesh, p).map(|center| Dent { center, radius: DENT_RADIUS * 1.5, height: -DENT_MAX })
 }

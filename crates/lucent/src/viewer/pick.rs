@@ -11,8 +11,6 @@ pub struct Hit {
     pub face: u32,
     /// Hit point, mesh units.
     pub point: Vec3,
-    /// Unit geometric normal of the face.
-    pub normal: Vec3,
     /// Distance along the ray, mesh units.
     pub t: f32,
 }
@@ -24,19 +22,17 @@ pub fn pick(mesh: &Mesh, origin: Vec3, dir: Vec3) -> Option<Hit> {
         .into_par_iter()
         .filter_map(|f| {
             let t = intersect(mesh.corners(f), origin, dir)?;
-            Some(Hit { face: f as u32, point: origin + t * dir, normal: mesh.face_normal(f), t })
+            Some(Hit { face: f as u32, point: origin + t * dir, t })
         })
         .min_by(|a, b| a.t.total_cmp(&b.t))
 }
 
-/// The vertex nearest to `p` and its area-weighted normal (for scripted dents).
-pub fn nearest_vertex(mesh: &Mesh, p: Vec3) -> Option<(Vec3, Vec3)> {
-    let normals = mesh.vertex_normals();
+/// The vertex nearest to `p` (for scripted dents).
+pub fn nearest_vertex(mesh: &Mesh, p: Vec3) -> Option<Vec3> {
     mesh.positions
         .iter()
-        .zip(normals)
-        .min_by(|a, b| (*a.0 - p).length_squared().total_cmp(&(*b.0 - p).length_squared()))
-        .map(|(q, n)| (*q, n))
+        .copied()
+        .min_by(|a, b| (*a - p).length_squared().total_cmp(&(*b - p).length_squared()))
 }
 
 /// Möller–Trumbore ray/triangle intersection; the distance `t > 0` or `None`.

@@ -130,11 +130,9 @@ impl SolverMode {
 pub struct Dent {
     /// Centre on the surface, mesh units.
     pub center: Vec3,
-    /// Direction the surface moves (the outward normal at `center`, unit).
-    pub normal: Vec3,
     /// Radius of the smooth falloff, mesh units (> 0).
     pub radius: f32,
-    /// Displacement along `normal` at the centre, mesh units (negative: a dent).
+    /// Displacement along the vertex normal at the centre, mesh units (negative: a dent).
     pub height: f32,
 }
 

@@ -58,7 +58,7 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status) -> UiRequ
             section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights, status));
             section(ui, "Environment", false, |ui| environment(ui, state, status));
             section(ui, "Solver", true, |ui| solver(ui, state, status));
-            section(ui, "Deformation", true, |ui| deformation(ui, state, status));
+            section(ui, "Deformation", true, |ui| deformation(ui, state));
             section(ui, "Timings", true, |ui| timings(ui, status));
         });
     });
@@ -233,7 +233,7 @@ fn level_legend(ui: &mut Ui) {
     });
 }
 
-fn deformation(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+fn deformation(ui: &mut Ui, state: &mut ViewState) {
     ui.horizontal(|ui| {
         ui.label("left drag:");
         ui.radio_value(&mut state.tool, Tool::Orbit, "orbit");
@@ -244,9 +244,6 @@ fn deformation(ui: &mut Ui, state: &mut ViewState, status: &Status) {
     ui.add(Slider::new(&mut d.twist, -6.0..=6.0).text("twist (rad/unit)"));
     ui.add(Slider::new(&mut d.noise_amplitude, 0.0..=0.1).text("noise"));
     ui.checkbox(&mut d.noise_animated, "animate noise");
-    if !status.caps.perlin_noise {
-        ui.weak("noise: smooth stand-in until Perlin noise lands");
-    }
     ui.horizontal(|ui| {
         ui.label(format!("{} dents", d.dents.len()));
         if ui.button("Undo dent").clicked() {
