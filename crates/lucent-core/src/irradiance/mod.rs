@@ -1,21 +1,69 @@
 //! Irradiance at the leaves (Mertens §5.3): light arriving at each face's midpoint and
 //! transmitted through the smooth dielectric boundary, `E = ∫ L_i F_t(eta, w_i) cos dω`.
+//!
+//! Sources: point, directional and spot lights ([`lights`]), optionally shadowed by ray casting
+//! against a refitted BVH of the (deforming) mesh ([`shadow`]), and a distant environment given
+//! by nine spherical-harmonic coefficients ([`sh`], [`envmap`]; unshadowed, as in Mertens §5.3:
+//! "shadows cannot be taken into account, unless we assume rigid objects").
+
+pub mod envmap;
+pub mod lights;
+pub mod sh;
+pub mod shadow;
+
+pub use envmap::{EnvMap, EnvMapError, equirect_direction, equirect_uv};
+pub use lights::{Incident, Light, SceneLight, light_irradiance, spot_falloff};
+pub use sh::{BandWeights, Sh9};
+pub use shadow::{Bvh, ShadowCaster, Update};
 
 use crate::Rgb;
 use crate::bssrdf::fresnel_transmittance;
 use crate::mesh::Mesh;
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
-/// A light source. Radiometric units are arbitrary but consistent (think W and W/m^2).
+/// Distant environment light as nine SH coefficients of its radiance (Mertens §5.3).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Light {
-    /// An isotropic point light at `position` (mesh units) with radiant `intensity` per channel
-    /// (W/sr); irradiance falls off as `1 / d^2` with `d` in mesh units.
-    Point { position: Vec3, intensity: Rgb },
-    /// A distant light shining *along* `direction` (need not be unit), giving `irradiance`
-    /// (W/m^2 per channel) on a surface facing it.
-    Directional { direction: Vec3, irradiance: Rgb },
+pub struct Environment {
+    /// SH coefficients `L_lm` of the radiance in the map's own frame (see [`envmap`] for the
+    /// direction convention), per channel, in radiance units.
+    pub sh: Sh9,
+    /// Rotation of the environment about +Y, in degrees (right-handed; default 0).
+    pub rotation_deg: f32,
+    /// Multiplier on the radiance (unitless, >= 0; default 1).
+    pub intensity: f32,
+}
+
+impl Environment {
+    /// An environment from a map, projected onto SH (rotation 0, intensity 1).
+    pub fn from_map(map: &EnvMap) -> Self {
+        Environment {
+            sh: map.project_sh(),
+            rotation_deg: 0.0,
+            intensity: 1.0,
+        }
+    }
+
+    /// Takes a world-space direction to the map's frame: `R_y(−rotation)`, since the rotated
+    /// environment is `L'(ω) = L(R_y(−α) ω)`.
+    #[inline]
+    pub fn to_map_frame(&self, d: Vec3) -> Vec3 {
+        Quat::from_rotation_y(-self.rotation_deg.to_radians()) * d
+    }
+
+    /// Irradiance `∫ L(ω) max(0, n·ω) dω` on a surface with unit normal `n` (world space), by
+    /// Ramamoorthi & Hanrahan's formula.
+    pub fn irradiance(&self, n: Vec3) -> Rgb {
+        self.sh.irradiance(self.to_map_frame(n)) * self.intensity
+    }
+
+    /// Fresnel-transmitted irradiance `∫ L(ω) F_t(eta, n·ω) max(0, n·ω) dω` with `weights` from
+    /// [`BandWeights::fresnel_cosine`] for the material's `eta` (computed once per frame, not per
+    /// face). Exact for the 9-coefficient radiance: the kernel is zonal (see [`sh`]). Clamped at
+    /// zero, where ringing of the truncated expansion could dip below it.
+    pub fn transmitted_irradiance(&self, n: Vec3, weights: &BandWeights) -> Rgb {
+        (self.sh.convolve(self.to_map_frame(n), weights) * self.intensity).max(Rgb::ZERO)
+    }
 }
 
 /// Fresnel-transmitted irradiance at every face centroid from `lights`, without shadows.
@@ -30,19 +78,40 @@ pub fn face_irradiance(mesh: &Mesh, lights: &[Light], eta: f64) -> Vec<Rgb> {
         .collect()
 }
 
-/// Irradiance transmitted into the surface at `p` with unit normal `n` from one light.
-pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, eta: f64) -> Rgb {
-    let (to_light, e) = match *light {
-        Light::Point { position, intensity } => {
-            let d = position - p;
-            let d2 = d.length_squared().max(1e-12);
-            (d / d2.sqrt(), intensity / d2)
-        }
-        Light::Directional { direction, irradiance } => (-direction.normalize_or_zero(), irradiance),
-    };
-    let cos = n.dot(to_light);
-    if cos <= 0.0 {
-        return Rgb::ZERO;
-    }
-    e * cos * fresnel_transmittance(cos as f64, eta) as f32
+/// Fresnel-transmitted irradiance at every face centroid from `lights` (shadowed where
+/// `SceneLight::shadows` is set and a `caster` is given; call [`ShadowCaster::update`] after
+/// the mesh moved) plus the `environment` (unshadowed), for a material of relative index `eta`.
+pub fn face_irradiance_shadowed(
+    mesh: &Mesh,
+    lights: &[SceneLight],
+    environment: Option<&Environment>,
+    eta: f64,
+    caster: Option<&ShadowCaster>,
+) -> Vec<Rgb> {
+    let weights = environment.map(|_| BandWeights::fresnel_cosine(eta));
+    (0..mesh.triangles.len())
+        .into_par_iter()
+        .map(|f| {
+            let p = mesh.face_centroid(f);
+            let n = mesh.face_normal(f);
+            let mut e = match (environment, &weights) {
+                (Some(env), Some(w)) => env.transmitted_irradiance(n, w),
+                _ => Rgb::ZERO,
+            };
+            for sl in lights {
+                let Some(inc) = sl.light.incident(p) else {
+                    continue;
+                };
+                let cos = n.dot(inc.to_light);
+                if cos <= 0.0 {
+                    continue;
+                }
+                if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
+                    continue;
+                }
+                e += inc.irradiance * cos * fresnel_transmittance(cos as f64, eta) as f32;
+            }
+            e
+        })
+        .collect()
 }

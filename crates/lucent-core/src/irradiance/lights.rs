@@ -1,0 +1,145 @@
+//! Point, directional and spot lights (Mertens §5.3 "point/spot lights"; the spot light of their
+//! figure 6.5), and the light a face midpoint receives from one of them before shadowing.
+
+use crate::Rgb;
+use crate::bssrdf::fresnel_transmittance;
+use glam::Vec3;
+
+/// A light source. Radiometric units are arbitrary but consistent (think W and W/m^2); positions
+/// are in mesh units and irradiance from a positional light falls off as `1 / d^2` with `d` in
+/// mesh units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// An isotropic point light at `position` (mesh units) with radiant `intensity` per channel
+    /// (W/sr); irradiance falls off as `1 / d^2` with `d` in mesh units.
+    Point { position: Vec3, intensity: Rgb },
+    /// A distant light shining *along* `direction` (need not be unit), giving `irradiance`
+    /// (W/m^2 per channel) on a surface facing it.
+    Directional { direction: Vec3, irradiance: Rgb },
+    /// A point light at `position` (mesh units) that emits only into a cone around `direction`
+    /// (the way it shines; need not be unit). On the axis its radiant intensity is `intensity`
+    /// (W/sr per channel). `cone_angle` is the cone's half-angle in radians (0..π); the intensity
+    /// fades to zero over the outer `soft_edge` fraction (0..1) of that angle with a smoothstep
+    /// in angle (0 gives a hard edge). See [`spot_falloff`].
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Rgb,
+        cone_angle: f32,
+        soft_edge: f32,
+    },
+}
+
+/// A light in a scene, with whether it casts shadows (ray cast against the mesh; see
+/// [`super::shadow::ShadowCaster`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneLight {
+    /// The light.
+    pub light: Light,
+    /// Whether faces occluded from the light by the mesh itself receive nothing from it.
+    /// Default `true`.
+    pub shadows: bool,
+}
+
+impl From<Light> for SceneLight {
+    /// A light that casts shadows.
+    fn from(light: Light) -> Self {
+        SceneLight {
+            light,
+            shadows: true,
+        }
+    }
+}
+
+/// Light arriving at a point, before the surface's orientation and Fresnel term apply.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incident {
+    /// Unit vector from the point towards the light.
+    pub to_light: Vec3,
+    /// Distance to the light in mesh units (`f32::INFINITY` for a directional light): the length
+    /// a shadow ray must be free over.
+    pub distance: f32,
+    /// Irradiance on a surface facing the light squarely (per channel).
+    pub irradiance: Rgb,
+}
+
+/// The spot light's angular falloff: 1 inside `cone_angle * (1 - soft_edge)`, 0 outside
+/// `cone_angle`, and a smoothstep `t^2 (3 - 2t)` of the angle between (`t` = 1 at the inner
+/// angle). `cos_angle` is the cosine between the spot axis and the direction to the point.
+pub fn spot_falloff(cos_angle: f32, cone_angle: f32, soft_edge: f32) -> f32 {
+    let angle = cos_angle.clamp(-1.0, 1.0).acos();
+    let inner = cone_angle * (1.0 - soft_edge.clamp(0.0, 1.0));
+    if angle >= cone_angle {
+        0.0
+    } else if angle <= inner {
+        1.0
+    } else {
+        let t = (cone_angle - angle) / (cone_angle - inner);
+        t * t * (3.0 - 2.0 * t)
+    }
+}
+
+impl Light {
+    /// The light arriving at point `p` (mesh units), or `None` where it gets nothing (outside a
+    /// spot's cone, or a light with zero direction).
+    pub fn incident(&self, p: Vec3) -> Option<Incident> {
+        match *self {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                let d = position - p;
+                let d2 = d.length_squared().max(1e-12);
+                let dist = d2.sqrt();
+                Some(Incident {
+                    to_light: d / dist,
+                    distance: dist,
+                    irradiance: intensity / d2,
+                })
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => {
+                let to_light = -direction.try_normalize()?;
+                Some(Incident {
+                    to_light,
+                    distance: f32::INFINITY,
+                    irradiance,
+                })
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                soft_edge,
+            } => {
+                let axis = direction.try_normalize()?;
+                let d = position - p;
+                let d2 = d.length_squared().max(1e-12);
+                let dist = d2.sqrt();
+                let to_light = d / dist;
+                let falloff = spot_falloff(axis.dot(-to_light), cone_angle, soft_edge);
+                (falloff > 0.0).then(|| Incident {
+                    to_light,
+                    distance: dist,
+                    irradiance: intensity * (falloff / d2),
+                })
+            }
+        }
+    }
+}
+
+/// Irradiance transmitted into the surface at `p` with unit normal `n` from one light, without
+/// shadows: `E F_t(eta, cos) cos`.
+pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, eta: f64) -> Rgb {
+    let Some(inc) = light.incident(p) else {
+        return Rgb::ZERO;
+    };
+    let cos = n.dot(inc.to_light);
+    if cos <= 0.0 {
+        return Rgb::ZERO;
+    }
+    inc.irradiance * cos * fresnel_transmittance(cos as f64, eta) as f32
+}
