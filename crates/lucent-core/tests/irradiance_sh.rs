@@ -125,20 +125,52 @@ fn l22_term_is_weighted_by_c1_not_c3() {
     }
 }
 
+/// Grace Cathedral light probe coefficients, Ramamoorthi & Hanrahan 2001, table 1 (to 5
+/// digits as reprinted with the paper's shader; the paper prints 2 digits, which these round to).
+const GRACE: [[f32; 3]; 9] = [
+    [0.78908, 0.43710, 0.54161],    // L00
+    [0.39499, 0.34989, 0.60488],    // L1-1
+    [-0.33974, -0.18236, -0.26940], // L10
+    [-0.29213, -0.05562, 0.00944],  // L11
+    [-0.11141, -0.05090, -0.12231], // L2-2
+    [-0.26240, -0.22401, -0.47479], // L2-1
+    [-0.15570, -0.09471, -0.14733], // L20
+    [0.56014, 0.21444, 0.13915],    // L21
+    [0.21205, -0.05432, -0.30374],  // L22
+];
+
+/// R&H 2001 eq. 12, the matrix form `E(n) = nᵀ M n` with `n = (x, y, z, 1)`: a third,
+/// independently written evaluation.
+fn rh_matrix_form(sh: &Sh9, n: Vec3) -> Rgb {
+    use lucent_core::irradiance::sh::{C1, C2, C3, C4, C5};
+    let l = &sh.coeffs;
+    let m = [
+        [l[8] * C1, l[4] * C1, l[7] * C1, l[3] * C2],
+        [l[4] * C1, -l[8] * C1, l[5] * C1, l[1] * C2],
+        [l[7] * C1, l[5] * C1, l[6] * C3, l[2] * C2],
+        [l[3] * C2, l[1] * C2, l[2] * C2, l[0] * C4 - l[6] * C5],
+    ];
+    let v = [n.x, n.y, n.z, 1.0];
+    let mut e = Rgb::ZERO;
+    for i in 0..4 {
+        for j in 0..4 {
+            e += m[i][j] * v[i] * v[j];
+        }
+    }
+    e
+}
+
 #[test]
-fn rh_formula_equals_band_weighted_convolution() {
-    // Two independent evaluations: R&H's quadratic form and Σ A_l L_lm Y_lm(n).
-    let sh = Sh9::from_array(std::array::from_fn(|i| {
-        [
-            0.3 + i as f32 * 0.1,
-            -0.2 + 0.05 * i as f32,
-            (i as f32).sin(),
-        ]
-    }));
+fn rh_formula_equals_matrix_form_and_band_weighted_convolution() {
+    // Three evaluations of E(n) for the Grace Cathedral fixture: R&H's quadratic polynomial
+    // (eq. 13), their matrix form (eq. 12) and Σ A_l L_lm Y_lm(n).
+    let sh = Sh9::from_array(GRACE);
     for n in normals(64) {
         let a = sh.irradiance(n);
-        let b = sh.convolve(n, &BandWeights::COSINE);
+        let b = rh_matrix_form(&sh, n);
+        let c = sh.convolve(n, &BandWeights::COSINE);
         assert!((a - b).abs().max_element() < 1e-5, "n={n}: {a} vs {b}");
+        assert!((a - c).abs().max_element() < 1e-5, "n={n}: {a} vs {c}");
     }
 }
 
