@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod render;
 mod render_htsm;
+mod scene;
 mod view;
 mod viewer;
 

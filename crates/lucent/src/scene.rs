@@ -1,0 +1,686 @@
+//! Scene files (TOML): mesh, material, scale, lights, environment, camera, deformations and
+//! exposure in one file, for `lucent render --scene` and the viewer. See
+//! `examples/scenes/*.toml` for complete examples.
+//!
+//! ```toml
+//! mesh = "bunny"              # a built-in name, or a file path relative to this file
+//! material = "marble"         # a preset, or { sigma_s_prime = [..], sigma_a = [..], eta = 1.3 }
+//! scale = 0.05                # largest bounding-box side, metres
+//! exposure = 1.0
+//! deform = ["twist:30"]       # twist:DEGREES, bump:x,y,z,radius,height, noise:amplitude,frequency
+//!
+//! [[light]]
+//! type = "spot"               # "point", "directional" (or "dir"), "spot"
+//! position = [0.0, 2.0, 1.0]  # mesh units
+//! direction = [0.0, -1.0, -0.5]
+//! color = [1.0, 0.9, 0.8]
+//! intensity = 1.0
+//! cone_angle = 30.0           # half-angle, degrees
+//! soft_edge = 0.2             # fraction of the cone over which it fades
+//! shadows = true
+//!
+//! [environment]
+//! path = "../../assets/courtyard.exr"
+//! rotation = 90.0             # degrees about +Y
+//! intensity = 1.0
+//!
+//! [camera]
+//! yaw = 30.0                  # degrees
+//! pitch = 15.0                # degrees
+//! distance = 3.0              # bounding-sphere radii (optional: frame the object)
+//! fov = 35.0                  # vertical, degrees
+//! ```
+// The render command and the viewer use this module once `--scene` is wired in.
+#![allow(dead_code)]
+
+use anyhow::{Context, Result, bail};
+use glam::Vec3;
+use lucent_core::Rgb;
+use lucent_core::bssrdf::Material;
+use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use serde::Deserialize;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A scene as read from a TOML file. Every field has a default, so an empty file is the default
+/// scene (the bunny in skim milk with one light).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// The mesh: a built-in name (`"bunny"`, or a generator the mesh module provides, e.g.
+    /// `"candle"`, `"cube"`, `"sphere"`) or a file path (OBJ, PLY, OFF, glTF/GLB) relative to the
+    /// scene file's folder. A string with a file extension or a path separator is a path.
+    /// Default `"bunny"`.
+    #[serde(default = "default_mesh")]
+    pub mesh: String,
+    /// The material: a preset name (`"skimmilk"`, `"marble"`, `"wax"`, ...) or a table with
+    /// `sigma_s_prime` and `sigma_a` (mm^-1, per RGB channel), optional `eta` (default 1.3) and
+    /// optional `name`. Default `"skimmilk"`.
+    #[serde(default)]
+    pub material: MaterialSpec,
+    /// Model scale: the largest side of the mesh's bounding box, in metres (> 0). Default 0.05.
+    #[serde(default = "default_scale")]
+    pub scale: f64,
+    /// Exposure multiplier applied to radiance before tone mapping (> 0). Default 1.
+    #[serde(default = "one")]
+    pub exposure: f32,
+    /// Lights (`[[light]]` tables). Default: none, and the renderer adds its default light when
+    /// there is neither a light nor an environment.
+    #[serde(default, rename = "light")]
+    pub lights: Vec<LightSpec>,
+    /// Distant environment light and reflection map. Default: none.
+    #[serde(default)]
+    pub environment: Option<EnvironmentSpec>,
+    /// The orbit camera. Default: the renderer's default framing.
+    #[serde(default)]
+    pub camera: CameraSpec,
+    /// Deformations applied in order, as strings: `twist:DEGREES` (about +Y over the mesh's
+    /// height), `bump:x,y,z,radius,height` (mesh units), `noise:amplitude,frequency`.
+    /// Default: none.
+    #[serde(default)]
+    pub deform: Vec<String>,
+    /// The folder of the scene file; relative paths inside the file are resolved against it.
+    #[serde(skip)]
+    pub dir: PathBuf,
+}
+
+fn default_mesh() -> String {
+    "bunny".into()
+}
+fn default_scale() -> f64 {
+    0.05
+}
+fn one() -> f32 {
+    1.0
+}
+fn yes() -> bool {
+    true
+}
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+fn default_cone() -> f32 {
+    30.0
+}
+fn default_soft_edge() -> f32 {
+    0.2
+}
+
+/// A material preset name or custom coefficients.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialSpec {
+    /// A preset, by name (case-insensitive).
+    Preset(String),
+    /// User-defined coefficients.
+    Custom(CustomMaterial),
+}
+
+impl Default for MaterialSpec {
+    fn default() -> Self {
+        MaterialSpec::Preset("skimmilk".into())
+    }
+}
+
+/// Custom material coefficients (see [`Material`]).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CustomMaterial {
+    /// Display name. Default `"custom"`.
+    #[serde(default = "custom_name")]
+    pub name: String,
+    /// Reduced scattering coefficient per RGB channel, mm^-1 (> 0).
+    pub sigma_s_prime: [f64; 3],
+    /// Absorption coefficient per RGB channel, mm^-1 (> 0).
+    pub sigma_a: [f64; 3],
+    /// Relative index of refraction (1..3). Default 1.3.
+    #[serde(default = "default_eta")]
+    pub eta: f64,
+}
+
+fn custom_name() -> String {
+    "custom".into()
+}
+fn default_eta() -> f64 {
+    1.3
+}
+
+// A string or a table, with the table's own field errors (serde's untagged enums would only say
+// "did not match any variant").
+impl<'de> Deserialize<'de> for MaterialSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = MaterialSpec;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material preset name or a table with sigma_s_prime and sigma_a")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<MaterialSpec, E> {
+                Ok(MaterialSpec::Preset(s.to_string()))
+            }
+            fn visit_map<M: MapAccess<'de>>(self, m: M) -> Result<MaterialSpec, M::Error> {
+                CustomMaterial::deserialize(de::value::MapAccessDeserializer::new(m))
+                    .map(MaterialSpec::Custom)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// One `[[light]]` table, selected by `type`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightSpec {
+    /// An isotropic point light.
+    Point {
+        /// Position, mesh units.
+        position: [f32; 3],
+        /// Colour (linear RGB, >= 0). Default white.
+        #[serde(default = "white")]
+        color: [f32; 3],
+        /// Irradiance (times `color`) that the light gives a surface facing it at the centre of
+        /// the mesh's bounding box (>= 0), so brightness does not depend on the mesh's units.
+        /// Default 1.
+        #[serde(default = "one")]
+        intensity: f32,
+        /// Whether the mesh shadows itself from this light. Default true.
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+    /// A distant light.
+    #[serde(alias = "dir")]
+    Directional {
+        /// The direction the light travels (non-zero).
+        direction: [f32; 3],
+        /// Colour (linear RGB, >= 0). Default white.
+        #[serde(default = "white")]
+        color: [f32; 3],
+        /// Irradiance (times `color`) on a surface facing the light (>= 0). Default 1.
+        #[serde(default = "one")]
+        intensity: f32,
+        /// Whether the mesh shadows itself from this light. Default true.
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+    /// A spot light: a point light limited to a cone.
+    Spot {
+        /// Position, mesh units.
+        position: [f32; 3],
+        /// The direction the spot points (non-zero).
+        direction: [f32; 3],
+        /// Colour (linear RGB, >= 0). Default white.
+        #[serde(default = "white")]
+        color: [f32; 3],
+        /// Irradiance (times `color`) on the spot's axis at the distance of the mesh's
+        /// bounding-box centre (>= 0). Default 1.
+        #[serde(default = "one")]
+        intensity: f32,
+        /// Cone half-angle, degrees (0..180). Default 30.
+        #[serde(default = "default_cone")]
+        cone_angle: f32,
+        /// Fraction of the cone angle over which the light fades out (0..1). Default 0.2.
+        #[serde(default = "default_soft_edge")]
+        soft_edge: f32,
+        /// Whether the mesh shadows itself from this light. Default true.
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+}
+
+/// The `[environment]` table.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentSpec {
+    /// Equirectangular `.hdr` or `.exr` file, relative to the scene file's folder.
+    pub path: PathBuf,
+    /// Rotation about +Y, degrees. Default 0.
+    #[serde(default)]
+    pub rotation: f32,
+    /// Radiance multiplier (>= 0). Default 1.
+    #[serde(default = "one")]
+    pub intensity: f32,
+}
+
+/// The `[camera]` table: an orbit camera around the mesh's bounding sphere.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Rotation about +Y, degrees; positive moves the camera towards +X. Default 0.
+    #[serde(default)]
+    pub yaw: f32,
+    /// Elevation above the XZ plane, degrees (-89..89). Default 15.
+    #[serde(default = "default_pitch")]
+    pub pitch: f32,
+    /// Distance from the centre in bounding-sphere radii (> 1). Default: framed to fit.
+    #[serde(default)]
+    pub distance: Option<f32>,
+    /// Vertical field of view, degrees (0..180). Default 35.
+    #[serde(default = "default_fov")]
+    pub fov: f32,
+}
+
+fn default_pitch() -> f32 {
+    15.0
+}
+fn default_fov() -> f32 {
+    35.0
+}
+
+impl Default for CameraSpec {
+    fn default() -> Self {
+        CameraSpec {
+            yaw: 0.0,
+            pitch: default_pitch(),
+            distance: None,
+            fov: default_fov(),
+        }
+    }
+}
+
+/// Where the mesh comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum MeshSource {
+    /// A built-in mesh or generator, by name.
+    Builtin(String),
+    /// A mesh file (resolved against the scene file's folder).
+    File(PathBuf),
+}
+
+/// An environment ready for the solver and the renderer.
+#[derive(Clone, Debug)]
+pub struct LoadedEnvironment {
+    /// SH coefficients with rotation and intensity, for the leaf irradiance.
+    pub environment: Environment,
+    /// A 256 x 128 equirect copy of the map (unrotated, intensity not applied) for the GPU's
+    /// Fresnel-weighted reflection.
+    pub reflection: EnvMap,
+}
+
+impl Scene {
+    /// Reads and validates a scene file. Errors name the file and, for syntax and type errors,
+    /// the line and column.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read scene file {}", path.display()))?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Scene::parse(&text, dir).with_context(|| format!("scene file {}", path.display()))
+    }
+
+    /// Parses and validates scene text; relative paths resolve against `dir`.
+    pub fn parse(text: &str, dir: PathBuf) -> Result<Scene> {
+        // toml's error shows the line, column and the offending text.
+        let mut scene: Scene = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        scene.dir = dir;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Checks ranges that the types do not express.
+    fn validate(&self) -> Result<()> {
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            bail!("scale must be a finite number of metres > 0, got {}", self.scale);
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            bail!("exposure must be finite and > 0, got {}", self.exposure);
+        }
+        self.material()?;
+        for (i, l) in self.lights.iter().enumerate() {
+            validate_light(l).with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;
+        }
+        if let Some(env) = &self.environment {
+            if !(env.intensity.is_finite() && env.intensity >= 0.0) {
+                bail!("environment intensity must be finite and >= 0, got {}", env.intensity);
+            }
+            if !env.rotation.is_finite() {
+                bail!("environment rotation must be finite");
+            }
+        }
+        let c = &self.camera;
+        if !(c.fov > 0.0 && c.fov < 180.0) {
+            bail!("camera fov must be within 0..180 degrees, got {}", c.fov);
+        }
+        if !(-89.0..=89.0).contains(&c.pitch) || !c.yaw.is_finite() {
+            bail!("camera pitch must be within -89..89 degrees and yaw finite");
+        }
+        if let Some(d) = c.distance
+            && !(d.is_finite() && d > 1.0)
+        {
+            bail!("camera distance must be > 1 bounding-sphere radius, got {d}");
+        }
+        self.deformations()?;
+        Ok(())
+    }
+
+    /// The material, validated.
+    pub fn material(&self) -> Result<Material> {
+        Ok(match &self.material {
+            MaterialSpec::Preset(name) => Material::by_name(name)?,
+            MaterialSpec::Custom(c) => {
+                Material::custom(&c.name, c.sigma_s_prime, c.sigma_a, c.eta)?
+            }
+        })
+    }
+
+    /// Where the mesh comes from: a path if the string has an extension or a path separator,
+    /// else a built-in name.
+    pub fn mesh_source(&self) -> MeshSource {
+        let p = Path::new(&self.mesh);
+        if p.extension().is_some() || self.mesh.contains(['/', '\\']) {
+            MeshSource::File(self.dir.join(p))
+        } else {
+            MeshSource::Builtin(self.mesh.trim().to_ascii_lowercase())
+        }
+    }
+
+    /// The deformation strings, checked for form (kind and number count).
+    pub fn deformations(&self) -> Result<Vec<String>> {
+        for d in &self.deform {
+            let (kind, args) = d
+                .split_once(':')
+                .with_context(|| format!("deformation {d:?}: expected KIND:NUMBERS"))?;
+            let n = args
+                .split(',')
+                .map(|v| v.trim().parse::<f32>().ok().filter(|x| x.is_finite()))
+                .collect::<Option<Vec<_>>>()
+                .with_context(|| format!("deformation {d:?}: not a list of finite numbers"))?
+                .len();
+            let want = match kind.trim() {
+                "twist" => 1,
+                "bump" => 5,
+                "noise" => 2,
+                other => bail!(
+                    "deformation {d:?}: unknown kind {other:?} (twist:DEGREES, \
+                     bump:x,y,z,radius,height, noise:amplitude,frequency)"
+                ),
+            };
+            if n != want {
+                bail!("deformation {d:?}: {kind} takes {want} numbers, got {n}");
+            }
+        }
+        Ok(self.deform.clone())
+    }
+
+    /// The lights for the irradiance computation. Point and spot intensities are set so the
+    /// light gives `intensity * color` at the distance of `center` (mesh units; the centre of
+    /// the mesh's bounding box).
+    pub fn lights(&self, center: Vec3) -> Vec<SceneLight> {
+        self.lights
+            .iter()
+            .map(|l| match *l {
+                LightSpec::Point {
+                    position,
+                    color,
+                    intensity,
+                    shadows,
+                } => {
+                    let p = Vec3::from_array(position);
+                    SceneLight {
+                        light: Light::Point {
+                            position: p,
+                            intensity: Rgb::from_array(color) * intensity * d2(p, center),
+                        },
+                        shadows,
+                    }
+                }
+                LightSpec::Directional {
+                    direction,
+                    color,
+                    intensity,
+                    shadows,
+                } => SceneLight {
+                    light: Light::Directional {
+                        direction: Vec3::from_array(direction).normalize(),
+                        irradiance: Rgb::from_array(color) * intensity,
+                    },
+                    shadows,
+                },
+                LightSpec::Spot {
+                    position,
+                    direction,
+                    color,
+                    intensity,
+                    cone_angle,
+                    soft_edge,
+                    shadows,
+                } => {
+                    let p = Vec3::from_array(position);
+                    SceneLight {
+                        light: Light::Spot {
+                            position: p,
+                            direction: Vec3::from_array(direction).normalize(),
+                            intensity: Rgb::from_array(color) * intensity * d2(p, center),
+                            cone_angle: cone_angle.to_radians(),
+                            soft_edge,
+                        },
+                        shadows,
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Loads the environment map (if any), projects it onto SH and makes the 256 x 128
+    /// reflection copy. Errors name the map file.
+    pub fn environment(&self) -> Result<Option<LoadedEnvironment>> {
+        let Some(spec) = &self.environment else {
+            return Ok(None);
+        };
+        let map = EnvMap::load(&self.dir.join(&spec.path))?;
+        let environment = Environment {
+            rotation_deg: spec.rotation,
+            intensity: spec.intensity,
+            ..Environment::from_map(&map)
+        };
+        Ok(Some(LoadedEnvironment {
+            environment,
+            reflection: map.downsampled(256, 128),
+        }))
+    }
+}
+
+fn d2(p: Vec3, center: Vec3) -> f32 {
+    (p - center).length_squared().max(1e-12)
+}
+
+fn validate_light(l: &LightSpec) -> Result<()> {
+    let finite = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
+    let (color, intensity) = match l {
+        LightSpec::Point {
+            position,
+            color,
+            intensity,
+            ..
+        } => {
+            if !finite(position) {
+                bail!("position must be finite");
+            }
+            (color, *intensity)
+        }
+        LightSpec::Directional {
+            direction,
+            color,
+            intensity,
+            ..
+        } => {
+            check_direction(direction)?;
+            (color, *intensity)
+        }
+        LightSpec::Spot {
+            position,
+            direction,
+            color,
+            intensity,
+            cone_angle,
+            soft_edge,
+            ..
+        } => {
+            if !finite(position) {
+                bail!("position must be finite");
+            }
+            check_direction(direction)?;
+            if !(*cone_angle > 0.0 && *cone_angle < 180.0) {
+                bail!("cone_angle must be within 0..180 degrees, got {cone_angle}");
+            }
+            if !(0.0..=1.0).contains(soft_edge) {
+                bail!("soft_edge must be within 0..1, got {soft_edge}");
+            }
+            (color, *intensity)
+        }
+    };
+    if !finite(color) || color.iter().any(|c| *c < 0.0) {
+        bail!("color must be finite and >= 0, got {color:?}");
+    }
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        bail!("intensity must be finite and >= 0, got {intensity}");
+    }
+    Ok(())
+}
+
+fn check_direction(d: &[f32; 3]) -> Result<()> {
+    let v = Vec3::from_array(*d);
+    if !v.is_finite() || v.length_squared() == 0.0 {
+        bail!("direction must be finite and non-zero, got {d:?}");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn examples() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes")
+    }
+
+    #[test]
+    fn example_scenes_parse() {
+        for name in ["candle.toml", "bunny_courtyard.toml"] {
+            let s = Scene::load(&examples().join(name)).unwrap_or_else(|e| panic!("{e:#}"));
+            assert!(!s.lights.is_empty() || s.environment.is_some(), "{name}");
+        }
+        let s = Scene::load(&examples().join("bunny_courtyard.toml")).unwrap();
+        let env = s.environment().unwrap().expect("has an environment");
+        assert_eq!((env.reflection.width, env.reflection.height), (256, 128));
+        assert!(env.environment.sh.coeffs[0].min_element() > 0.0);
+    }
+
+    #[test]
+    fn empty_file_is_the_default_scene() {
+        let s = Scene::parse("", PathBuf::new()).unwrap();
+        assert_eq!(s.mesh_source(), MeshSource::Builtin("bunny".into()));
+        assert_eq!(s.material().unwrap().name, "Skimmilk");
+        assert_eq!(s.scale, 0.05);
+        assert!(s.lights.is_empty() && s.environment.is_none() && s.deform.is_empty());
+    }
+
+    #[test]
+    fn lights_convert_with_intensity_at_the_centre() {
+        let s = Scene::parse(
+            r#"
+            [[light]]
+            type = "point"
+            position = [0.0, 3.0, 4.0]
+            color = [1.0, 0.5, 0.25]
+            intensity = 2.0
+            shadows = false
+
+            [[light]]
+            type = "spot"
+            position = [0.0, 2.0, 0.0]
+            direction = [0.0, -2.0, 0.0]
+            cone_angle = 45.0
+            "#,
+            PathBuf::new(),
+        )
+        .unwrap();
+        let lights = s.lights(Vec3::ZERO);
+        // 25 = squared distance to the centre: the light gives intensity * color there.
+        assert_eq!(
+            lights[0],
+            SceneLight {
+                light: Light::Point {
+                    position: Vec3::new(0.0, 3.0, 4.0),
+                    intensity: Vec3::new(50.0, 25.0, 12.5),
+                },
+                shadows: false,
+            }
+        );
+        let Light::Spot {
+            direction,
+            cone_angle,
+            soft_edge,
+            intensity,
+            ..
+        } = lights[1].light
+        else {
+            panic!("a spot");
+        };
+        assert_eq!(direction, -Vec3::Y);
+        assert!((cone_angle - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+        assert_eq!(soft_edge, 0.2);
+        assert_eq!(intensity, Vec3::splat(4.0));
+        assert!(lights[1].shadows);
+    }
+
+    #[test]
+    fn custom_material_and_paths() {
+        let s = Scene::parse(
+            r#"
+            mesh = "models/thing.obj"
+            material = { sigma_s_prime = [1.0, 1.0, 1.0], sigma_a = [0.01, 0.02, 0.03] }
+            "#,
+            PathBuf::from("/scenes"),
+        )
+        .unwrap();
+        assert_eq!(
+            s.mesh_source(),
+            MeshSource::File(PathBuf::from("/scenes/models/thing.obj"))
+        );
+        let m = s.material().unwrap();
+        assert_eq!((m.sigma_a[2], m.eta), (0.03, 1.3));
+    }
+
+    fn error(text: &str) -> String {
+        format!("{:#}", Scene::parse(text, PathBuf::new()).unwrap_err())
+    }
+
+    #[test]
+    fn bad_scenes_give_clear_errors() {
+        // Syntax and type errors carry toml's line numbers.
+        let e = error("scale = 0.1\nexposure = \"bright\"\n");
+        assert!(e.contains("line 2"), "{e}");
+        let e = error("scale = 0.1\n[[light]]\ntype = \"laser\"\nposition = [0, 0, 0]\n");
+        assert!(e.contains("line 3") && e.contains("laser"), "{e}");
+        let e = error("colour = 1\n");
+        assert!(e.contains("colour"), "{e}");
+        let e = error("material = { sigma_s_prime = [1.0, 1.0, 1.0] }\n");
+        assert!(e.contains("sigma_a"), "{e}");
+        // Range errors name the field.
+        assert!(error("scale = -1\n").contains("scale"));
+        assert!(error("material = \"jelly\"\n").contains("jelly"));
+        let e = error(
+            "[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,0,0]\n",
+        );
+        assert!(e.contains("light 1") && e.contains("direction"), "{e}");
+        let e = error(
+            "[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,-1,0]\nsoft_edge = 2\n",
+        );
+        assert!(e.contains("soft_edge"), "{e}");
+        assert!(error("deform = [\"twist\"]\n").contains("twist"));
+        assert!(error("deform = [\"bump:1,2\"]\n").contains("5 numbers"));
+        assert!(error("[camera]\nfov = 200\n").contains("fov"));
+    }
+
+    #[test]
+    fn missing_files_are_named() {
+        let e = format!("{:#}", Scene::load(Path::new("no/such/scene.toml")).unwrap_err());
+        assert!(e.contains("no/such/scene.toml"), "{e}");
+        let s = Scene::parse(
+            "[environment]\npath = \"missing.exr\"\n",
+            PathBuf::from("somewhere"),
+        )
+        .unwrap();
+        let e = format!("{:#}", s.environment().unwrap_err());
+        assert!(e.contains("missing.exr"), "{e}");
+    }
+}
