@@ -17,18 +17,12 @@ use std::time::Duration;
 /// The bunny from `assets/bunny.obj` (read with tobj so the bench depends on nothing else).
 fn bunny() -> Mesh {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny.obj");
-    let (models, _) = tobj::load_obj(&path, &tobj::GPU_LOAD_OPTIONS)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (models, _) =
+        tobj::load_obj(&path, &tobj::GPU_LOAD_OPTIONS).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let m = &models[0].mesh;
     Mesh::new(
-        m.positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect(),
-        m.indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect(),
+        m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+        m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
     )
 }
 
@@ -69,16 +63,10 @@ fn twisted(mesh: &Mesh, radians: f32) -> Mesh {
 fn shadow(c: &mut Criterion) {
     let meshes = [("bunny_3674", bunny()), ("torus_131072", torus(256))];
     let mut group = c.benchmark_group("shadow");
-    group
-        .sample_size(10)
-        .measurement_time(Duration::from_secs(3))
-        .warm_up_time(Duration::from_secs(1));
+    group.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
     for (name, mesh) in &meshes {
         let (lo, hi) = mesh.bounds();
-        let light = SceneLight::from(Light::Point {
-            position: hi + (hi - lo),
-            intensity: Vec3::ONE,
-        });
+        let light = SceneLight::from(Light::Point { position: hi + (hi - lo), intensity: Vec3::ONE });
         group.bench_with_input(BenchmarkId::new("build", name), mesh, |b, m| {
             b.iter(|| black_box(Bvh::build(m)))
         });
@@ -98,15 +86,7 @@ fn shadow(c: &mut Criterion) {
             b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, 1.3, None)))
         });
         group.bench_function(BenchmarkId::new("irradiance_shadowed", name), |b| {
-            b.iter(|| {
-                black_box(face_irradiance_shadowed(
-                    mesh,
-                    &[light],
-                    None,
-                    1.3,
-                    Some(&caster),
-                ))
-            })
+            b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, 1.3, Some(&caster))))
         });
     }
     group.finish();

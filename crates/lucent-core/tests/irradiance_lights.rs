@@ -47,17 +47,8 @@ fn spot_light_lights_a_disc_and_matches_a_point_light_inside_its_cone() {
     let (h, cone) = (2.0f32, 25f32.to_radians());
     let position = Vec3::new(0.0, h, 0.0);
     let intensity = Rgb::new(3.0, 2.0, 1.0);
-    let spot = Light::Spot {
-        position,
-        direction: -Vec3::Y,
-        intensity,
-        cone_angle: cone,
-        soft_edge: 0.0,
-    };
-    let point = Light::Point {
-        position,
-        intensity,
-    };
+    let spot = Light::Spot { position, direction: -Vec3::Y, intensity, cone_angle: cone, soft_edge: 0.0 };
+    let point = Light::Point { position, intensity };
     let e_spot = face_irradiance(&mesh, &[spot], ETA);
     let e_point = face_irradiance(&mesh, &[point], ETA);
     // The cone meets the plane in a disc of radius h tan(cone).
@@ -66,12 +57,7 @@ fn spot_light_lights_a_disc_and_matches_a_point_light_inside_its_cone() {
         let rho = mesh.face_centroid(f).length();
         if rho < radius - 1e-3 {
             let diff = (e_spot[f] - e_point[f]).abs().max_element();
-            assert!(
-                diff <= 1e-6 * e_point[f].max_element(),
-                "{} vs {}",
-                e_spot[f],
-                e_point[f]
-            );
+            assert!(diff <= 1e-6 * e_point[f].max_element(), "{} vs {}", e_spot[f], e_point[f]);
         } else if rho > radius + 1e-3 {
             assert_eq!(e_spot[f], Rgb::ZERO);
         }
@@ -79,24 +65,15 @@ fn spot_light_lights_a_disc_and_matches_a_point_light_inside_its_cone() {
     // Directly below: E = I / h² times F_t at normal incidence.
     let below = light_irradiance(&spot, Vec3::ZERO, Vec3::Y, ETA);
     let want = intensity / (h * h) * fresnel_transmittance(1.0, ETA) as f32;
-    assert!(
-        (below - want).abs().max_element() < 1e-6,
-        "{below} vs {want}"
-    );
+    assert!((below - want).abs().max_element() < 1e-6, "{below} vs {want}");
 }
 
 #[test]
 fn shadowed_entry_point_without_caster_equals_the_plain_one() {
     let mesh = uv_sphere(Vec3::ZERO, 1.0, 32, 16);
     let lights = [
-        Light::Point {
-            position: Vec3::new(0.0, 2.0, -3.0),
-            intensity: Rgb::splat(5.0),
-        },
-        Light::Directional {
-            direction: Vec3::new(1.0, -1.0, 0.0),
-            irradiance: Rgb::new(0.2, 0.3, 0.4),
-        },
+        Light::Point { position: Vec3::new(0.0, 2.0, -3.0), intensity: Rgb::splat(5.0) },
+        Light::Directional { direction: Vec3::new(1.0, -1.0, 0.0), irradiance: Rgb::new(0.2, 0.3, 0.4) },
         Light::Spot {
             position: Vec3::new(2.0, 0.0, 0.0),
             direction: -Vec3::X,
@@ -124,9 +101,6 @@ fn constant_environment_gives_the_hemispherical_fresnel_average_on_every_face() 
     let want = l * BandWeights::fresnel_cosine(ETA).0[0];
     let e = face_irradiance_shadowed(&mesh, &[], Some(&env), ETA, None);
     for v in e {
-        assert!(
-            (v - want).abs().max_element() < 2e-3 * want.max_element(),
-            "{v} vs {want}"
-        );
+        assert!((v - want).abs().max_element() < 2e-3 * want.max_element(), "{v} vs {want}");
     }
 }

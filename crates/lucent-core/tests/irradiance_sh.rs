@@ -11,9 +11,7 @@ use std::f32::consts::PI;
 use std::path::PathBuf;
 
 fn asset(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../assets")
-        .join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets").join(name)
 }
 
 /// Unit directions spread over the sphere (Fibonacci lattice) plus the six axes.
@@ -73,9 +71,7 @@ fn equirect_mapping_round_trips_and_follows_the_documented_axes() {
 #[test]
 fn texel_solid_angles_sum_to_four_pi() {
     let map = EnvMap::from_fn(64, 32, |_| Rgb::ONE);
-    let total: f64 = (0..32)
-        .map(|j| map.texel_solid_angle(j) as f64 * 64.0)
-        .sum();
+    let total: f64 = (0..32).map(|j| map.texel_solid_angle(j) as f64 * 64.0).sum();
     assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-5, "{total}");
 }
 
@@ -177,9 +173,8 @@ fn rh_formula_equals_matrix_form_and_band_weighted_convolution() {
 #[test]
 fn projection_recovers_known_coefficients() {
     // A radiance built from given coefficients projects back onto them.
-    let want = Sh9::from_array(std::array::from_fn(|i| {
-        [1.0 / (1.0 + i as f32), 0.2 * (i as f32).cos(), 0.1]
-    }));
+    let want =
+        Sh9::from_array(std::array::from_fn(|i| [1.0 / (1.0 + i as f32), 0.2 * (i as f32).cos(), 0.1]));
     let got = EnvMap::from_fn(512, 256, |d| want.radiance(d)).project_sh();
     for (g, w) in got.coeffs.iter().zip(want.coeffs) {
         assert!((*g - w).abs().max_element() < 1e-3, "{g} vs {w}");
@@ -188,9 +183,7 @@ fn projection_recovers_known_coefficients() {
 
 /// Loads a probe and reduces it to 128 x 64 (box filter) so brute force stays quick.
 fn probe(name: &str) -> EnvMap {
-    EnvMap::load(&asset(name))
-        .unwrap_or_else(|e| panic!("{e}"))
-        .downsampled(128, 64)
+    EnvMap::load(&asset(name)).unwrap_or_else(|e| panic!("{e}")).downsampled(128, 64)
 }
 
 /// Error of the 9-coefficient irradiance against brute force over the probe's texels, for 70
@@ -220,11 +213,7 @@ fn sh_error(map: &EnvMap, kernel: impl Fn(f32) -> f32 + Copy, eta: Option<f64>) 
         .collect();
     let peak = pairs.iter().fold(Rgb::ZERO, |m, (_, b)| m.max(*b));
     let count = pairs.len() as f32;
-    let mut e = ShError {
-        mean_of_peak: 0.0,
-        worst_of_peak: 0.0,
-        mean_relative: 0.0,
-    };
+    let mut e = ShError { mean_of_peak: 0.0, worst_of_peak: 0.0, mean_relative: 0.0 };
     for (a, b) in &pairs {
         let err = (*a - *b).abs();
         e.mean_of_peak += (err / peak).element_sum() / 3.0 / count;
@@ -243,16 +232,8 @@ fn check_rh_bounds(what: &str, e: &ShError) {
         "{what}: mean {:.4} worst {:.4} of peak; mean relative {:.4}",
         e.mean_of_peak, e.worst_of_peak, e.mean_relative
     );
-    assert!(
-        e.mean_of_peak < 0.03,
-        "{what}: mean error {}",
-        e.mean_of_peak
-    );
-    assert!(
-        e.worst_of_peak < 3.0 / 32.0,
-        "{what}: worst error {}",
-        e.worst_of_peak
-    );
+    assert!(e.mean_of_peak < 0.03, "{what}: mean error {}", e.mean_of_peak);
+    assert!(e.worst_of_peak < 3.0 / 32.0, "{what}: worst error {}", e.worst_of_peak);
 }
 
 #[test]
@@ -275,11 +256,7 @@ fn fresnel_transmitted_sh_irradiance_matches_brute_force() {
     let eta = 1.3;
     let map = probe("courtyard.exr");
     let kernel = |mu: f32| {
-        if mu > 0.0 {
-            mu * fresnel_transmittance(mu as f64, eta) as f32
-        } else {
-            0.0
-        }
+        if mu > 0.0 { mu * fresnel_transmittance(mu as f64, eta) as f32 } else { 0.0 }
     };
     check_rh_bounds("courtyard Fresnel", &sh_error(&map, kernel, Some(eta)));
 }
@@ -304,10 +281,7 @@ fn rotating_the_map_equals_rotating_the_normal() {
     // Rotating the pixels by 90° (a whole number of columns) ...
     let rotated = Environment::from_map(&map.rotated(90.0));
     // ... equals keeping the coefficients and rotating by the Environment's angle ...
-    let turned = Environment {
-        rotation_deg: 90.0,
-        ..env
-    };
+    let turned = Environment { rotation_deg: 90.0, ..env };
     let r = Quat::from_rotation_y(-90f32.to_radians());
     let scale = env.irradiance(Vec3::Y).max_element();
     for n in normals(64) {
@@ -315,14 +289,8 @@ fn rotating_the_map_equals_rotating_the_normal() {
         let b = turned.irradiance(n);
         // ... equals evaluating the unrotated environment at R_y(-90°) n.
         let c = env.irradiance(r * n);
-        assert!(
-            (a - b).abs().max_element() < 1e-3 * scale,
-            "n={n}: {a} vs {b}"
-        );
-        assert!(
-            (a - c).abs().max_element() < 1e-3 * scale,
-            "n={n}: {a} vs {c}"
-        );
+        assert!((a - b).abs().max_element() < 1e-3 * scale, "n={n}: {a} vs {b}");
+        assert!((a - c).abs().max_element() < 1e-3 * scale, "n={n}: {a} vs {c}");
     }
 }
 
@@ -344,23 +312,14 @@ fn hdr_files_load_like_exr() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("test.hdr");
     let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
-    let pixels: Vec<image::Rgb<f32>> = map
-        .texels
-        .iter()
-        .map(|t| image::Rgb(t.to_array()))
-        .collect();
-    image::codecs::hdr::HdrEncoder::new(file)
-        .encode(&pixels, 16, 8)
-        .unwrap();
+    let pixels: Vec<image::Rgb<f32>> = map.texels.iter().map(|t| image::Rgb(t.to_array())).collect();
+    image::codecs::hdr::HdrEncoder::new(file).encode(&pixels, 16, 8).unwrap();
     let loaded = EnvMap::load(&path).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!((loaded.width, loaded.height), (16, 8));
     for (a, b) in loaded.texels.iter().zip(&map.texels) {
         // RGBE shares one exponent, so the error is relative to the brightest channel.
-        assert!(
-            (*a - *b).abs().max_element() < 0.01 * b.max_element(),
-            "{a} vs {b}"
-        );
+        assert!((*a - *b).abs().max_element() < 0.01 * b.max_element(), "{a} vs {b}");
     }
 }
 

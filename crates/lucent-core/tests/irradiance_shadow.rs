@@ -72,18 +72,13 @@ fn sphere_casts_a_disc_of_its_radius_under_a_directional_light() {
     let center = Vec3::new(0.0, 1.0, 0.0);
     let (mesh, n) = scene(center);
     let caster = ShadowCaster::new(&mesh);
-    let light = Light::Directional {
-        direction: -Vec3::Y,
-        irradiance: Vec3::ONE,
-    };
+    let light = Light::Directional { direction: -Vec3::Y, irradiance: Vec3::ONE };
     // Parallel light: the shadow is the sphere's silhouette, a disc of radius r below it. The
     // 96-gon silhouette is within r (1 - cos(π/96)) = 0.0003 of the circle.
     let cell = PLANE_SIZE / PLANE_CELLS as f32;
     let (count, reach) = check_disc(&mesh, n, light, &caster, Vec3::ZERO, RADIUS, 0.002);
     let expected = std::f32::consts::PI * RADIUS * RADIUS / (cell * cell / 2.0);
-    println!(
-        "directional: {count} faces shadowed (disc area predicts {expected:.0}), reach {reach}"
-    );
+    println!("directional: {count} faces shadowed (disc area predicts {expected:.0}), reach {reach}");
     assert!((count as f32 - expected).abs() < 0.03 * expected);
     assert!(reach < RADIUS && reach > RADIUS - cell);
 }
@@ -94,10 +89,7 @@ fn sphere_casts_the_cone_shadow_of_a_point_light() {
     let center = Vec3::new(0.0, h, 0.0);
     let (mesh, n) = scene(center);
     let caster = ShadowCaster::new(&mesh);
-    let light = Light::Point {
-        position: Vec3::new(0.0, light_height, 0.0),
-        intensity: Vec3::ONE,
-    };
+    let light = Light::Point { position: Vec3::new(0.0, light_height, 0.0), intensity: Vec3::ONE };
     // The tangent cone from the light has half-angle asin(r / (H - h)); it meets the plane in a
     // disc of radius H tan(that angle).
     let alpha = (RADIUS / (light_height - h)).asin();
@@ -112,10 +104,7 @@ fn shadow_follows_the_mesh_after_a_refit() {
     let (mut mesh, n) = scene(Vec3::new(0.0, 1.0, 0.0));
     let mut caster = ShadowCaster::new(&mesh);
     caster.rebuild_ratio = f32::INFINITY; // exercise the refit path
-    let light = Light::Directional {
-        direction: Vec3::new(0.3, -1.0, 0.2),
-        irradiance: Vec3::ONE,
-    };
+    let light = Light::Directional { direction: Vec3::new(0.3, -1.0, 0.2), irradiance: Vec3::ONE };
     let dir = Vec3::new(0.3, -1.0, 0.2).normalize();
     for step in 1..=3 {
         // Move the sphere (its vertices only: a deformation of the whole mesh, same topology).
@@ -134,8 +123,7 @@ fn shadow_follows_the_mesh_after_a_refit() {
         // A tilted parallel light: the shadow is an ellipse around where the axis through the
         // centre meets the plane. Check membership exactly with the ray-sphere test instead.
         let hit = center - dir * (center.y / -dir.y);
-        let lit =
-            face_irradiance_shadowed(&mesh, &[SceneLight::from(light)], None, ETA, Some(&caster));
+        let lit = face_irradiance_shadowed(&mesh, &[SceneLight::from(light)], None, ETA, Some(&caster));
         let mut shadowed = 0;
         for (f, e) in lit.iter().enumerate().take(n) {
             let c = mesh.face_centroid(f);
@@ -177,13 +165,9 @@ fn compare_with_brute_force(mesh: &Mesh, bvh: &Bvh, seed: u64) -> usize {
     let (lo, hi) = mesh.bounds();
     let (mut occluded, mut disagree) = (0, 0);
     for _ in 0..2000 {
-        let o = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random()) * 1.2
-            - (hi - lo) * 0.1;
-        let d = Vec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
+        let o = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random()) * 1.2 - (hi - lo) * 0.1;
+        let d =
+            Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
         let t_max = rng.random_range(0.05..2.0f32);
         let want = (0..mesh.triangles.len()).any(|f| hits(o, d, mesh.corners(f), t_max));
         let got = bvh.occluded(o, d, 0.0, t_max);
@@ -233,9 +217,5 @@ fn bvh_answers_like_brute_force_after_build_refit_and_rebuild() {
 #[test]
 fn empty_mesh_casts_no_shadow() {
     let caster = ShadowCaster::new(&Mesh::default());
-    assert!(
-        !caster
-            .bvh()
-            .occluded(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY)
-    );
+    assert!(!caster.bvh().occluded(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY));
 }

@@ -350,10 +350,14 @@ impl MeshPass {
         let mut lights = [LightUniform { position: [0.0; 4], intensity: [0.0; 4] }; MAX_LIGHTS];
         for (dst, l) in lights.iter_mut().zip(&shading.lights) {
             *dst = match *l {
-                Light::Point { position, intensity } => LightUniform {
-                    position: position.extend(1.0).to_array(),
-                    intensity: intensity.extend(0.0).to_array(),
-                },
+                // The highlight treats a spot as a point light (its cone is applied to the
+                // subsurface irradiance on the CPU, not here yet).
+                Light::Point { position, intensity } | Light::Spot { position, intensity, .. } => {
+                    LightUniform {
+                        position: position.extend(1.0).to_array(),
+                        intensity: intensity.extend(0.0).to_array(),
+                    }
+                }
                 Light::Directional { direction, irradiance } => LightUniform {
                     position: direction.extend(0.0).to_array(),
                     intensity: irradiance.extend(0.0).to_array(),

@@ -268,12 +268,7 @@ fn default_fov() -> f32 {
 
 impl Default for CameraSpec {
     fn default() -> Self {
-        CameraSpec {
-            yaw: 0.0,
-            pitch: default_pitch(),
-            distance: None,
-            fov: default_fov(),
-        }
+        CameraSpec { yaw: 0.0, pitch: default_pitch(), distance: None, fov: default_fov() }
     }
 }
 
@@ -355,9 +350,7 @@ impl Scene {
     pub fn material(&self) -> Result<Material> {
         Ok(match &self.material {
             MaterialSpec::Preset(name) => Material::by_name(name)?,
-            MaterialSpec::Custom(c) => {
-                Material::custom(&c.name, c.sigma_s_prime, c.sigma_a, c.eta)?
-            }
+            MaterialSpec::Custom(c) => Material::custom(&c.name, c.sigma_s_prime, c.sigma_a, c.eta)?,
         })
     }
 
@@ -375,9 +368,8 @@ impl Scene {
     /// The deformation strings, checked for form (kind and number count).
     pub fn deformations(&self) -> Result<Vec<String>> {
         for d in &self.deform {
-            let (kind, args) = d
-                .split_once(':')
-                .with_context(|| format!("deformation {d:?}: expected KIND:NUMBERS"))?;
+            let (kind, args) =
+                d.split_once(':').with_context(|| format!("deformation {d:?}: expected KIND:NUMBERS"))?;
             let n = args
                 .split(',')
                 .map(|v| v.trim().parse::<f32>().ok().filter(|x| x.is_finite()))
@@ -407,12 +399,7 @@ impl Scene {
         self.lights
             .iter()
             .map(|l| match *l {
-                LightSpec::Point {
-                    position,
-                    color,
-                    intensity,
-                    shadows,
-                } => {
+                LightSpec::Point { position, color, intensity, shadows } => {
                     let p = Vec3::from_array(position);
                     SceneLight {
                         light: Light::Point {
@@ -422,27 +409,14 @@ impl Scene {
                         shadows,
                     }
                 }
-                LightSpec::Directional {
-                    direction,
-                    color,
-                    intensity,
-                    shadows,
-                } => SceneLight {
+                LightSpec::Directional { direction, color, intensity, shadows } => SceneLight {
                     light: Light::Directional {
                         direction: Vec3::from_array(direction).normalize(),
                         irradiance: Rgb::from_array(color) * intensity,
                     },
                     shadows,
                 },
-                LightSpec::Spot {
-                    position,
-                    direction,
-                    color,
-                    intensity,
-                    cone_angle,
-                    soft_edge,
-                    shadows,
-                } => {
+                LightSpec::Spot { position, direction, color, intensity, cone_angle, soft_edge, shadows } => {
                     let p = Vec3::from_array(position);
                     SceneLight {
                         light: Light::Spot {
@@ -471,10 +445,7 @@ impl Scene {
             intensity: spec.intensity,
             ..Environment::from_map(&map)
         };
-        Ok(Some(LoadedEnvironment {
-            environment,
-            reflection: map.downsampled(256, 128),
-        }))
+        Ok(Some(LoadedEnvironment { environment, reflection: map.downsampled(256, 128) }))
     }
 }
 
@@ -485,35 +456,17 @@ fn d2(p: Vec3, center: Vec3) -> f32 {
 fn validate_light(l: &LightSpec) -> Result<()> {
     let finite = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
     let (color, intensity) = match l {
-        LightSpec::Point {
-            position,
-            color,
-            intensity,
-            ..
-        } => {
+        LightSpec::Point { position, color, intensity, .. } => {
             if !finite(position) {
                 bail!("position must be finite");
             }
             (color, *intensity)
         }
-        LightSpec::Directional {
-            direction,
-            color,
-            intensity,
-            ..
-        } => {
+        LightSpec::Directional { direction, color, intensity, .. } => {
             check_direction(direction)?;
             (color, *intensity)
         }
-        LightSpec::Spot {
-            position,
-            direction,
-            color,
-            intensity,
-            cone_angle,
-            soft_edge,
-            ..
-        } => {
+        LightSpec::Spot { position, direction, color, intensity, cone_angle, soft_edge, .. } => {
             if !finite(position) {
                 bail!("position must be finite");
             }
@@ -605,14 +558,7 @@ mod tests {
                 shadows: false,
             }
         );
-        let Light::Spot {
-            direction,
-            cone_angle,
-            soft_edge,
-            intensity,
-            ..
-        } = lights[1].light
-        else {
+        let Light::Spot { direction, cone_angle, soft_edge, intensity, .. } = lights[1].light else {
             panic!("a spot");
         };
         assert_eq!(direction, -Vec3::Y);
@@ -632,10 +578,7 @@ mod tests {
             PathBuf::from("/scenes"),
         )
         .unwrap();
-        assert_eq!(
-            s.mesh_source(),
-            MeshSource::File(PathBuf::from("/scenes/models/thing.obj"))
-        );
+        assert_eq!(s.mesh_source(), MeshSource::File(PathBuf::from("/scenes/models/thing.obj")));
         let m = s.material().unwrap();
         assert_eq!((m.sigma_a[2], m.eta), (0.03, 1.3));
     }
@@ -658,13 +601,10 @@ mod tests {
         // Range errors name the field.
         assert!(error("scale = -1\n").contains("scale"));
         assert!(error("material = \"jelly\"\n").contains("jelly"));
-        let e = error(
-            "[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,0,0]\n",
-        );
+        let e = error("[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,0,0]\n");
         assert!(e.contains("light 1") && e.contains("direction"), "{e}");
-        let e = error(
-            "[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,-1,0]\nsoft_edge = 2\n",
-        );
+        let e =
+            error("[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,-1,0]\nsoft_edge = 2\n");
         assert!(e.contains("soft_edge"), "{e}");
         assert!(error("deform = [\"twist\"]\n").contains("twist"));
         assert!(error("deform = [\"bump:1,2\"]\n").contains("5 numbers"));
@@ -675,11 +615,7 @@ mod tests {
     fn missing_files_are_named() {
         let e = format!("{:#}", Scene::load(Path::new("no/such/scene.toml")).unwrap_err());
         assert!(e.contains("no/such/scene.toml"), "{e}");
-        let s = Scene::parse(
-            "[environment]\npath = \"missing.exr\"\n",
-            PathBuf::from("somewhere"),
-        )
-        .unwrap();
+        let s = Scene::parse("[environment]\npath = \"missing.exr\"\n", PathBuf::from("somewhere")).unwrap();
         let e = format!("{:#}", s.environment().unwrap_err());
         assert!(e.contains("missing.exr"), "{e}");
     }

@@ -75,11 +75,7 @@ impl EnvMap {
     pub fn new(width: usize, height: usize, texels: Vec<Rgb>) -> Self {
         assert!(width > 0 && height > 0, "empty environment map");
         assert_eq!(texels.len(), width * height, "texel count");
-        EnvMap {
-            width,
-            height,
-            texels,
-        }
+        EnvMap { width, height, texels }
     }
 
     /// A map whose texels sample `radiance(direction)` at texel centres (for tests and
@@ -103,26 +99,18 @@ impl EnvMap {
     /// non-finite or negative texels, naming the file.
     pub fn load(path: &Path) -> Result<EnvMap, EnvMapError> {
         let name = path.display().to_string();
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
         let (width, height, texels) = match ext.as_deref() {
-            Some("exr") => load_exr(path).map_err(|reason| EnvMapError::Read {
-                path: name.clone(),
-                reason,
-            })?,
-            Some("hdr") => load_hdr(path).map_err(|reason| EnvMapError::Read {
-                path: name.clone(),
-                reason,
-            })?,
+            Some("exr") => {
+                load_exr(path).map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?
+            }
+            Some("hdr") => {
+                load_hdr(path).map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?
+            }
             _ => return Err(EnvMapError::Format { path: name }),
         };
         if width == 0 || height == 0 {
-            return Err(EnvMapError::Invalid {
-                path: name,
-                reason: "image has no texels".into(),
-            });
+            return Err(EnvMapError::Invalid { path: name, reason: "image has no texels".into() });
         }
         if let Some(k) = texels.iter().position(|t| !t.is_finite()) {
             return Err(EnvMapError::Invalid {
@@ -150,10 +138,7 @@ impl EnvMap {
     /// The direction through the centre of texel `(i, j)`.
     #[inline]
     pub fn texel_direction(&self, i: usize, j: usize) -> Vec3 {
-        equirect_direction(
-            (i as f32 + 0.5) / self.width as f32,
-            (j as f32 + 0.5) / self.height as f32,
-        )
+        equirect_direction((i as f32 + 0.5) / self.width as f32, (j as f32 + 0.5) / self.height as f32)
     }
 
     /// Exact solid angle (sr) of one texel in row `j`: `(2π / width) (cos θ_top − cos θ_bottom)`.
@@ -292,9 +277,6 @@ fn load_hdr(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
     reader.set_format(image::ImageFormat::Hdr);
     let img = reader.decode().map_err(|e| e.to_string())?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let texels = img
-        .pixels()
-        .map(|p| Rgb::new(p.0[0], p.0[1], p.0[2]))
-        .collect();
+    let texels = img.pixels().map(|p| Rgb::new(p.0[0], p.0[1], p.0[2])).collect();
     Ok((w, h, texels))
 }

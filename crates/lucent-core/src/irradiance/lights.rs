@@ -21,13 +21,7 @@ pub enum Light {
     /// (W/sr per channel). `cone_angle` is the cone's half-angle in radians (0..π); the intensity
     /// fades to zero over the outer `soft_edge` fraction (0..1) of that angle with a smoothstep
     /// in angle (0 gives a hard edge). See [`spot_falloff`].
-    Spot {
-        position: Vec3,
-        direction: Vec3,
-        intensity: Rgb,
-        cone_angle: f32,
-        soft_edge: f32,
-    },
+    Spot { position: Vec3, direction: Vec3, intensity: Rgb, cone_angle: f32, soft_edge: f32 },
 }
 
 /// A light in a scene, with whether it casts shadows (ray cast against the mesh; see
@@ -44,10 +38,7 @@ pub struct SceneLight {
 impl From<Light> for SceneLight {
     /// A light that casts shadows.
     fn from(light: Light) -> Self {
-        SceneLight {
-            light,
-            shadows: true,
-        }
+        SceneLight { light, shadows: true }
     }
 }
 
@@ -84,37 +75,17 @@ impl Light {
     /// spot's cone, or a light with zero direction).
     pub fn incident(&self, p: Vec3) -> Option<Incident> {
         match *self {
-            Light::Point {
-                position,
-                intensity,
-            } => {
+            Light::Point { position, intensity } => {
                 let d = position - p;
                 let d2 = d.length_squared().max(1e-12);
                 let dist = d2.sqrt();
-                Some(Incident {
-                    to_light: d / dist,
-                    distance: dist,
-                    irradiance: intensity / d2,
-                })
+                Some(Incident { to_light: d / dist, distance: dist, irradiance: intensity / d2 })
             }
-            Light::Directional {
-                direction,
-                irradiance,
-            } => {
+            Light::Directional { direction, irradiance } => {
                 let to_light = -direction.try_normalize()?;
-                Some(Incident {
-                    to_light,
-                    distance: f32::INFINITY,
-                    irradiance,
-                })
+                Some(Incident { to_light, distance: f32::INFINITY, irradiance })
             }
-            Light::Spot {
-                position,
-                direction,
-                intensity,
-                cone_angle,
-                soft_edge,
-            } => {
+            Light::Spot { position, direction, intensity, cone_angle, soft_edge } => {
                 let axis = direction.try_normalize()?;
                 let d = position - p;
                 let d2 = d.length_squared().max(1e-12);

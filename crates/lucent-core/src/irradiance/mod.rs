@@ -37,11 +37,7 @@ pub struct Environment {
 impl Environment {
     /// An environment from a map, projected onto SH (rotation 0, intensity 1).
     pub fn from_map(map: &EnvMap) -> Self {
-        Environment {
-            sh: map.project_sh(),
-            rotation_deg: 0.0,
-            intensity: 1.0,
-        }
+        Environment { sh: map.project_sh(), rotation_deg: 0.0, intensity: 1.0 }
     }
 
     /// Takes a world-space direction to the map's frame: `R_y(−rotation)`, since the rotated

@@ -66,15 +66,11 @@ pub struct Sh9 {
 
 impl Sh9 {
     /// All-zero coefficients.
-    pub const ZERO: Sh9 = Sh9 {
-        coeffs: [Rgb::ZERO; SH_COUNT],
-    };
+    pub const ZERO: Sh9 = Sh9 { coeffs: [Rgb::ZERO; SH_COUNT] };
 
     /// From plain arrays (`[[r, g, b]; 9]`, the order of [`sh_basis`]).
     pub fn from_array(a: [[f32; 3]; SH_COUNT]) -> Self {
-        Sh9 {
-            coeffs: a.map(Rgb::from_array),
-        }
+        Sh9 { coeffs: a.map(Rgb::from_array) }
     }
 
     /// As plain arrays (for upload to the GPU or serialisation).
@@ -93,11 +89,7 @@ impl Sh9 {
 
     /// The band-limited radiance `Σ L_lm Y_lm(d)` at unit direction `d`.
     pub fn radiance(&self, d: Vec3) -> Rgb {
-        self.coeffs
-            .iter()
-            .zip(sh_basis(d))
-            .map(|(c, y)| *c * y)
-            .sum()
+        self.coeffs.iter().zip(sh_basis(d)).map(|(c, y)| *c * y).sum()
     }
 
     /// Irradiance `E(n) = ∫ L(ω) max(0, n·ω) dω` at unit normal `n` by Ramamoorthi & Hanrahan's
@@ -115,19 +107,12 @@ impl Sh9 {
     /// weights are `w` (see [`BandWeights`]). With [`BandWeights::COSINE`] this equals
     /// [`Sh9::irradiance`].
     pub fn convolve(&self, n: Vec3, w: &BandWeights) -> Rgb {
-        self.coeffs
-            .iter()
-            .zip(sh_basis(n))
-            .zip(SH_BAND)
-            .map(|((c, y), l)| *c * (y * w.0[l]))
-            .sum()
+        self.coeffs.iter().zip(sh_basis(n)).zip(SH_BAND).map(|((c, y), l)| *c * (y * w.0[l])).sum()
     }
 
     /// Coefficients scaled by `s`.
     pub fn scaled(&self, s: f32) -> Sh9 {
-        Sh9 {
-            coeffs: self.coeffs.map(|c| c * s),
-        }
+        Sh9 { coeffs: self.coeffs.map(|c| c * s) }
     }
 }
 
@@ -138,11 +123,8 @@ pub struct BandWeights(pub [f32; 3]);
 
 impl BandWeights {
     /// The clamped cosine `max(0, μ)`: `A = (π, 2π/3, π/4)` (R&H 2001 eq. 8).
-    pub const COSINE: BandWeights = BandWeights([
-        std::f32::consts::PI,
-        2.0 * std::f32::consts::PI / 3.0,
-        std::f32::consts::PI / 4.0,
-    ]);
+    pub const COSINE: BandWeights =
+        BandWeights([std::f32::consts::PI, 2.0 * std::f32::consts::PI / 3.0, std::f32::consts::PI / 4.0]);
 
     /// The Fresnel-transmitted clamped cosine `F_t(eta, μ) max(0, μ)` for a smooth dielectric
     /// of relative index `eta` (light entering from air). `A_0 / π` is the cosine-weighted

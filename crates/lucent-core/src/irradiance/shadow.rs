@@ -99,19 +99,10 @@ impl Bvh {
                 }
             })
             .collect();
-        let nodes = if items.is_empty() {
-            Vec::new()
-        } else {
-            build_subtree(&mut items, 0)
-        };
+        let nodes = if items.is_empty() { Vec::new() } else { build_subtree(&mut items, 0) };
         let faces: Vec<u32> = items.iter().map(|i| i.face).collect();
         let tris = faces.iter().map(|&f| mesh.corners(f as usize)).collect();
-        let mut bvh = Bvh {
-            nodes,
-            faces,
-            tris,
-            built_cost: 0.0,
-        };
+        let mut bvh = Bvh { nodes, faces, tris, built_cost: 0.0 };
         bvh.built_cost = bvh.sah_cost();
         bvh
     }
@@ -123,23 +114,15 @@ impl Bvh {
     /// If the triangle count differs from the build's (use [`Bvh::build`] after a topology
     /// change; [`ShadowCaster::update`] does that for you).
     pub fn refit(&mut self, mesh: &Mesh) {
-        assert_eq!(
-            mesh.triangles.len(),
-            self.faces.len(),
-            "refit needs the mesh the tree was built for"
-        );
-        self.tris
-            .par_iter_mut()
-            .zip(self.faces.par_iter())
-            .for_each(|(t, &f)| *t = mesh.corners(f as usize));
+        assert_eq!(mesh.triangles.len(), self.faces.len(), "refit needs the mesh the tree was built for");
+        self.tris.par_iter_mut().zip(self.faces.par_iter()).for_each(|(t, &f)| *t = mesh.corners(f as usize));
         for i in (0..self.nodes.len()).rev() {
             let n = self.nodes[i];
             let (min, max) = if n.is_leaf() {
                 let tris = &self.tris[n.first as usize..(n.first + n.count) as usize];
-                tris.iter().flatten().fold(
-                    (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-                    |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-                )
+                tris.iter().flatten().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                })
             } else {
                 let (l, r) = (self.nodes[i + 1], self.nodes[n.first as usize]);
                 (l.min.min(r.min), l.max.max(r.max))
@@ -161,11 +144,7 @@ impl Bvh {
             .nodes
             .iter()
             .map(|n| {
-                let per = if n.is_leaf() {
-                    n.count as f32
-                } else {
-                    TRAVERSAL_COST
-                };
+                let per = if n.is_leaf() { n.count as f32 } else { TRAVERSAL_COST };
                 n.half_area() * per
             })
             .sum();
@@ -194,9 +173,7 @@ impl Bvh {
 
     /// Box `(min, max)` around the whole mesh (zero for an empty tree).
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.nodes
-            .first()
-            .map_or((Vec3::ZERO, Vec3::ZERO), |n| (n.min, n.max))
+        self.nodes.first().map_or((Vec3::ZERO, Vec3::ZERO), |n| (n.min, n.max))
     }
 
     /// Whether any triangle (either side) is hit by the ray `origin + t dir` for
@@ -217,10 +194,7 @@ impl Bvh {
             }
             if node.is_leaf() {
                 let range = node.first as usize..(node.first + node.count) as usize;
-                if self.tris[range]
-                    .iter()
-                    .any(|t| ray_triangle(origin, dir, t, t_min, t_max))
-                {
+                if self.tris[range].iter().any(|t| ray_triangle(origin, dir, t, t_min, t_max)) {
                     return true;
                 }
             } else if top + 2 <= stack.len() {
@@ -230,10 +204,7 @@ impl Bvh {
             } else {
                 // Deeper than 64 levels (only for pathological inputs): answer by brute force
                 // rather than overflow.
-                return self
-                    .tris
-                    .iter()
-                    .any(|t| ray_triangle(origin, dir, t, t_min, t_max));
+                return self.tris.iter().any(|t| ray_triangle(origin, dir, t, t_min, t_max));
             }
         }
         false
@@ -243,19 +214,11 @@ impl Bvh {
 /// Builds the subtree over `items` (whose first element is triangle slot `offset` overall) and
 /// returns its nodes in local indices, root at 0.
 fn build_subtree(items: &mut [Item], offset: usize) -> Vec<BvhNode> {
-    let (min, max) = items.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), it| (lo.min(it.min), hi.max(it.max)),
-    );
+    let (min, max) = items.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), it| {
+        (lo.min(it.min), hi.max(it.max))
+    });
     let n = items.len();
-    let leaf = || {
-        vec![BvhNode {
-            min,
-            max,
-            first: offset as u32,
-            count: n as u32,
-        }]
-    };
+    let leaf = || vec![BvhNode { min, max, first: offset as u32, count: n as u32 }];
     if n <= 2 {
         return leaf();
     }
@@ -264,24 +227,13 @@ fn build_subtree(items: &mut [Item], offset: usize) -> Vec<BvhNode> {
     };
     let (left_items, right_items) = items.split_at_mut(mid);
     let (left, right) = if n > PARALLEL_MIN {
-        rayon::join(
-            || build_subtree(left_items, offset),
-            || build_subtree(right_items, offset + mid),
-        )
+        rayon::join(|| build_subtree(left_items, offset), || build_subtree(right_items, offset + mid))
     } else {
-        (
-            build_subtree(left_items, offset),
-            build_subtree(right_items, offset + mid),
-        )
+        (build_subtree(left_items, offset), build_subtree(right_items, offset + mid))
     };
     let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
     let right_root = 1 + left.len() as u32;
-    nodes.push(BvhNode {
-        min,
-        max,
-        first: right_root,
-        count: 0,
-    });
+    nodes.push(BvhNode { min, max, first: right_root, count: 0 });
     let shift = |mut node: BvhNode, by: u32| {
         if !node.is_leaf() {
             node.first += by;
@@ -297,10 +249,9 @@ fn build_subtree(items: &mut [Item], offset: usize) -> Vec<BvhNode> {
 /// index, or `None` when a leaf is cheaper (and small enough).
 fn sah_split(items: &mut [Item], parent_half_area: f32) -> Option<usize> {
     let n = items.len();
-    let (cmin, cmax) = items.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), it| (lo.min(it.centroid), hi.max(it.centroid)),
-    );
+    let (cmin, cmax) = items.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), it| {
+        (lo.min(it.centroid), hi.max(it.centroid))
+    });
     let extent = cmax - cmin;
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bins left of the plane)
     for axis in 0..3 {
@@ -324,11 +275,7 @@ fn sah_split(items: &mut [Item], parent_half_area: f32) -> Option<usize> {
             lo = lo.min(bmin[b]);
             hi = hi.max(bmax[b]);
             c += count[b];
-            right_cost[b] = if c > 0 {
-                half_area(lo, hi) * c as f32
-            } else {
-                0.0
-            };
+            right_cost[b] = if c > 0 { half_area(lo, hi) * c as f32 } else { 0.0 };
         }
         let (mut lo, mut hi, mut c) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN), 0u32);
         for b in 0..BINS - 1 {
@@ -351,9 +298,8 @@ fn sah_split(items: &mut [Item], parent_half_area: f32) -> Option<usize> {
                 || TRAVERSAL_COST + cost / parent_half_area.max(f32::MIN_POSITIVE) < leaf_cost =>
         {
             let scale = BINS as f32 / extent[axis];
-            let goes_left = |it: &Item| {
-                (((it.centroid[axis] - cmin[axis]) * scale) as usize).min(BINS - 1) < split_bin
-            };
+            let goes_left =
+                |it: &Item| (((it.centroid[axis] - cmin[axis]) * scale) as usize).min(BINS - 1) < split_bin;
             Some(partition(items, goes_left))
         }
         // Every centroid in one spot (or no better plane): split the list in half if it is too
@@ -440,11 +386,7 @@ pub struct ShadowCaster {
 impl ShadowCaster {
     /// Builds the tree for `mesh`.
     pub fn new(mesh: &Mesh) -> Self {
-        ShadowCaster {
-            bvh: Bvh::build(mesh),
-            rebuild_ratio: 2.0,
-            relative_offset: 1e-4,
-        }
+        ShadowCaster { bvh: Bvh::build(mesh), rebuild_ratio: 2.0, relative_offset: 1e-4 }
     }
 
     /// Brings the tree up to date with the mesh's current positions: a refit, or a rebuild when
@@ -478,8 +420,6 @@ impl ShadowCaster {
     pub fn visible(&self, p: Vec3, n: Vec3, inc: &Incident) -> bool {
         let eps = self.offset();
         let origin = p + n * eps;
-        !self
-            .bvh
-            .occluded(origin, inc.to_light, 0.0, inc.distance - eps)
+        !self.bvh.occluded(origin, inc.to_light, 0.0, inc.distance - eps)
     }
 }

@@ -14,13 +14,7 @@ pub fn uv_sphere(center: Vec3, radius: f32, segments: u32, rings: u32) -> Mesh {
         for s in 0..segments {
             let phi = 2.0 * PI * s as f32 / segments as f32;
             positions.push(
-                center
-                    + radius
-                        * Vec3::new(
-                            theta.sin() * phi.cos(),
-                            theta.cos(),
-                            theta.sin() * phi.sin(),
-                        ),
+                center + radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()),
             );
         }
     }
@@ -34,12 +28,7 @@ pub fn uv_sphere(center: Vec3, radius: f32, segments: u32, rings: u32) -> Mesh {
     }
     for r in 1..rings - 1 {
         for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
+            let (a, b, c, d) = (ring(r, s), ring(r, s + 1), ring(r + 1, s), ring(r + 1, s + 1));
             triangles.push([a, b, d]);
             triangles.push([a, d, c]);
         }
@@ -100,8 +89,7 @@ pub fn merge(a: &Mesh, b: &Mesh) -> Mesh {
     let off = a.positions.len() as u32;
     let mut m = a.clone();
     m.positions.extend(&b.positions);
-    m.triangles
-        .extend(b.triangles.iter().map(|t| t.map(|i| i + off)));
+    m.triangles.extend(b.triangles.iter().map(|t| t.map(|i| i + off)));
     m
 }
 

@@ -229,7 +229,7 @@ impl LightFrustum {
                     Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.5 * radius, 3.5 * radius);
                 Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * radius })
             }
-            Light::Point { position, .. } => {
+            Light::Point { position, .. } | Light::Spot { position, .. } => {
                 let to_centre = centre - position;
                 let dist = to_centre.length();
                 if dist <= radius * 1.001 {

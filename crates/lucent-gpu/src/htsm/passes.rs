@@ -621,7 +621,10 @@ impl HtsmRenderer {
         let frustum = LightFrustum::fit(self.sphere, &view.light)?;
         let extent = self.box_size.max_element();
         let (light, light_colour) = match view.light {
-            Light::Point { position, intensity } => (position.extend(1.0), intensity),
+            // A spot renders like a point light from its position (cone not applied in HTSM).
+            Light::Point { position, intensity } | Light::Spot { position, intensity, .. } => {
+                (position.extend(1.0), intensity)
+            }
             Light::Directional { direction, irradiance } => {
                 (direction.normalize_or_zero().extend(0.0), irradiance)
             }
