@@ -505,3 +505,22 @@ fn truncated_and_corrupted_bytes_never_panic() {
         }
     }
 }
+
+#[test]
+fn ply_other_elements_are_skipped_and_missing_coordinates_rejected() {
+    // A leading unrelated element, an edge element after the faces, extra vertex properties
+    // before and after the coordinates, and a char-typed index list.
+    let ply = b"ply\nformat ascii 1.0\nelement material 1\nproperty uchar red\nelement vertex 4\nproperty int id\nproperty double x\nproperty double y\nproperty double z\nproperty list uchar float extra\nelement face 4\nproperty uchar flags\nproperty list uchar char vertex_index\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n7\n0 0 0 0 2 1.5 2.5\n1 1 0 0 0\n2 0 1 0 1 9\n3 0 0 1 0\n0 3 0 2 1\n0 3 0 1 3\n0 3 0 3 2\n0 3 1 2 3\n0 1\n";
+    let (m, r) = parse_mesh(ply, MeshFormat::Ply, "tetra.ply").unwrap();
+    assert_eq!(m.positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]);
+    assert_eq!(m.triangles, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+    assert!(r.is_clean(), "{r}");
+    // Unit right tetrahedron: volume 1/6.
+    assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-12);
+
+    let no_z = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0\n1 0\n0 1\n3 0 1 2\n";
+    let e = load_err("noz.ply", no_z);
+    assert!(e.reason().contains("no 'z' property"), "{e}");
+    let no_face = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
+    assert!(load_err("noface.ply", no_face).reason().contains("no 'face' element"));
+}

@@ -12,6 +12,7 @@
 //!   inconsistently oriented edges, unreferenced vertices, connected components.
 
 use super::{Mesh, MeshError};
+use rayon::slice::ParallelSliceMut;
 use std::collections::HashMap;
 use std::fmt;
 
@@ -153,7 +154,7 @@ pub fn analyze(mesh: &Mesh) -> MeshReport {
             edges.push((a.min(b), a.max(b), a < b));
         }
     }
-    edges.sort_unstable();
+    edges.par_sort_unstable();
     let (mut unique, mut boundary, mut nonmanifold, mut inconsistent) = (0, 0, 0, 0);
     for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
         unique += 1;
