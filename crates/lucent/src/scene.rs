@@ -38,6 +38,9 @@ use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use lucent_core::mesh::deform::Deformation;
+use lucent_core::mesh::{Mesh, embedded, generate};
+use lucent_gpu::camera::OrbitCamera;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use std::fmt;
@@ -48,8 +51,8 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
-    /// The mesh: a built-in name (`"bunny"`, or a generator the mesh module provides, e.g.
-    /// `"candle"`, `"cube"`, `"sphere"`) or a file path (OBJ, PLY, OFF, glTF/GLB) relative to the
+    /// The mesh: a built-in name (`"bunny"`, `"candle"`, `"cube"`, `"sphere"`; see
+    /// [`Scene::load_mesh`]) or a file path (OBJ, PLY, OFF, glTF/GLB) relative to the
     /// scene file's folder. A string with a file extension or a path separator is a path.
     /// Default `"bunny"`.
     #[serde(default = "default_mesh")]
@@ -272,6 +275,9 @@ impl Default for CameraSpec {
     }
 }
 
+/// Names accepted by [`Scene::load_mesh`] for built-in meshes.
+pub const BUILTIN_MESHES: &[&str] = &["bunny", "candle", "cube", "sphere"];
+
 /// Where the mesh comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum MeshSource {
@@ -365,31 +371,38 @@ impl Scene {
         }
     }
 
-    /// The deformation strings, checked for form (kind and number count).
-    pub fn deformations(&self) -> Result<Vec<String>> {
-        for d in &self.deform {
-            let (kind, args) =
-                d.split_once(':').with_context(|| format!("deformation {d:?}: expected KIND:NUMBERS"))?;
-            let n = args
-                .split(',')
-                .map(|v| v.trim().parse::<f32>().ok().filter(|x| x.is_finite()))
-                .collect::<Option<Vec<_>>>()
-                .with_context(|| format!("deformation {d:?}: not a list of finite numbers"))?
-                .len();
-            let want = match kind.trim() {
-                "twist" => 1,
-                "bump" => 5,
-                "noise" => 2,
+    /// The deformations, parsed (see `lucent_core::mesh::deform::Deformation`).
+    pub fn deformations(&self) -> Result<Vec<Deformation>> {
+        Ok(self.deform.iter().map(|d| d.parse::<Deformation>()).collect::<Result<Vec<_>, _>>()?)
+    }
+
+    /// Loads or generates the mesh (rest pose, before deformations). Built-in names: `bunny`
+    /// (embedded Stanford bunny), `candle`, `cube` (32 x 32 squares per side), `sphere`
+    /// (icosphere, 5 subdivisions). Errors name the file or list the known names.
+    pub fn load_mesh(&self) -> Result<Mesh> {
+        Ok(match self.mesh_source() {
+            MeshSource::File(path) => lucent_core::mesh::load_mesh(&path)?,
+            MeshSource::Builtin(name) => match name.as_str() {
+                "bunny" => embedded::bunny(),
+                "candle" => generate::candle(&generate::CandleParams::default()),
+                "cube" => generate::cube(32),
+                "sphere" | "icosphere" => generate::icosphere(5),
                 other => bail!(
-                    "deformation {d:?}: unknown kind {other:?} (twist:DEGREES, \
-                     bump:x,y,z,radius,height, noise:amplitude,frequency)"
+                    "unknown built-in mesh {other:?} (known: {}); a file path needs an extension",
+                    BUILTIN_MESHES.join(", ")
                 ),
-            };
-            if n != want {
-                bail!("deformation {d:?}: {kind} takes {want} numbers, got {n}");
-            }
+            },
+        })
+    }
+
+    /// The camera as the renderer's orbit camera.
+    pub fn camera(&self) -> OrbitCamera {
+        OrbitCamera {
+            yaw_deg: self.camera.yaw,
+            pitch_deg: self.camera.pitch,
+            distance: self.camera.distance,
+            fov_y_deg: self.camera.fov,
         }
-        Ok(self.deform.clone())
     }
 
     /// The lights for the irradiance computation. Point and spot intensities are set so the
@@ -607,8 +620,25 @@ mod tests {
             error("[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ndirection = [0,-1,0]\nsoft_edge = 2\n");
         assert!(e.contains("soft_edge"), "{e}");
         assert!(error("deform = [\"twist\"]\n").contains("twist"));
-        assert!(error("deform = [\"bump:1,2\"]\n").contains("5 numbers"));
+        assert!(error("deform = [\"bump:1,2\"]\n").contains("bump takes 5 numbers"));
         assert!(error("[camera]\nfov = 200\n").contains("fov"));
+    }
+
+    #[test]
+    fn meshes_and_deformations_resolve() {
+        let s = Scene::load(&examples().join("candle.toml")).unwrap();
+        let mesh = s.load_mesh().unwrap();
+        assert!(!mesh.triangles.is_empty());
+        assert_eq!(s.deformations().unwrap(), vec![Deformation::Twist { degrees: 40.0 }]);
+        assert_eq!(s.camera().fov_y_deg, 35.0);
+        for name in BUILTIN_MESHES {
+            let s = Scene::parse(&format!("mesh = \"{name}\"\n"), PathBuf::new()).unwrap();
+            assert!(!s.load_mesh().unwrap().triangles.is_empty(), "{name}");
+        }
+        let s = Scene::parse("mesh = \"teapot\"\n", PathBuf::new()).unwrap();
+        assert!(format!("{:#}", s.load_mesh().unwrap_err()).contains("teapot"));
+        let s = Scene::parse("mesh = \"gone.obj\"\n", PathBuf::from("d")).unwrap();
+        assert!(format!("{:#}", s.load_mesh().unwrap_err()).contains("gone.obj"));
     }
 
     #[test]
