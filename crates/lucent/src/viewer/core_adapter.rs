@@ -1,12 +1,14 @@
 //! The viewer's only contact with `lucent-core`: mesh loading, deformation, lights and the
 //! solve, each behind one small function so that the viewer follows the core's API in one place.
 
-use super::state::{Deformations, LightKind, LightSpec, SolveParams};
+use super::state::{Deformations, EnvChoice, LightKind, LightSpec, SolveParams};
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Dipole;
 use lucent_core::formfactor::FormFactorOptions;
-use lucent_core::irradiance::{Light, face_irradiance};
+use lucent_core::irradiance::{
+    EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed,
+};
 use lucent_core::mesh::deform::{self, Deformer as _};
 use lucent_core::mesh::{Mesh, embedded, generate};
 use lucent_core::shading::diffuse_radiance;
@@ -115,15 +117,22 @@ pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
     mesh
 }
 
-/// The core's lights for the UI's list. A spot light is a point light whose cone is not yet
-/// modelled by the core's irradiance.
+/// Fraction of a spot cone's angle over which its edge fades out.
+const SPOT_SOFT_EDGE: f32 = 0.2;
+
+/// The core's lights for the UI's list.
 pub fn core_lights(lights: &[LightSpec]) -> Vec<Light> {
     lights
         .iter()
         .map(|l| match l.kind {
-            LightKind::Point | LightKind::Spot => {
-                Light::Point { position: l.position, intensity: l.color * l.power }
-            }
+            LightKind::Point => Light::Point { position: l.position, intensity: l.color * l.power },
+            LightKind::Spot => Light::Spot {
+                position: l.position,
+                direction: l.direction,
+                intensity: l.color * l.power,
+                cone_angle: l.spot_angle_deg.to_radians(),
+                soft_edge: SPOT_SOFT_EDGE,
+            },
             LightKind::Directional => {
                 Light::Directional { direction: l.direction, irradiance: l.color * l.power }
             }
@@ -131,15 +140,65 @@ pub fn core_lights(lights: &[LightSpec]) -> Vec<Light> {
         .collect()
 }
 
-/// Solver state the worker keeps between requests (the hierarchy and links that render and
-/// incremental modes reuse live here).
+/// Solver state the worker keeps between requests: the shadow caster's BVH (refitted when the
+/// mesh deforms) and the environment's SH projection (redone only when the map changes).
 #[derive(Default)]
-pub struct SolverSession {}
+pub struct SolverSession {
+    shadows: Option<(ShadowCaster, usize)>,
+    environment: Option<(EnvChoice, Option<Environment>)>,
+}
 
 impl SolverSession {
     /// Solves for the per-vertex radiance of `mesh` under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
-        solve_exact(mesh, params)
+        let t = Instant::now();
+        let e = self.irradiance(mesh, params);
+        let mut solution = solve_exact(mesh, params, &e);
+        solution.timings.irradiance_ms = ms_since(t);
+        solution
+    }
+
+    /// Fresnel-transmitted irradiance at the face midpoints (Mertens §5.3): lights, shadowed
+    /// by the mesh when asked, plus the environment's SH irradiance.
+    fn irradiance(&mut self, mesh: &Mesh, params: &SolveParams) -> Vec<Rgb> {
+        let lights: Vec<SceneLight> = core_lights(&params.lights)
+            .into_iter()
+            .map(|light| SceneLight { light, shadows: params.shadows })
+            .collect();
+        let environment = self.environment(params.env).map(|env| Environment {
+            rotation_deg: params.env_rotation_deg,
+            intensity: params.env_strength,
+            ..env
+        });
+        let caster = params.shadows.then(|| self.shadow_caster(mesh));
+        face_irradiance_shadowed(mesh, &lights, environment.as_ref(), params.material.eta, caster)
+    }
+
+    fn shadow_caster(&mut self, mesh: &Mesh) -> &ShadowCaster {
+        let faces = mesh.triangles.len();
+        match &mut self.shadows {
+            Some((caster, n)) if *n == faces => {
+                caster.update(mesh);
+            }
+            slot => *slot = Some((ShadowCaster::new(mesh), faces)),
+        }
+        &self.shadows.as_ref().expect("set above").0
+    }
+
+    /// The environment for `choice`, loaded and projected on first use. A missing or bad map
+    /// is logged and lights nothing.
+    fn environment(&mut self, choice: EnvChoice) -> Option<Environment> {
+        if self.environment.as_ref().is_none_or(|(c, _)| *c != choice) {
+            let env = choice.path().and_then(|path| match EnvMap::load(Path::new(path)) {
+                Ok(map) => Some(Environment::from_map(&map)),
+                Err(e) => {
+                    log::warn!("environment {path}: {e}");
+                    None
+                }
+            });
+            self.environment = Some((choice, env));
+        }
+        self.environment.as_ref().and_then(|(_, env)| *env)
     }
 }
 
@@ -158,18 +217,13 @@ pub fn level_colour(level: usize) -> Rgb {
     Rgb::from_array(PALETTE[level % PALETTE.len()])
 }
 
-/// The exact O(N^2) solve (every face against every face).
-fn solve_exact(mesh: &Mesh, params: &SolveParams) -> Solution {
+/// The exact O(N^2) solve (every face against every face) for face irradiance `e`.
+fn solve_exact(mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
     let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
     let mut timings = Timings::default();
 
     let t = Instant::now();
-    let lights = core_lights(&params.lights);
-    let e = face_irradiance(mesh, &lights, params.material.eta);
-    timings.irradiance_ms = ms_since(t);
-
-    let t = Instant::now();
-    let b = exact::solve(mesh, &dipole, &e, &FormFactorOptions::default());
+    let b = exact::solve(mesh, &dipole, e, &FormFactorOptions::default());
     timings.gather_ms = ms_since(t);
 
     let t = Instant::now();

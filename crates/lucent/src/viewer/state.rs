@@ -53,14 +53,14 @@ pub struct LightSpec {
 
 impl LightSpec {
     /// A white point light at `position` whose irradiance on a surface at the origin facing it
-    /// is about 2 (so the default exposure shows it well).
+    /// is 1 (so the default exposure shows it without clipping).
     pub fn point(position: Vec3) -> Self {
         LightSpec {
             kind: LightKind::Point,
             position,
             direction: -position,
             color: Rgb::ONE,
-            power: 2.0 * position.length_squared().max(0.01),
+            power: position.length_squared().max(0.01),
             spot_angle_deg: 30.0,
         }
     }
