@@ -292,9 +292,19 @@ pub enum MeshSource {
 pub struct LoadedEnvironment {
     /// SH coefficients with rotation and intensity, for the leaf irradiance.
     pub environment: Environment,
-    /// A 256 x 128 equirect copy of the map (unrotated, intensity not applied) for the GPU's
-    /// Fresnel-weighted reflection.
+    /// A 256 x 128 equirect copy of the map for the GPU's Fresnel-weighted reflection, already
+    /// rotated by the scene's rotation (to the nearest 360/256 degrees), intensity not applied
+    /// (pass it as the shading's environment weight). Same mapping as `lucent-gpu`'s
+    /// `equirect_uv` in `mesh.wgsl`.
     pub reflection: EnvMap,
+}
+
+impl LoadedEnvironment {
+    /// The reflection texels as RGBA (alpha 1), rows top first, for
+    /// `lucent_gpu::mesh_pass::EnvironmentMap::from_rgba_f32`.
+    pub fn reflection_rgba(&self) -> Vec<[f32; 4]> {
+        self.reflection.texels.iter().map(|t| t.extend(1.0).to_array()).collect()
+    }
 }
 
 impl Scene {
@@ -458,7 +468,10 @@ impl Scene {
             intensity: spec.intensity,
             ..Environment::from_map(&map)
         };
-        Ok(Some(LoadedEnvironment { environment, reflection: map.downsampled(256, 128) }))
+        Ok(Some(LoadedEnvironment {
+            environment,
+            reflection: map.downsampled(256, 128).rotated(spec.rotation),
+        }))
     }
 }
 
@@ -527,6 +540,7 @@ mod tests {
         let s = Scene::load(&examples().join("bunny_courtyard.toml")).unwrap();
         let env = s.environment().unwrap().expect("has an environment");
         assert_eq!((env.reflection.width, env.reflection.height), (256, 128));
+        assert_eq!(env.reflection_rgba().len(), 256 * 128);
         assert!(env.environment.sh.coeffs[0].min_element() > 0.0);
     }
 
