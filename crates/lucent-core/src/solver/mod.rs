@@ -1,5 +1,13 @@
 //! Solving `B(x_o) = Σ_k E_k F(A_k, x_o)` (Mertens eq. 6).
 //!
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
+//! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
+//!   §5.5) in on-the-fly, render and incremental modes.
+//! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
 
 pub mod exact;
+pub mod hierarchical;
+pub mod oracle;
+
+pub use hierarchical::{HierarchicalSolver, LinkSet, SolveStats, Solution};
+pub use oracle::{LinkKind, Oracle};

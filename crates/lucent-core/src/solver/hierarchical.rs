@@ -1,0 +1,496 @@
+//! The hierarchical boundary element solve of Mertens et al. 2003 (§3.2, §5.2, §5.5) over a
+//! [`Hierarchy`], in its three modes:
+//!
+//! * **on-the-fly** ([`HierarchicalSolver::solve_on_the_fly`]): every frame, refine from the
+//!   root's self-link and gather while traversing; nothing is stored. Parallel over receiver
+//!   subtrees.
+//! * **render** ([`HierarchicalSolver::link`] once, then
+//!   [`HierarchicalSolver::solve_render`] per frame): the links are stored flat, sorted by
+//!   receiver (CSR: `recv_start`, `emitter`, `ff`), and a frame is only *pull* (area-weighted
+//!   irradiance up the tree), *gather* (`Σ E_e F_re` per receiver) and *push* (a receiver's `B`
+//!   added to all its leaves).
+//! * **incremental** ([`HierarchicalSolver::update_incremental`]): after a geometry or material
+//!   change, re-evaluate the links touching changed clusters, moving links down (refining) or up
+//!   (coarsening) where the oracle's verdict changed, optionally within a budget of form factor
+//!   evaluations per frame; then render as above.
+//!
+//! The receiver-driven traversal: a receiver `R` is handed the candidate emitters its ancestors
+//! deferred to it; each candidate is linked at `R`, opened at the emitter (its children become
+//! candidates of `R`) or deferred to `R`'s children, per [`Oracle::decide`]. This is the
+//! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
+//! parallel, and links come out sorted by receiver in preorder.
+
+use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView};
+use crate::Rgb;
+use crate::bssrdf::Dipole;
+use crate::formfactor::FormFactorOptions;
+use crate::hierarchy::{Hierarchy, PAR_LEAVES};
+use crate::mesh::Mesh;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::time::Instant;
+
+/// Flag in [`LinkSet::emitter`] marking a link evaluated with the form factor.
+const FF_BIT: u32 = 1 << 31;
+
+/// Stored links, sorted by receiver (CSR over clusters in preorder).
+#[derive(Clone, Debug, Default)]
+pub struct LinkSet {
+    /// `recv_start[r]..recv_start[r + 1]` are receiver `r`'s links (length: clusters + 1).
+    pub recv_start: Vec<u32>,
+    /// Emitter cluster of each link; the top bit marks a form factor link
+    /// (see [`LinkSet::emitter_of`]).
+    pub emitter: Vec<u32>,
+    /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless).
+    pub ff: Vec<[f32; 3]>,
+    /// Links whose coefficient is stale (left over when an incremental update ran out of
+    /// budget); recomputed first by the next update.
+    pub dirty: Vec<bool>,
+}
+
+impl LinkSet {
+    /// Number of links.
+    pub fn len(&self) -> usize {
+        self.emitter.len()
+    }
+
+    /// Whether there are no links.
+    pub fn is_empty(&self) -> bool {
+        self.emitter.is_empty()
+    }
+
+    /// Emitter cluster of link `j`.
+    #[inline]
+    pub fn emitter_of(&self, j: usize) -> usize {
+        (self.emitter[j] & !FF_BIT) as usize
+    }
+
+    /// Evaluation kind of link `j`.
+    #[inline]
+    pub fn kind_of(&self, j: usize) -> LinkKind {
+        if self.emitter[j] & FF_BIT != 0 {
+            LinkKind::FormFactor
+        } else {
+            LinkKind::PointSample
+        }
+    }
+}
+
+/// Counters and timings of one solve or update. Times in milliseconds (wall clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveStats {
+    /// Links used (stored links in render/incremental mode, traversed ones on the fly).
+    pub links: usize,
+    /// Semi-analytic form factor evaluations in this call.
+    pub form_factors: usize,
+    /// One-point evaluations in this call.
+    pub point_samples: usize,
+    /// Time spent refining / relinking (and evaluating link coefficients), ms.
+    pub link_ms: f64,
+    /// Time spent pulling irradiance up the hierarchy, ms.
+    pub pull_ms: f64,
+    /// Time spent gathering over links, ms (on the fly: included in `link_ms`).
+    pub gather_ms: f64,
+    /// Time spent pushing `B` down to the leaves and reordering, ms.
+    pub push_ms: f64,
+    /// Whole call, ms.
+    pub total_ms: f64,
+}
+
+/// The result of a solve: `B` per face (original face order) and statistics.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// `B(x_o)` at each face midpoint (Mertens eq. 4), in the units of the irradiance.
+    pub face_b: Vec<Rgb>,
+    /// What it took.
+    pub stats: SolveStats,
+}
+
+/// The hierarchical solver: a mesh, its hierarchy, the material and the oracle, plus the
+/// stored links once [`HierarchicalSolver::link`] has run.
+#[derive(Clone, Debug)]
+pub struct HierarchicalSolver {
+    /// The mesh in its current shape (updated by [`HierarchicalSolver::update_incremental`]).
+    pub mesh: Mesh,
+    /// The cluster hierarchy over `mesh`.
+    pub hierarchy: Hierarchy,
+    /// The material at the model's scale.
+    pub dipole: Dipole,
+    /// The refinement oracle.
+    pub oracle: Oracle,
+    /// Options of the semi-analytic form factor.
+    pub ff_opts: FormFactorOptions,
+    links: Option<LinkSet>,
+}
+
+/// Per-task state of a traversal.
+struct Ctx<'a> {
+    ev: Evaluator<'a>,
+    stack: Vec<u32>,
+    inv_rtot: [f32; 3],
+    form_factors: usize,
+    point_samples: usize,
+}
+
+impl<'a> Ctx<'a> {
+    fn new(s: &'a HierarchicalSolver) -> Self {
+        Ctx {
+            ev: Evaluator::new(&s.hierarchy, &s.dipole, s.ff_opts),
+            stack: Vec::with_capacity(64),
+            // One scale for all channels (the largest `R_d_total`): the oracle bounds absolute
+            // errors relative to the brightest channel, not each dim channel on its own.
+            inv_rtot: {
+                let r = s.dipole.total_diffuse_reflectance();
+                [(1.0 / r[0].max(r[1]).max(r[2]).max(1e-12)) as f32; 3]
+            },
+            form_factors: 0,
+            point_samples: 0,
+        }
+    }
+
+    fn absorb(&mut self, o: &Ctx) {
+        self.form_factors += o.form_factors;
+        self.point_samples += o.point_samples;
+    }
+
+    /// Processes the candidates of receiver `r` (see the module documentation): calls
+    /// `on_link(e, kind, F)` for every accepted link and fills `defer` with the candidates for
+    /// `r`'s children.
+    fn receive(
+        &mut self,
+        oracle: &Oracle,
+        r: usize,
+        cands: &[u32],
+        defer: &mut Vec<u32>,
+        mut on_link: impl FnMut(usize, LinkKind, [f32; 3]),
+    ) {
+        let h = self.ev.h;
+        let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
+        let src = view.src;
+        self.stack.clear();
+        self.stack.extend_from_slice(cands);
+        let mut estimate = None;
+        while let Some(e) = self.stack.pop() {
+            let e = e as usize;
+            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate) {
+                Decision::Link(kind) => {
+                    let f = match (kind, estimate) {
+                        (LinkKind::PointSample, Some(f)) => f,
+                        _ => self.ev.eval(&src, r, e, kind),
+                    };
+                    match kind {
+                        LinkKind::FormFactor => self.form_factors += 1,
+                        LinkKind::PointSample => self.point_samples += 1,
+                    }
+                    on_link(e, kind, f);
+                }
+                Decision::SplitReceiver => defer.push(e as u32),
+                Decision::SplitEmitter => self.stack.extend_from_slice(h.nodes[e].children()),
+            }
+        }
+    }
+}
+
+/// Links found in one subtree, in receiver preorder.
+#[derive(Default)]
+struct LinkChunk {
+    recv: Vec<u32>,
+    emitter: Vec<u32>,
+    ff: Vec<[f32; 3]>,
+}
+
+impl HierarchicalSolver {
+    /// A solver for `mesh` (whose topology `hierarchy` was built on) with `dipole` and
+    /// `oracle`, using the default form factor options. No links are stored yet.
+    pub fn new(mesh: Mesh, hierarchy: Hierarchy, dipole: Dipole, oracle: Oracle) -> Self {
+        assert_eq!(hierarchy.leaf_count(), mesh.triangles.len());
+        HierarchicalSolver {
+            mesh,
+            hierarchy,
+            dipole,
+            oracle,
+            ff_opts: FormFactorOptions::default(),
+            links: None,
+        }
+    }
+
+    /// The stored links, if [`HierarchicalSolver::link`] has run.
+    pub fn links(&self) -> Option<&LinkSet> {
+        self.links.as_ref()
+    }
+
+    /// Area-weighted average irradiance of every cluster (the *pull* of §3.2).
+    pub fn pull(&self, face_irradiance: &[Rgb]) -> Vec<Rgb> {
+        let h = &self.hierarchy;
+        assert_eq!(face_irradiance.len(), h.leaf_count());
+        let mut e = vec![Rgb::ZERO; h.len()];
+        for i in (0..h.len()).rev() {
+            let n = &h.nodes[i];
+            if n.is_leaf() {
+                e[i] = face_irradiance[h.leaf_faces[n.leaf_start as usize] as usize];
+            } else {
+                let area = h.geom[i].area;
+                let mut s = Rgb::ZERO;
+                for &c in n.children() {
+                    let c = c as usize;
+                    s += if area > 0.0 {
+                        e[c] * (h.geom[c].area / area)
+                    } else {
+                        e[c] / n.child_count as f32
+                    };
+                }
+                e[i] = s;
+            }
+        }
+        e
+    }
+
+    /// On-the-fly mode: refine from the root's self-link and gather in one parallel traversal,
+    /// storing nothing. Returns `B` per face.
+    pub fn solve_on_the_fly(&self, face_irradiance: &[Rgb]) -> Solution {
+        let t0 = Instant::now();
+        let h = &self.hierarchy;
+        let mut stats = SolveStats::default();
+        if h.is_empty() {
+            return Solution {
+                face_b: Vec::new(),
+                stats,
+            };
+        }
+        let e_node = self.pull(face_irradiance);
+        let t1 = Instant::now();
+        let mut leaf_b = vec![Rgb::ZERO; h.leaf_count()];
+        let mut ctx = Ctx::new(self);
+        self.otf_rec(&mut ctx, 0, &[0], Rgb::ZERO, &e_node, &mut leaf_b);
+        let t2 = Instant::now();
+        let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
+        for (pos, &f) in h.leaf_faces.iter().enumerate() {
+            face_b[f as usize] = leaf_b[pos];
+        }
+        let t3 = Instant::now();
+        stats.links = ctx.form_factors + ctx.point_samples;
+        stats.form_factors = ctx.form_factors;
+        stats.point_samples = ctx.point_samples;
+        stats.pull_ms = ms(t1 - t0);
+        stats.link_ms = ms(t2 - t1);
+        stats.push_ms = ms(t3 - t2);
+        stats.total_ms = ms(t3 - t0);
+        Solution { face_b, stats }
+    }
+
+    fn otf_rec(
+        &self,
+        ctx: &mut Ctx,
+        r: usize,
+        cands: &[u32],
+        b_acc: Rgb,
+        e_node: &[Rgb],
+        out: &mut [Rgb],
+    ) {
+        let mut defer = Vec::new();
+        let mut b = b_acc;
+        ctx.receive(&self.oracle, r, cands, &mut defer, |e, _, f| {
+            b += e_node[e] * Rgb::from(f);
+        });
+        let n = self.hierarchy.nodes[r];
+        if n.is_leaf() {
+            out[0] = b;
+            return;
+        }
+        let parts = split_leaves(&self.hierarchy, r, out);
+        if n.leaf_count() > PAR_LEAVES {
+            let subs: Vec<Ctx> = parts
+                .into_par_iter()
+                .map(|(c, o)| {
+                    let mut sub = Ctx::new(self);
+                    self.otf_rec(&mut sub, c, &defer, b, e_node, o);
+                    sub
+                })
+                .collect();
+            subs.iter().for_each(|s| ctx.absorb(s));
+        } else {
+            for (c, o) in parts {
+                self.otf_rec(ctx, c, &defer, b, e_node, o);
+            }
+        }
+    }
+
+    /// Refines from the root's self-link and stores the links (render and incremental modes).
+    pub fn link(&mut self) -> SolveStats {
+        let t0 = Instant::now();
+        let h = &self.hierarchy;
+        let mut stats = SolveStats::default();
+        let mut set = LinkSet {
+            recv_start: vec![0; h.len() + 1],
+            ..Default::default()
+        };
+        if !h.is_empty() {
+            let mut ctx = Ctx::new(self);
+            let mut chunks = vec![LinkChunk::default()];
+            self.link_rec(&mut ctx, 0, &[0], &mut chunks);
+            stats.form_factors = ctx.form_factors;
+            stats.point_samples = ctx.point_samples;
+            let total: usize = chunks.iter().map(|c| c.recv.len()).sum();
+            set.emitter.reserve_exact(total);
+            set.ff.reserve_exact(total);
+            let mut counts = vec![0u32; h.len()];
+            for c in &chunks {
+                for &r in &c.recv {
+                    counts[r as usize] += 1;
+                }
+                set.emitter.extend_from_slice(&c.emitter);
+                set.ff.extend_from_slice(&c.ff);
+            }
+            for i in 0..h.len() {
+                set.recv_start[i + 1] = set.recv_start[i] + counts[i];
+            }
+            set.dirty = vec![false; total];
+        }
+        stats.links = set.len();
+        self.links = Some(set);
+        stats.link_ms = ms(t0.elapsed());
+        stats.total_ms = stats.link_ms;
+        stats
+    }
+
+    fn link_rec(&self, ctx: &mut Ctx, r: usize, cands: &[u32], chunks: &mut Vec<LinkChunk>) {
+        let mut defer = Vec::new();
+        {
+            let chunk = chunks.last_mut().expect("a chunk");
+            ctx.receive(&self.oracle, r, cands, &mut defer, |e, kind, f| {
+                chunk.recv.push(r as u32);
+                chunk.emitter.push(match kind {
+                    LinkKind::FormFactor => e as u32 | FF_BIT,
+                    LinkKind::PointSample => e as u32,
+                });
+                chunk.ff.push(f);
+            });
+        }
+        let n = self.hierarchy.nodes[r];
+        if n.is_leaf() {
+            return;
+        }
+        if n.leaf_count() > PAR_LEAVES {
+            let subs: Vec<(Ctx, Vec<LinkChunk>)> = n
+                .children()
+                .par_iter()
+                .map(|&c| {
+                    let mut sub = Ctx::new(self);
+                    let mut sub_chunks = vec![LinkChunk::default()];
+                    self.link_rec(&mut sub, c as usize, &defer, &mut sub_chunks);
+                    (sub, sub_chunks)
+                })
+                .collect();
+            for (s, c) in subs {
+                ctx.absorb(&s);
+                chunks.extend(c);
+            }
+            chunks.push(LinkChunk::default());
+        } else {
+            for &c in n.children() {
+                self.link_rec(ctx, c as usize, &defer, chunks);
+            }
+        }
+    }
+
+    /// Render mode: pull, gather over the stored links, push. Links are created on first use.
+    pub fn solve_render(&mut self, face_irradiance: &[Rgb]) -> Solution {
+        if self.links.is_none() {
+            self.link();
+        }
+        self.render_stored(face_irradiance)
+    }
+
+    /// Render mode over the stored links (which must exist).
+    fn render_stored(&self, face_irradiance: &[Rgb]) -> Solution {
+        let t0 = Instant::now();
+        let h = &self.hierarchy;
+        let links = self.links.as_ref().expect("links stored");
+        let e_node = self.pull(face_irradiance);
+        let t1 = Instant::now();
+        const CHUNK: usize = 1024;
+        let mut b_node = vec![Rgb::ZERO; h.len()];
+        b_node
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(ci, chunk)| {
+                for (k, b) in chunk.iter_mut().enumerate() {
+                    let r = ci * CHUNK + k;
+                    let (a, z) = (links.recv_start[r] as usize, links.recv_start[r + 1] as usize);
+                    let mut s = [0.0f32; 3];
+                    for j in a..z {
+                        let e = e_node[(links.emitter[j] & !FF_BIT) as usize];
+                        let f = links.ff[j];
+                        s[0] += e.x * f[0];
+                        s[1] += e.y * f[1];
+                        s[2] += e.z * f[2];
+                    }
+                    *b = Rgb::from(s);
+                }
+            });
+        let t2 = Instant::now();
+        let face_b = self.push(&mut b_node);
+        let t3 = Instant::now();
+        Solution {
+            face_b,
+            stats: SolveStats {
+                links: links.len(),
+                pull_ms: ms(t1 - t0),
+                gather_ms: ms(t2 - t1),
+                push_ms: ms(t3 - t2),
+                total_ms: ms(t3 - t0),
+                ..Default::default()
+            },
+        }
+    }
+
+    /// Push: accumulates every cluster's gathered `B` down to its leaves (preorder: parents
+    /// first) and returns `B` per original face.
+    fn push(&self, b_node: &mut [Rgb]) -> Vec<Rgb> {
+        let h = &self.hierarchy;
+        let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
+        for i in 1..h.len() {
+            let p = h.nodes[i].parent as usize;
+            b_node[i] += b_node[p];
+        }
+        for (i, n) in h.nodes.iter().enumerate() {
+            if n.is_leaf() {
+                face_b[h.leaf_faces[n.leaf_start as usize] as usize] = b_node[i];
+            }
+        }
+        face_b
+    }
+
+    /// Changes the material: every stored link's coefficient becomes stale and is recomputed by
+    /// the next [`HierarchicalSolver::update_incremental`] (the oracle is geometric, so the
+    /// links themselves stay).
+    pub fn set_dipole(&mut self, dipole: Dipole) {
+        self.dipole = dipole;
+        if let Some(l) = self.links.as_mut() {
+            l.dirty.iter_mut().for_each(|d| *d = true);
+        }
+    }
+}
+
+/// Splits a receiver's leaf-ordered output slice among its children.
+fn split_leaves<'a, T>(h: &Hierarchy, r: usize, out: &'a mut [T]) -> Vec<(usize, &'a mut [T])> {
+    let mut rest = out;
+    let mut parts = Vec::with_capacity(4);
+    for &c in h.nodes[r].children() {
+        let len = h.nodes[c as usize].leaf_count() as usize;
+        let (a, b) = rest.split_at_mut(len);
+        parts.push((c as usize, a));
+        rest = b;
+    }
+    parts
+}
+
+#[inline]
+fn ms(d: std::time::Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+#[allow(dead_code)]
+fn budget_take(b: &AtomicI64) -> bool {
+    b.fetch_sub(1, Ordering::Relaxed) > 0
+}

@@ -1,0 +1,386 @@
+//! The refinement oracle (Mertens et al. 2003, §5.2) and the per-link transport evaluation
+//! (§3.1, §3.2): Jensen & Buhler's maximum-solid-angle criteria at the receiver (`ε1`) and the
+//! emitter (`ε2`), the `A'/A` curvature test for near clusters (§5.1.1), and the choice between
+//! a one-point estimate and the semi-analytic form factor (§4).
+
+use crate::bssrdf::Dipole;
+use crate::formfactor::{FormFactorOptions, form_factor};
+use crate::hierarchy::{ClusterGeom, Hierarchy};
+use glam::{DVec3, Vec3};
+
+/// Solid angle standing in for "infinitely close": the point lies inside the cluster's
+/// bounding sphere, so no finite distance describes it.
+const INSIDE: f32 = f32::INFINITY;
+
+/// In [`OracleMode::Transport`], emitters seen under a larger solid angle (sr) are always
+/// near: the one-point estimates the test compares are meaningless that close.
+const MAX_FAR_SOLID_ANGLE: f32 = 1.0;
+
+/// Which refinement criteria the oracle applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OracleMode {
+    /// Mertens §5.2 as published: Jensen & Buhler's solid angles (`ε1` receiver deviation,
+    /// `ε2` emitter size), plus the `A'/A` test for near clusters and the receiver normal test
+    /// (`eps_normal`).
+    SolidAngle,
+    /// Magnitude-aware variant (the "alternatives which take the magnitude of the form factor
+    /// into account" of §5.2 and §7.2): the same two questions, answered with one-point
+    /// transport estimates `A_E R_d` relative to the material's total diffuse reflectance
+    /// `R_d_total`. Receiver: the largest change of the estimate between `R`'s midpoint and its
+    /// children's midpoints (each with its own normal) must stay below `eps1`. Emitter: the
+    /// estimate from `E`'s midpoint and the sum of those from its children must agree within
+    /// `eps2`. Negligible interactions stay coarse however close, and accuracy is spent where
+    /// the transport is large (the default).
+    Transport,
+}
+
+/// Thresholds of the refinement oracle. Solid angles are the projected-area estimate
+/// `ω = A_E / d²` (steradians) of Jensen & Buhler 2002, with `d` the distance to the emitter's
+/// midpoint; a point inside the emitter's bounding sphere sees `ω = ∞`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Oracle {
+    /// Which criteria to apply (default [`OracleMode::Transport`]).
+    pub mode: OracleMode,
+    /// `ε1` (sr): a receiver cluster `R` is opened when the solid angle of the emitter, seen from
+    /// `R`'s children's midpoints, deviates from the one seen from `R`'s midpoint by more than
+    /// this. Smaller is more accurate and gives more links. Default 0.02.
+    pub eps1: f32,
+    /// `ε2` (sr): an emitter seen under a solid angle at most this large from the receiver's
+    /// midpoint is linked with a single point sample `A_E R_d` ("far"); larger ones are "near"
+    /// (Jensen & Buhler would take more than one sample) and are either integrated with the
+    /// semi-analytic form factor (leaves, flat clusters) or opened. Default 0.05.
+    pub eps2: f32,
+    /// Largest solid angle (sr) under which a *near* inner cluster may still be integrated
+    /// with the form factor over its projected boundary polygon instead of being opened, if it
+    /// is flat enough (`min_flatness`). Setting it to `eps2` or below opens every near cluster
+    /// (only faces are integrated with the form factor). Default 0.5.
+    pub eps_near_cluster: f32,
+    /// Least curvature measure `A'/A` (0..1) of a near cluster integrated with the form factor
+    /// (§5.1.1); more curved near clusters are opened. Default 0.98.
+    pub min_flatness: f32,
+    /// Receiver normal criterion (unitless): the dipole sits at the receiver along its normal
+    /// (§4), so a curved receiver cluster, gathering with one averaged normal, errs by about
+    /// `δ_R z_v (σ_tr + 3/d)` relative, with `δ_R = sqrt(2 (1 - A'/A))` its normal spread and
+    /// `d` the distance to the emitter. A receiver is opened when this exceeds `eps_normal`.
+    /// Not in the paper (its oracle is purely geometric); it matters for very translucent
+    /// materials whose dipole is as large as the object. Default 0.05.
+    pub eps_normal: f32,
+}
+
+impl Default for Oracle {
+    fn default() -> Self {
+        Oracle {
+            mode: OracleMode::Transport,
+            eps1: 1e-4,
+            eps2: 1e-3,
+            eps_near_cluster: 0.0,
+            min_flatness: 0.98,
+            eps_normal: 0.05,
+        }
+    }
+}
+
+/// How a link's transport coefficient is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkKind {
+    /// One sample, `A_E R_d(m_E)` (far emitters).
+    PointSample,
+    /// The semi-analytic form factor over the emitter's (projected) polygon (near emitters).
+    FormFactor,
+}
+
+/// What the oracle decides for a candidate link from emitter `E` to receiver `R`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decision {
+    /// Accept the link, evaluated as given.
+    Link(LinkKind),
+    /// Move the link down at the receiver (to each child of `R`).
+    SplitReceiver,
+    /// Move the link down at the emitter (from each child of `E`).
+    SplitEmitter,
+}
+
+/// Solid angle `A_E / d²` of cluster `e` seen from `x`, or infinity inside its bounding sphere.
+#[inline]
+pub fn solid_angle(x: Vec3, e: &ClusterGeom) -> f32 {
+    let d2 = (x - e.midpoint).length_squared();
+    if d2 <= e.radius * e.radius {
+        INSIDE
+    } else {
+        e.area / d2
+    }
+}
+
+/// What the oracle needs to know about the current receiver, computed once per receiver.
+pub(crate) struct ReceiverView {
+    /// Dipole sources at the receiver's midpoint.
+    pub src: ReceiverSources,
+    /// Dipole sources at each child's midpoint (first `child_count`).
+    pub child_src: [ReceiverSources; 4],
+    /// `1 / R_d_total` per channel.
+    pub inv_rtot: [f32; 3],
+}
+
+impl ReceiverView {
+    pub fn new(h: &Hierarchy, d: &DipoleF32, inv_rtot: [f32; 3], r: usize) -> Self {
+        let g = &h.geom[r];
+        let src = ReceiverSources::new(d, g.midpoint, g.normal);
+        let mut child_src = [src; 4];
+        for (k, &c) in h.nodes[r].children().iter().enumerate() {
+            let cg = &h.geom[c as usize];
+            child_src[k] = ReceiverSources::new(d, cg.midpoint, cg.normal);
+        }
+        ReceiverView {
+            src,
+            child_src,
+            inv_rtot,
+        }
+    }
+}
+
+/// Largest per-channel `|a - b| / R_d_total`.
+#[inline]
+fn rel_diff(a: [f32; 3], b: [f32; 3], inv_rtot: [f32; 3]) -> f32 {
+    let mut m = 0.0f32;
+    for c in 0..3 {
+        m = m.max((a[c] - b[c]).abs() * inv_rtot[c]);
+    }
+    m
+}
+
+impl Oracle {
+    /// The decision for receiver `r` and emitter `e` (cluster indices of `h`); `view` is
+    /// `r`'s [`ReceiverView`].
+    ///
+    /// Order (§5.2): first the receiver test (`ε1`), then, before connecting, the emitter test
+    /// (`ε2`). When the receiver test fails but the emitter is near and larger, the emitter is
+    /// opened first (it would be anyway), which keeps links at the higher receiver level.
+    #[inline]
+    pub(crate) fn decide(
+        &self,
+        h: &Hierarchy,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        r: usize,
+        e: usize,
+        estimate: &mut Option<[f32; 3]>,
+    ) -> Decision {
+        *estimate = None;
+        let rn = &h.nodes[r];
+        let en = &h.nodes[e];
+        let rg = &h.geom[r];
+        let eg = &h.geom[e];
+        if r == e && rn.is_leaf() {
+            return Decision::Link(LinkKind::FormFactor);
+        }
+        let w = solid_angle(rg.midpoint, eg);
+        // Emitter verdict: far (one point sample is enough) or near.
+        let far = match self.mode {
+            OracleMode::SolidAngle => w <= self.eps2,
+            OracleMode::Transport => {
+                w != INSIDE && w <= MAX_FAR_SOLID_ANGLE && {
+                    let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                    if en.is_leaf() {
+                        // A face cannot be opened: compare with its one-point estimate from
+                        // two points straddling it instead (its extent along the line of
+                        // sight), a stand-in for Jensen & Buhler's sample count.
+                        w <= self.eps2
+                            || rel_diff(f, [0.0; 3], view.inv_rtot) * w <= self.eps2 * self.eps2
+                    } else {
+                        let mut sum = [0.0f32; 3];
+                        let mut fk = [[0.0f32; 3]; 4];
+                        for (j, &k) in en.children().iter().enumerate() {
+                            let kg = &h.geom[k as usize];
+                            fk[j] = view.src.point_sample(d, kg.midpoint, kg.area);
+                            for c in 0..3 {
+                                sum[c] += fk[j][c];
+                            }
+                        }
+                        // The link spreads E's *average* irradiance: besides the total, the
+                        // transport must be spread over E's children like their areas, or a
+                        // non-uniform irradiance would be mis-weighted.
+                        let mut err = rel_diff(f, sum, view.inv_rtot);
+                        let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
+                        for (j, &k) in en.children().iter().enumerate() {
+                            let share = h.geom[k as usize].area * inv_a;
+                            err += rel_diff(fk[j], sum.map(|v| v * share), view.inv_rtot);
+                        }
+                        // The children's sum is the better estimate: keep it for the link.
+                        *estimate = Some(sum);
+                        err <= self.eps2
+                    }
+                }
+            }
+        };
+        if !rn.is_leaf() {
+            let mut split = rg.normal == Vec3::ZERO || w == INSIDE;
+            if !split {
+                match self.mode {
+                    OracleMode::SolidAngle => {
+                        if rg.projected_area < rg.area {
+                            let spread = (2.0 * (1.0 - rg.flatness())).sqrt();
+                            let inv_d = 1.0 / (rg.midpoint - eg.midpoint).length();
+                            let mut sens = 0.0f32;
+                            for c in 0..3 {
+                                sens = sens.max(d.z_v[c] * (d.sigma_tr[c] + 3.0 * inv_d));
+                            }
+                            split = spread * sens > self.eps_normal;
+                        }
+                        if !split {
+                            for &c in rn.children() {
+                                let wc = solid_angle(h.geom[c as usize].midpoint, eg);
+                                if wc == INSIDE || (wc - w).abs() > self.eps1 {
+                                    split = true;
+                                    break;
+                                }
+                            }
+                        }
+                    }
+                    OracleMode::Transport => {
+                        let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                        for (k, &c) in rn.children().iter().enumerate() {
+                            if solid_angle(h.geom[c as usize].midpoint, eg) == INSIDE {
+                                split = true;
+                                break;
+                            }
+                            let fc = view.child_src[k].point_sample(d, eg.midpoint, eg.area);
+                            if rel_diff(f, fc, view.inv_rtot) > self.eps1 {
+                                split = true;
+                                break;
+                            }
+                        }
+                    }
+                }
+            }
+            if split {
+                if !en.is_leaf() && !far && eg.area > rg.area {
+                    return Decision::SplitEmitter;
+                }
+                return Decision::SplitReceiver;
+            }
+        }
+        if far {
+            return Decision::Link(LinkKind::PointSample);
+        }
+        if en.is_leaf() {
+            return Decision::Link(LinkKind::FormFactor);
+        }
+        if w <= self.eps_near_cluster
+            && eg.flatness() >= self.min_flatness
+            && eg.polygon_area > 0.0
+            && !h.polygon(e).is_empty()
+        {
+            return Decision::Link(LinkKind::FormFactor);
+        }
+        Decision::SplitEmitter
+    }
+}
+
+/// The dipole's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
+/// lengths in mesh units).
+#[derive(Clone, Copy, Debug)]
+pub struct DipoleF32 {
+    /// `sigma_tr` per channel, per mesh unit.
+    pub sigma_tr: [f32; 3],
+    /// `z_r` per channel, mesh units.
+    pub z_r: [f32; 3],
+    /// `z_v` per channel, mesh units.
+    pub z_v: [f32; 3],
+    /// `alpha' / 4π` per channel.
+    pub k: [f32; 3],
+}
+
+impl DipoleF32 {
+    /// The `f32` copy of `d`.
+    pub fn new(d: &Dipole) -> Self {
+        DipoleF32 {
+            sigma_tr: d.sigma_tr.map(|v| v as f32),
+            z_r: d.z_r.map(|v| v as f32),
+            z_v: d.z_v.map(|v| v as f32),
+            k: d.alpha_prime.map(|v| (v / (4.0 * std::f64::consts::PI)) as f32),
+        }
+    }
+}
+
+/// The dipole sources of one receiver point (the dipole sits at the receiver, §4's inverse
+/// interpretation): real sources `x_o - z_r n_o`, virtual sources `x_o + z_v n_o`, per channel.
+#[derive(Clone, Copy, Debug)]
+pub struct ReceiverSources {
+    x_r: [Vec3; 3],
+    x_v: [Vec3; 3],
+}
+
+impl ReceiverSources {
+    /// The sources for receiver point `x_o` with unit normal `n_o`.
+    #[inline]
+    pub fn new(d: &DipoleF32, x_o: Vec3, n_o: Vec3) -> Self {
+        ReceiverSources {
+            x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n_o),
+            x_v: std::array::from_fn(|c| x_o + d.z_v[c] * n_o),
+        }
+    }
+
+    /// One-point form factor `A R_d(p)` for an emitter of area `area` at `p`.
+    #[inline]
+    pub fn point_sample(&self, d: &DipoleF32, p: Vec3, area: f32) -> [f32; 3] {
+        std::array::from_fn(|c| {
+            let s_r = (self.x_r[c] - p).length();
+            let s_v = (self.x_v[c] - p).length();
+            let sig = d.sigma_tr[c];
+            let tr = d.z_r[c] * (1.0 + sig * s_r) * (-sig * s_r).exp() / (s_r * s_r * s_r);
+            let tv = d.z_v[c] * (1.0 + sig * s_v) * (-sig * s_v).exp() / (s_v * s_v * s_v);
+            area * d.k[c] * (tr + tv)
+        })
+    }
+}
+
+/// Evaluates links: holds the dipole in both precisions and a scratch polygon buffer.
+pub(crate) struct Evaluator<'a> {
+    pub h: &'a Hierarchy,
+    pub dipole: &'a Dipole,
+    pub d32: DipoleF32,
+    pub opts: FormFactorOptions,
+    scratch: Vec<DVec3>,
+}
+
+impl<'a> Evaluator<'a> {
+    pub fn new(h: &'a Hierarchy, dipole: &'a Dipole, opts: FormFactorOptions) -> Self {
+        Evaluator {
+            h,
+            dipole,
+            d32: DipoleF32::new(dipole),
+            opts,
+            scratch: Vec::with_capacity(16),
+        }
+    }
+
+    /// The transport coefficient of the link `e -> r` (per channel, unitless).
+    #[inline]
+    pub fn eval(&mut self, src: &ReceiverSources, r: usize, e: usize, kind: LinkKind) -> [f32; 3] {
+        let eg = &self.h.geom[e];
+        match kind {
+            LinkKind::PointSample => src.point_sample(&self.d32, eg.midpoint, eg.area),
+            LinkKind::FormFactor => {
+                let rg = &self.h.geom[r];
+                self.scratch.clear();
+                self.scratch
+                    .extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
+                let f = form_factor(
+                    &self.scratch,
+                    rg.midpoint.as_dvec3(),
+                    rg.normal.as_dvec3(),
+                    self.dipole,
+                    &self.opts,
+                );
+                // The projected polygon stands for the cluster's true area (§5.1.1); scale so
+                // that the far field matches the point sample `A R_d`. Leaves: scale 1.
+                let scale = if self.h.nodes[e].is_leaf() || eg.polygon_area <= 0.0 {
+                    1.0
+                } else {
+                    eg.area as f64 / eg.polygon_area as f64
+                };
+                f.map(|v| (v * scale) as f32)
+            }
+        }
+    }
+}
