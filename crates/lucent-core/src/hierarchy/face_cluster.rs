@@ -45,10 +45,7 @@ impl PartialOrd for Merge {
 impl Ord for Merge {
     fn cmp(&self, o: &Self) -> Ordering {
         // Reversed for a min-heap; ties broken by ids so the build is deterministic.
-        o.cost
-            .total_cmp(&self.cost)
-            .then_with(|| o.a.cmp(&self.a))
-            .then_with(|| o.b.cmp(&self.b))
+        o.cost.total_cmp(&self.cost).then_with(|| o.a.cmp(&self.a)).then_with(|| o.b.cmp(&self.b))
     }
 }
 
@@ -167,12 +164,13 @@ pub fn build(mesh: &Mesh) -> Hierarchy {
         let c = children.len() as u32;
         // Entries may name clusters merged since: resolve them (their lengths add up).
         let mut shared = 0.0;
-        for k in 0..adj[a as usize].len() {
-            let (x, len) = adj[a as usize][k];
+        let list = std::mem::take(&mut adj[a as usize]);
+        for &(x, len) in &list {
             if find(&mut forward, x) == b {
                 shared += len;
             }
         }
+        adj[a as usize] = list;
         let mut nb: Vec<(u32, f64)> = Vec::new();
         for src in [a, b] {
             for &(x, len) in &std::mem::take(&mut adj[src as usize]) {
@@ -195,11 +193,7 @@ pub fn build(mesh: &Mesh) -> Hierarchy {
         alive.push(true);
         forward.push(c);
         for &(x, len) in &nb {
-            heap.push(Merge {
-                cost: merge_cost(p, perimeter[x as usize], len),
-                a: x,
-                b: c,
-            });
+            heap.push(Merge { cost: merge_cost(p, perimeter[x as usize], len), a: x, b: c });
             // The neighbour's own entries for a and b now resolve to c through `forward`.
         }
         adj.push(nb);
@@ -208,11 +202,7 @@ pub fn build(mesh: &Mesh) -> Hierarchy {
     // Size-balanced fallback over the remaining roots (components).
     let mut roots: BinaryHeap<Merge> = (0..children.len() as u32)
         .filter(|&x| alive[x as usize])
-        .map(|x| Merge {
-            cost: area[x as usize],
-            a: x,
-            b: x,
-        })
+        .map(|x| Merge { cost: area[x as usize], a: x, b: x })
         .collect();
     while roots.len() > 1 {
         let x = roots.pop().expect("len > 1").a;
@@ -221,22 +211,10 @@ pub fn build(mesh: &Mesh) -> Hierarchy {
         children.push(vec![x, y]);
         face.push(u32::MAX);
         area.push(area[x as usize] + area[y as usize]);
-        roots.push(Merge {
-            cost: area[c as usize],
-            a: c,
-            b: c,
-        });
+        roots.push(Merge { cost: area[c as usize], a: c, b: c });
     }
     let root = roots.pop().expect("at least one face").a;
-    Hierarchy::from_raw(
-        mesh,
-        RawTree {
-            children,
-            face,
-            polygon: None,
-            root,
-        },
-    )
+    Hierarchy::from_raw(mesh, RawTree { children, face, polygon: None, root })
 }
 
 /// Sums the lengths of repeated neighbour ids (keeps the first occurrence's position order).

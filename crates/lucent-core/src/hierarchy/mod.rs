@@ -27,7 +27,6 @@ use std::collections::{HashMap, HashSet};
 
 pub mod face_cluster;
 
-
 /// Marks "no cluster" (the root's parent, unused child slots).
 pub const NO_NODE: u32 = u32::MAX;
 
@@ -103,11 +102,7 @@ impl ClusterGeom {
     /// bends (0 for a closed surface).
     #[inline]
     pub fn flatness(&self) -> f32 {
-        if self.area > 0.0 {
-            self.projected_area / self.area
-        } else {
-            1.0
-        }
+        if self.area > 0.0 { self.projected_area / self.area } else { 1.0 }
     }
 }
 
@@ -321,10 +316,7 @@ fn leaf_geom(mesh: &Mesh, face: usize) -> ClusterGeom {
     let cross = (b - a).cross(c - a);
     let area = 0.5 * cross.length();
     let midpoint = (a + b + c) / 3.0;
-    let radius = (a - midpoint)
-        .length()
-        .max((b - midpoint).length())
-        .max((c - midpoint).length());
+    let radius = (a - midpoint).length().max((b - midpoint).length()).max((c - midpoint).length());
     ClusterGeom {
         midpoint,
         normal: cross.normalize_or_zero(),
@@ -351,9 +343,7 @@ fn refit_subtree(nodes: &[Node], leaf_faces: &[u32], mesh: &Mesh, i: usize, g: &
         rest = b;
     }
     if n.leaf_count() > PAR_LEAVES {
-        parts
-            .par_iter_mut()
-            .for_each(|(c, s)| refit_subtree(nodes, leaf_faces, mesh, *c, s));
+        parts.par_iter_mut().for_each(|(c, s)| refit_subtree(nodes, leaf_faces, mesh, *c, s));
     } else {
         for (c, s) in parts.iter_mut() {
             refit_subtree(nodes, leaf_faces, mesh, *c, s);
@@ -373,10 +363,8 @@ fn refit_subtree(nodes: &[Node], leaf_faces: &[u32], mesh: &Mesh, i: usize, g: &
     } else {
         parts.iter().map(|(_, s)| s[0].midpoint).sum::<Vec3>() / parts.len() as f32
     };
-    let radius = parts
-        .iter()
-        .map(|(_, s)| (s[0].midpoint - midpoint).length() + s[0].radius)
-        .fold(0.0f32, f32::max);
+    let radius =
+        parts.iter().map(|(_, s)| (s[0].midpoint - midpoint).length() + s[0].radius).fold(0.0f32, f32::max);
     *head = ClusterGeom {
         midpoint,
         normal: nsum.normalize_or_zero(),
@@ -445,11 +433,7 @@ fn chain_single_loop(he: &[(u32, u32)]) -> Vec<u32> {
             break;
         }
     }
-    if v == start && out.len() == he.len() {
-        out
-    } else {
-        Vec::new()
-    }
+    if v == start && out.len() == he.len() { out } else { Vec::new() }
 }
 
 #[cfg(test)]

@@ -68,11 +68,7 @@ impl LinkSet {
     /// Evaluation kind of link `j`.
     #[inline]
     pub fn kind_of(&self, j: usize) -> LinkKind {
-        if self.emitter[j] & FF_BIT != 0 {
-            LinkKind::FormFactor
-        } else {
-            LinkKind::PointSample
-        }
+        if self.emitter[j] & FF_BIT != 0 { LinkKind::FormFactor } else { LinkKind::PointSample }
     }
 }
 
@@ -169,15 +165,18 @@ impl<'a> Ctx<'a> {
         let src = view.src;
         self.stack.clear();
         self.stack.extend_from_slice(cands);
-        let mut estimate = None;
+        let (mut estimate, mut recv_scale) = (None, None);
         while let Some(e) = self.stack.pop() {
             let e = e as usize;
-            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate) {
+            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate, &mut recv_scale) {
                 Decision::Link(kind) => {
-                    let f = match (kind, estimate) {
+                    let mut f = match (kind, estimate) {
                         (LinkKind::PointSample, Some(f)) => f,
                         _ => self.ev.eval(&src, r, e, kind),
                     };
+                    if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
+                        f = std::array::from_fn(|c| f[c] * s[c]);
+                    }
                     match kind {
                         LinkKind::FormFactor => self.form_factors += 1,
                         LinkKind::PointSample => self.point_samples += 1,
@@ -233,11 +232,8 @@ impl HierarchicalSolver {
                 let mut s = Rgb::ZERO;
                 for &c in n.children() {
                     let c = c as usize;
-                    s += if area > 0.0 {
-                        e[c] * (h.geom[c].area / area)
-                    } else {
-                        e[c] / n.child_count as f32
-                    };
+                    s +=
+                        if area > 0.0 { e[c] * (h.geom[c].area / area) } else { e[c] / n.child_count as f32 };
                 }
                 e[i] = s;
             }
@@ -252,10 +248,7 @@ impl HierarchicalSolver {
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
         if h.is_empty() {
-            return Solution {
-                face_b: Vec::new(),
-                stats,
-            };
+            return Solution { face_b: Vec::new(), stats };
         }
         let e_node = self.pull(face_irradiance);
         let t1 = Instant::now();
@@ -278,15 +271,7 @@ impl HierarchicalSolver {
         Solution { face_b, stats }
     }
 
-    fn otf_rec(
-        &self,
-        ctx: &mut Ctx,
-        r: usize,
-        cands: &[u32],
-        b_acc: Rgb,
-        e_node: &[Rgb],
-        out: &mut [Rgb],
-    ) {
+    fn otf_rec(&self, ctx: &mut Ctx, r: usize, cands: &[u32], b_acc: Rgb, e_node: &[Rgb], out: &mut [Rgb]) {
         let mut defer = Vec::new();
         let mut b = b_acc;
         ctx.receive(&self.oracle, r, cands, &mut defer, |e, _, f| {
@@ -320,10 +305,7 @@ impl HierarchicalSolver {
         let t0 = Instant::now();
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
-        let mut set = LinkSet {
-            recv_start: vec![0; h.len() + 1],
-            ..Default::default()
-        };
+        let mut set = LinkSet { recv_start: vec![0; h.len() + 1], ..Default::default() };
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::default()];
@@ -341,8 +323,8 @@ impl HierarchicalSolver {
                 set.emitter.extend_from_slice(&c.emitter);
                 set.ff.extend_from_slice(&c.ff);
             }
-            for i in 0..h.len() {
-                set.recv_start[i + 1] = set.recv_start[i] + counts[i];
+            for (i, &c) in counts.iter().enumerate() {
+                set.recv_start[i + 1] = set.recv_start[i] + c;
             }
             set.dirty = vec![false; total];
         }
@@ -410,24 +392,21 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         const CHUNK: usize = 1024;
         let mut b_node = vec![Rgb::ZERO; h.len()];
-        b_node
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(ci, chunk)| {
-                for (k, b) in chunk.iter_mut().enumerate() {
-                    let r = ci * CHUNK + k;
-                    let (a, z) = (links.recv_start[r] as usize, links.recv_start[r + 1] as usize);
-                    let mut s = [0.0f32; 3];
-                    for j in a..z {
-                        let e = e_node[(links.emitter[j] & !FF_BIT) as usize];
-                        let f = links.ff[j];
-                        s[0] += e.x * f[0];
-                        s[1] += e.y * f[1];
-                        s[2] += e.z * f[2];
-                    }
-                    *b = Rgb::from(s);
+        b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, chunk)| {
+            for (k, b) in chunk.iter_mut().enumerate() {
+                let r = ci * CHUNK + k;
+                let (a, z) = (links.recv_start[r] as usize, links.recv_start[r + 1] as usize);
+                let mut s = [0.0f32; 3];
+                for j in a..z {
+                    let e = e_node[(links.emitter[j] & !FF_BIT) as usize];
+                    let f = links.ff[j];
+                    s[0] += e.x * f[0];
+                    s[1] += e.y * f[1];
+                    s[2] += e.z * f[2];
                 }
-            });
+                *b = Rgb::from(s);
+            }
+        });
         let t2 = Instant::now();
         let face_b = self.push(&mut b_node);
         let t3 = Instant::now();

@@ -9,5 +9,5 @@ pub mod exact;
 pub mod hierarchical;
 pub mod oracle;
 
-pub use hierarchical::{HierarchicalSolver, LinkSet, SolveStats, Solution};
+pub use hierarchical::{HierarchicalSolver, LinkSet, Solution, SolveStats};
 pub use oracle::{LinkKind, Oracle};

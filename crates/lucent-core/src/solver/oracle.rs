@@ -65,17 +65,23 @@ pub struct Oracle {
     /// Not in the paper (its oracle is purely geometric); it matters for very translucent
     /// materials whose dipole is as large as the object. Default 0.05.
     pub eps_normal: f32,
+    /// [`OracleMode::Transport`] only: absolute error floor per link, relative to the
+    /// material's largest `R_d_total` (unitless). Interactions whose estimated error is below
+    /// this are accepted whatever their relative error, so negligible far transport stays
+    /// coarse. Default 1e-5.
+    pub eps_abs: f32,
 }
 
 impl Default for Oracle {
     fn default() -> Self {
         Oracle {
             mode: OracleMode::Transport,
-            eps1: 1e-4,
-            eps2: 1e-3,
+            eps1: 0.01,
+            eps2: 0.01,
             eps_near_cluster: 0.0,
             min_flatness: 0.98,
             eps_normal: 0.05,
+            eps_abs: 1e-5,
         }
     }
 }
@@ -104,11 +110,7 @@ pub enum Decision {
 #[inline]
 pub fn solid_angle(x: Vec3, e: &ClusterGeom) -> f32 {
     let d2 = (x - e.midpoint).length_squared();
-    if d2 <= e.radius * e.radius {
-        INSIDE
-    } else {
-        e.area / d2
-    }
+    if d2 <= e.radius * e.radius { INSIDE } else { e.area / d2 }
 }
 
 /// What the oracle needs to know about the current receiver, computed once per receiver.
@@ -130,25 +132,18 @@ impl ReceiverView {
             let cg = &h.geom[c as usize];
             child_src[k] = ReceiverSources::new(d, cg.midpoint, cg.normal);
         }
-        ReceiverView {
-            src,
-            child_src,
-            inv_rtot,
-        }
+        ReceiverView { src, child_src, inv_rtot }
     }
-}
-
-/// Largest per-channel `|a - b| / R_d_total`.
-#[inline]
-fn rel_diff(a: [f32; 3], b: [f32; 3], inv_rtot: [f32; 3]) -> f32 {
-    let mut m = 0.0f32;
-    for c in 0..3 {
-        m = m.max((a[c] - b[c]).abs() * inv_rtot[c]);
-    }
-    m
 }
 
 impl Oracle {
+    /// Whether the error estimate `err` of transport `f` is within `eps_rel f + eps_abs R_tot`
+    /// in every channel.
+    #[inline]
+    fn within(&self, err: [f32; 3], f: [f32; 3], eps_rel: f32, inv_rtot: [f32; 3]) -> bool {
+        (0..3).all(|c| err[c] * inv_rtot[c] <= eps_rel * f[c] * inv_rtot[c] + self.eps_abs)
+    }
+
     /// The decision for receiver `r` and emitter `e` (cluster indices of `h`); `view` is
     /// `r`'s [`ReceiverView`].
     ///
@@ -156,6 +151,7 @@ impl Oracle {
     /// (`ε2`). When the receiver test fails but the emitter is near and larger, the emitter is
     /// opened first (it would be anyway), which keeps links at the higher receiver level.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn decide(
         &self,
         h: &Hierarchy,
@@ -164,8 +160,10 @@ impl Oracle {
         r: usize,
         e: usize,
         estimate: &mut Option<[f32; 3]>,
+        recv_scale: &mut Option<[f32; 3]>,
     ) -> Decision {
         *estimate = None;
+        *recv_scale = None;
         let rn = &h.nodes[r];
         let en = &h.nodes[e];
         let rg = &h.geom[r];
@@ -174,18 +172,28 @@ impl Oracle {
             return Decision::Link(LinkKind::FormFactor);
         }
         let w = solid_angle(rg.midpoint, eg);
+        let separated = w != INSIDE
+            && (rg.midpoint - eg.midpoint).length_squared()
+                > (rg.radius + eg.radius) * (rg.radius + eg.radius);
         // Emitter verdict: far (one point sample is enough) or near.
         let far = match self.mode {
             OracleMode::SolidAngle => w <= self.eps2,
             OracleMode::Transport => {
-                w != INSIDE && w <= MAX_FAR_SOLID_ANGLE && {
+                // Bounding spheres must be disjoint: one-point estimates at midpoints say
+                // nothing about the near-field where two adjacent clusters touch.
+                separated && w <= MAX_FAR_SOLID_ANGLE && {
                     let f = view.src.point_sample(d, eg.midpoint, eg.area);
                     if en.is_leaf() {
-                        // A face cannot be opened: compare with its one-point estimate from
-                        // two points straddling it instead (its extent along the line of
-                        // sight), a stand-in for Jensen & Buhler's sample count.
-                        w <= self.eps2
-                            || rel_diff(f, [0.0; 3], view.inv_rtot) * w <= self.eps2 * self.eps2
+                        // A face cannot be opened: estimate the one-point (midpoint rule)
+                        // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
+                        // face of circumradius r at distance d (a stand-in for Jensen &
+                        // Buhler's sample count that, unlike a solid angle, sees σ_tr).
+                        let dist = (rg.midpoint - eg.midpoint).length();
+                        let err: [f32; 3] = std::array::from_fn(|c| {
+                            let k = d.sigma_tr[c] + 3.0 / dist;
+                            k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
+                        });
+                        self.within(err, f, self.eps2, view.inv_rtot)
                     } else {
                         let mut sum = [0.0f32; 3];
                         let mut fk = [[0.0f32; 3]; 4];
@@ -199,15 +207,23 @@ impl Oracle {
                         // The link spreads E's *average* irradiance: besides the total, the
                         // transport must be spread over E's children like their areas, or a
                         // non-uniform irradiance would be mis-weighted.
-                        let mut err = rel_diff(f, sum, view.inv_rtot);
+                        let mut err = [0.0f32; 3];
                         let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
-                        for (j, &k) in en.children().iter().enumerate() {
-                            let share = h.geom[k as usize].area * inv_a;
-                            err += rel_diff(fk[j], sum.map(|v| v * share), view.inv_rtot);
+                        for c in 0..3 {
+                            err[c] = (f[c] - sum[c]).abs();
+                            for (j, &k) in en.children().iter().enumerate() {
+                                let share = h.geom[k as usize].area * inv_a;
+                                err[c] += (fk[j][c] - share * sum[c]).abs();
+                            }
                         }
-                        // The children's sum is the better estimate: keep it for the link.
-                        *estimate = Some(sum);
-                        err <= self.eps2
+                        // Keep a better estimate for the link: R_d is convex, so one-point
+                        // estimates fall short systematically, by ~ area x extent² (midpoint
+                        // rule); k children of 1/k the area each err 1/k as much in total, and
+                        // Richardson extrapolation removes the leading term.
+                        let k = en.child_count as f32;
+                        *estimate =
+                            Some(std::array::from_fn(|c| (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)));
+                        self.within(err, sum, self.eps2, view.inv_rtot)
                     }
                 }
             }
@@ -236,18 +252,39 @@ impl Oracle {
                             }
                         }
                     }
+                    OracleMode::Transport if !separated => split = true,
                     OracleMode::Transport => {
                         let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                        let mut avg = [0.0f32; 3];
+                        let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
                         for (k, &c) in rn.children().iter().enumerate() {
-                            if solid_angle(h.geom[c as usize].midpoint, eg) == INSIDE {
+                            let cg = &h.geom[c as usize];
+                            if solid_angle(cg.midpoint, eg) == INSIDE {
                                 split = true;
                                 break;
                             }
                             let fc = view.child_src[k].point_sample(d, eg.midpoint, eg.area);
-                            if rel_diff(f, fc, view.inv_rtot) > self.eps1 {
+                            let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
+                            if !self.within(diff, f, self.eps1, view.inv_rtot) {
                                 split = true;
                                 break;
                             }
+                            for c in 0..3 {
+                                avg[c] += fc[c] * cg.area * inv_a;
+                            }
+                        }
+                        if !split {
+                            // R's value goes to all its leaves, so it should be the *average*
+                            // of F over R, which exceeds F at R's midpoint (R_d is convex): as
+                            // at the emitter, extrapolate from the children's average.
+                            let k = rn.child_count as f32;
+                            *recv_scale = Some(std::array::from_fn(|c| {
+                                if f[c] > 0.0 {
+                                    ((avg[c] + (avg[c] - f[c]) / (k - 1.0)) / f[c]).max(0.0)
+                                } else {
+                                    1.0
+                                }
+                            }));
                         }
                     }
                 }
@@ -345,13 +382,7 @@ pub(crate) struct Evaluator<'a> {
 
 impl<'a> Evaluator<'a> {
     pub fn new(h: &'a Hierarchy, dipole: &'a Dipole, opts: FormFactorOptions) -> Self {
-        Evaluator {
-            h,
-            dipole,
-            d32: DipoleF32::new(dipole),
-            opts,
-            scratch: Vec::with_capacity(16),
-        }
+        Evaluator { h, dipole, d32: DipoleF32::new(dipole), opts, scratch: Vec::with_capacity(16) }
     }
 
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
@@ -363,8 +394,7 @@ impl<'a> Evaluator<'a> {
             LinkKind::FormFactor => {
                 let rg = &self.h.geom[r];
                 self.scratch.clear();
-                self.scratch
-                    .extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
+                self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
                 let f = form_factor(
                     &self.scratch,
                     rg.midpoint.as_dvec3(),

@@ -1,0 +1,158 @@
+//! The hierarchical solver (Mertens §3.2, §5.2, §5.5) against the exact O(N²) solve and against
+//! the closed-form total diffuse reflectance of the dipole.
+
+use glam::Vec3;
+use lucent_core::Rgb;
+use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::formfactor::FormFactorOptions;
+use lucent_core::hierarchy::face_cluster;
+use lucent_core::irradiance::{Light, face_irradiance};
+use lucent_core::mesh::Mesh;
+use lucent_core::solver::{HierarchicalSolver, Oracle, exact};
+
+/// A smooth, non-convex closed blob: an octahedron split `levels` times onto the unit sphere,
+/// stretched and dented (8 * 4^levels faces).
+fn blob(levels: u32) -> Mesh {
+    let mut pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let mut tris: Vec<[u32; 3]> =
+        vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::new();
+        for t in &tris {
+            let mut m = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+                m[k] = *mid.entry((a, b)).or_insert_with(|| {
+                    pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
+                    pos.len() as u32 - 1
+                });
+            }
+            next.extend([[t[0], m[0], m[2]], [m[0], t[1], m[1]], [m[2], m[1], t[2]], [m[0], m[1], m[2]]]);
+        }
+        tris = next;
+    }
+    let pos = pos
+        .iter()
+        .map(|p| Vec3::new(p.x * 1.3, p.y, p.z * 0.8) * (1.0 + 0.15 * (3.0 * p.x).sin() * p.y))
+        .collect();
+    Mesh::new(pos, tris)
+}
+
+/// Square grid of `n x n` quads (two triangles each) of side `size`, centred on the origin in
+/// the plane z = 0, facing +z.
+fn plane(n: u32, size: f32) -> Mesh {
+    let mut pos = Vec::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            pos.push(Vec3::new((i as f32 / n as f32 - 0.5) * size, (j as f32 / n as f32 - 0.5) * size, 0.0));
+        }
+    }
+    let id = |i: u32, j: u32| i * (n + 1) + j;
+    let mut tris = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            tris.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
+            tris.push([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    Mesh::new(pos, tris)
+}
+
+/// `sqrt(mean squared difference over vertices and channels) / rms(reference)`.
+fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (a, b) in reference.iter().zip(test) {
+        for c in 0..3 {
+            num += ((a[c] - b[c]) as f64).powi(2);
+            den += (a[c] as f64).powi(2);
+        }
+    }
+    (num / den).sqrt()
+}
+
+fn point_light() -> [Light; 1] {
+    [Light::Point { position: Vec3::new(2.0, 3.0, 1.5), intensity: Vec3::splat(10.0) }]
+}
+
+#[test]
+fn render_mode_equals_on_the_fly() {
+    let mesh = blob(3);
+    let h = face_cluster::build(&mesh);
+    let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
+    let e = face_irradiance(&mesh, &point_light(), d.eta);
+    let mut s = HierarchicalSolver::new(mesh.clone(), h, d, Oracle::default());
+    let otf = s.solve_on_the_fly(&e);
+    let link_stats = s.link();
+    let render = s.solve_render(&e);
+    assert_eq!(link_stats.links, otf.stats.links);
+    assert_eq!(link_stats.form_factors, otf.stats.form_factors);
+    assert!(rel_rmse(&otf.face_b, &render.face_b) < 1e-5);
+}
+
+#[test]
+fn links_partition_every_receiver_emitter_pair() {
+    let mesh = blob(3);
+    let h = face_cluster::build(&mesh);
+    let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.02);
+    let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+    s.link();
+    let l = s.links().unwrap();
+    let n = mesh.triangles.len();
+    // For every leaf, the links of the leaf and its ancestors must cover every face exactly
+    // once (the discretised integral of eq. 6 counts each emitter face once).
+    for leaf in (0..h.len()).filter(|&i| h.nodes[i].is_leaf()) {
+        let mut cover = vec![0u32; n];
+        let mut r = leaf as u32;
+        while r != u32::MAX {
+            for j in l.recv_start[r as usize] as usize..l.recv_start[r as usize + 1] as usize {
+                let e = &h.nodes[l.emitter_of(j)];
+                (e.leaf_start..e.leaf_end).for_each(|p| cover[p as usize] += 1);
+            }
+            r = h.nodes[r as usize].parent;
+        }
+        assert!(cover.iter().all(|&c| c == 1), "leaf {leaf}");
+    }
+}
+
+/// A plane much wider than the diffusion length under uniform irradiance: `B` at the centre
+/// is `E R_d_total`, the closed form (Jensen et al. 2001, eq. 6), for both solvers.
+#[test]
+fn flat_plane_gives_total_diffuse_reflectance() {
+    // 200 mm square of marble (1/sigma_tr <= 8.6 mm: the edges are > 11 diffusion lengths away).
+    let mesh = plane(24, 1.0);
+    let d = Dipole::new(&Material::by_name("marble").unwrap(), 200.0);
+    let e = vec![Rgb::ONE; mesh.triangles.len()];
+    let centre = mesh.positions.iter().position(|p| p.length() < 1e-6).expect("grid has a centre vertex");
+    let want = d.total_diffuse_reflectance();
+    let exact_b = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
+    let h = face_cluster::build(&mesh);
+    let s = HierarchicalSolver::new(mesh.clone(), h, d, Oracle::default());
+    let hier_b = mesh.face_to_vertex(&s.solve_on_the_fly(&e).face_b);
+    for c in 0..3 {
+        let ex = exact_b[centre][c] as f64;
+        let hi = hier_b[centre][c] as f64;
+        assert!((ex / want[c] - 1.0).abs() < 0.01, "exact ch{c}: {ex} vs {}", want[c]);
+        assert!((hi / want[c] - 1.0).abs() < 0.01, "hierarchical ch{c}: {hi} vs {}", want[c]);
+    }
+}
+
+/// Relative RMSE of per-vertex `B` against the exact solve, at the default thresholds.
+#[test]
+fn accuracy_against_exact() {
+    let mesh = blob(3);
+    let h = face_cluster::build(&mesh);
+    let lights = point_light();
+    for name in ["marble", "skimmilk", "ketchup"] {
+        for scale in [0.01, 0.1, 1.0] {
+            let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale);
+            let e = face_irradiance(&mesh, &lights, d.eta);
+            let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
+            let s = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            let sol = s.solve_on_the_fly(&e);
+            let err = rel_rmse(&want, &mesh.face_to_vertex(&sol.face_b));
+            println!("{name} at {scale} m: rel RMSE {:.3}%, {} links", 100.0 * err, sol.stats.links);
+            assert!(err <= 0.01, "{name} at {scale} m: {:.3}%", 100.0 * err);
+        }
+    }
+}
