@@ -177,12 +177,21 @@ pub struct BenchArgs {
     /// Print one JSON object per line instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// `bench solver` only: sweep the oracle thresholds against error and link count.
+    #[arg(long)]
+    pub sweep: bool,
+    /// `bench solver` only: Mertens table 5 (form factor against point sampling).
+    #[arg(long)]
+    pub table5: bool,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchTarget {
     /// Semi-analytic form factor against converged Monte Carlo (Mertens fig. 3).
     Formfactor,
+    /// Hierarchical solver: Mertens table 3 (links, on-the-fly, incremental and render times on
+    /// a marble butterfly model at 2.5 cm); `--sweep`, `--table5`.
+    Solver,
     /// HTSM frame time for n = 1, 5, 9, 13 at 512^2 and 1024^2 (Shopf fig. 5.9).
     Htsm,
 }

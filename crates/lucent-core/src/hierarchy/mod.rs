@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
 pub mod face_cluster;
+pub mod subdivision;
 
 /// Marks "no cluster" (the root's parent, unused child slots).
 pub const NO_NODE: u32 = u32::MAX;

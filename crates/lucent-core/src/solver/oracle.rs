@@ -4,6 +4,7 @@
 //! a one-point estimate and the semi-analytic form factor (§4).
 
 use crate::bssrdf::Dipole;
+use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::{ClusterGeom, Hierarchy};
 use glam::{DVec3, Vec3};
@@ -377,12 +378,21 @@ pub(crate) struct Evaluator<'a> {
     pub dipole: &'a Dipole,
     pub d32: DipoleF32,
     pub opts: FormFactorOptions,
+    /// Near links by uniform point sampling instead of the form factor (Mertens table 5).
+    pub near_point_sampling: bool,
     scratch: Vec<DVec3>,
 }
 
 impl<'a> Evaluator<'a> {
     pub fn new(h: &'a Hierarchy, dipole: &'a Dipole, opts: FormFactorOptions) -> Self {
-        Evaluator { h, dipole, d32: DipoleF32::new(dipole), opts, scratch: Vec::with_capacity(16) }
+        Evaluator {
+            h,
+            dipole,
+            d32: DipoleF32::new(dipole),
+            opts,
+            near_point_sampling: false,
+            scratch: Vec::with_capacity(16),
+        }
     }
 
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
@@ -395,6 +405,21 @@ impl<'a> Evaluator<'a> {
                 let rg = &self.h.geom[r];
                 self.scratch.clear();
                 self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
+                if self.near_point_sampling {
+                    // Jensen & Buhler 2002 space their samples about one mean free path
+                    // `1/sigma_t'` apart: that many uniform samples over the polygon.
+                    let mfp = self.dipole.z_r.iter().copied().fold(f64::MAX, f64::min);
+                    let n = ((eg.area as f64 / (mfp * mfp)).ceil() as usize).clamp(1, 1 << 16);
+                    let f = sample_estimate(
+                        &self.scratch,
+                        rg.midpoint.as_dvec3(),
+                        rg.normal.as_dvec3(),
+                        self.dipole,
+                        n,
+                        (r as u64) << 32 | e as u64,
+                    );
+                    return f.map(|v| v as f32);
+                }
                 let f = form_factor(
                     &self.scratch,
                     rg.midpoint.as_dvec3(),

@@ -4,10 +4,12 @@ use crate::cli::{BenchArgs, BenchTarget};
 
 mod formfactor;
 mod htsm;
+mod solver;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
+        BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5),
     }
 }
