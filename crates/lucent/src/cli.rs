@@ -217,7 +217,8 @@ pub struct ViewArgs {
     /// Model scale: the largest side of the mesh's bounding box, in metres.
     #[arg(long, default_value_t = 0.05)]
     pub scale: f64,
-    /// Scene file (TOML) with mesh, material, lights and environment.
+    /// Scene file (TOML, as for `lucent render`): mesh, material, scale, exposure, lights and
+    /// environment (courtyard or forest); its deformations are not applied (use the panel).
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Save a PNG of the final frame (3D view and panel) to this path, then exit (scripted run).

@@ -2,8 +2,10 @@
 
 use crate::cli::ViewArgs;
 use crate::viewer::app::{App, Options, WorkerWake};
+use crate::viewer::scene_file;
 use crate::viewer::script::{self, Automation};
 use crate::viewer::state::ViewState;
+use crate::viewer::worker::MeshOrigin;
 use anyhow::Context as _;
 use lucent_core::bssrdf::Material;
 use winit::event_loop::EventLoop;
@@ -25,9 +27,6 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
 /// Checks the arguments and builds the start-up options (before any window opens, so bad input
 /// fails fast with a clear message).
 fn options(args: &ViewArgs) -> anyhow::Result<Options> {
-    if let Some(scene) = &args.scene {
-        anyhow::bail!("--scene {}: scene files are not supported by the viewer yet", scene.display());
-    }
     if let Some(path) = &args.mesh
         && !path.is_file()
     {
@@ -39,7 +38,18 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     if args.width < 200 || args.height < 150 {
         anyhow::bail!("--width/--height must be at least 200x150, got {}x{}", args.width, args.height);
     }
-    let material = Material::by_name(&args.material).context("--material")?;
+    let (mesh, state) = match (&args.scene, &args.mesh) {
+        (Some(_), Some(_)) => anyhow::bail!("give either --scene or --mesh, not both"),
+        (Some(path), None) => {
+            let start = scene_file::load(path)?;
+            (MeshOrigin::Loaded(Box::new(start.mesh)), start.state)
+        }
+        (None, mesh) => {
+            let material = Material::by_name(&args.material).context("--material")?;
+            let origin = mesh.clone().map_or(MeshOrigin::Default, MeshOrigin::File);
+            (origin, ViewState::new(material, args.scale))
+        }
+    };
     let actions = match &args.script {
         Some(s) => script::parse(s)?,
         None => Vec::new(),
@@ -47,10 +57,5 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     let scripted = args.frames.is_some() || args.script.is_some() || args.screenshot.is_some();
     let automation =
         scripted.then(|| Automation::new(args.frames.unwrap_or(10), actions, args.screenshot.clone()));
-    Ok(Options {
-        mesh: args.mesh.clone(),
-        state: ViewState::new(material, args.scale),
-        automation,
-        size: (args.width, args.height),
-    })
+    Ok(Options { mesh, state, automation, size: (args.width, args.height) })
 }

@@ -12,7 +12,7 @@ use super::screenshot::{self, Offscreen};
 use super::script::{Action, Automation, Step};
 use super::state::ViewState;
 use super::ui::{self, Status};
-use super::worker::{Request, Worker};
+use super::worker::{MeshOrigin, Request, Worker};
 use anyhow::Context as _;
 use glam::Vec2;
 use lucent_core::bssrdf::Material;
@@ -32,8 +32,8 @@ pub struct WorkerWake;
 
 /// How the viewer starts.
 pub struct Options {
-    /// Mesh file; the built-in mesh when `None`.
-    pub mesh: Option<PathBuf>,
+    /// Where the mesh comes from.
+    pub mesh: MeshOrigin,
     /// Initial state (material, scale, lights...).
     pub state: ViewState,
     /// Scripted run, if any.
@@ -67,7 +67,7 @@ struct FrameStats {
 
 /// The application.
 pub struct App {
-    mesh_path: Option<PathBuf>,
+    mesh_origin: Option<MeshOrigin>,
     size: (u32, u32),
     proxy: EventLoopProxy<WorkerWake>,
     worker: Option<Worker>,
@@ -89,7 +89,7 @@ impl App {
     /// An app that will open its window when the event loop resumes.
     pub fn new(options: Options, proxy: EventLoopProxy<WorkerWake>) -> Self {
         App {
-            mesh_path: options.mesh,
+            mesh_origin: Some(options.mesh),
             size: options.size,
             proxy,
             worker: None,
@@ -140,7 +140,7 @@ impl App {
         let worker = Worker::spawn(move || {
             let _ = proxy.send_event(WorkerWake);
         });
-        worker.send(Request::Load(self.mesh_path.clone()));
+        worker.send(Request::Load(self.mesh_origin.take().unwrap_or(MeshOrigin::Default)));
         self.worker = Some(worker);
     }
 

@@ -61,17 +61,10 @@ pub struct Solution {
 pub struct Capabilities {
     /// The hierarchical solver with its three modes, timings and link count.
     pub hierarchical: bool,
-    /// Shadowed irradiance.
-    pub shadows: bool,
-    /// Spherical-harmonic environment light.
-    pub environment: bool,
-    /// Spot-light cones.
-    pub spot_lights: bool,
 }
 
 /// This build's capabilities.
-pub const CAPABILITIES: Capabilities =
-    Capabilities { hierarchical: false, shadows: false, environment: false, spot_lights: false };
+pub const CAPABILITIES: Capabilities = Capabilities { hierarchical: false };
 
 /// The mesh shown when no `--mesh` is given: the embedded Stanford bunny when the
 /// hierarchical solver is linked, else a coarse sphere the O(N^2) solve handles interactively.
@@ -153,8 +146,9 @@ impl SolverSession {
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
         let t = Instant::now();
         let e = self.irradiance(mesh, params);
+        let irradiance_ms = ms_since(t);
         let mut solution = solve_exact(mesh, params, &e);
-        solution.timings.irradiance_ms = ms_since(t);
+        solution.timings.irradiance_ms = irradiance_ms;
         solution
     }
 

@@ -11,6 +11,7 @@
 //! * [`worker`]: the solve thread (coalesced requests).
 //! * [`core_adapter`]: every call into `lucent-core`, in one place.
 //! * [`script`], [`screenshot`]: scripted runs and PNG screenshots.
+//! * [`scene_file`]: start-up state from a TOML scene.
 
 pub mod app;
 pub mod camera;
@@ -20,6 +21,7 @@ pub mod input;
 pub mod pick;
 pub mod render;
 pub mod scene;
+pub mod scene_file;
 pub mod screenshot;
 pub mod script;
 pub mod state;

@@ -142,6 +142,7 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::viewer::worker::MeshOrigin;
     use lucent_core::bssrdf::Material;
     use std::time::Duration;
 
@@ -161,7 +162,7 @@ mod tests {
     fn settles_after_the_latest_state_is_solved_and_drawn() {
         let worker = Worker::spawn(|| {});
         let mut scene = Scene::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05));
-        worker.send(Request::Load(None));
+        worker.send(Request::Load(MeshOrigin::Default));
         wait_for(&mut scene, &worker, |s| s.base.is_some());
         scene.sync(&worker);
         assert!(scene.solving() && !scene.settled());

@@ -55,8 +55,8 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status) -> UiRequ
         egui::ScrollArea::vertical().show(ui, |ui| {
             header(ui, status, &mut req);
             section(ui, "Material", true, |ui| material(ui, state));
-            section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights, status));
-            section(ui, "Environment", false, |ui| environment(ui, state, status));
+            section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights));
+            section(ui, "Environment", false, |ui| environment(ui, state));
             section(ui, "Solver", true, |ui| solver(ui, state, status));
             section(ui, "Deformation", true, |ui| deformation(ui, state));
             section(ui, "Timings", true, |ui| timings(ui, status));
@@ -126,7 +126,7 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
     ui.add(Slider::new(&mut state.exposure, 0.05..=50.0).logarithmic(true).text("exposure"));
 }
 
-fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>, status: &Status) {
+fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>) {
     let mut remove = None;
     for (i, l) in lights.iter_mut().enumerate() {
         ui.push_id(i, |ui| {
@@ -152,9 +152,6 @@ fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>, status: &Status) {
             }
             if l.kind == LightKind::Spot {
                 ui.add(Slider::new(&mut l.spot_angle_deg, 1.0..=90.0).text("cone (°)"));
-                if !status.caps.spot_lights {
-                    ui.weak("spot cone not modelled yet: lit as a point light");
-                }
             }
             ui.add(Slider::new(&mut l.power, 0.01..=100.0).logarithmic(true).text("power"));
             ui.separator();
@@ -177,7 +174,7 @@ fn vec3_sliders(ui: &mut Ui, v: &mut Vec3, range: std::ops::RangeInclusive<f32>,
     });
 }
 
-fn environment(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+fn environment(ui: &mut Ui, state: &mut ViewState) {
     let p = &mut state.params;
     ComboBox::from_label("map").selected_text(p.env.label()).show_ui(ui, |ui| {
         for e in EnvChoice::ALL {
@@ -191,13 +188,7 @@ fn environment(ui: &mut Ui, state: &mut ViewState, status: &Status) {
     {
         ui.weak(format!("{path} not found (run from the repository root)"));
     }
-    if !status.caps.environment {
-        ui.weak("environment lighting is not in this build's solver yet");
-    }
     ui.checkbox(&mut p.shadows, "shadows");
-    if !status.caps.shadows {
-        ui.weak("shadows are not in this build's solver yet");
-    }
 }
 
 fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {

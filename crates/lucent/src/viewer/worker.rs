@@ -13,8 +13,8 @@ use std::thread::JoinHandle;
 
 /// A request to the worker.
 pub enum Request {
-    /// Load (or generate, when `None`) the mesh and normalise it.
-    Load(Option<PathBuf>),
+    /// Load the mesh and normalise it.
+    Load(MeshOrigin),
     /// Solve `mesh` under `params`; `generation` identifies the state it was made from.
     Solve {
         /// Increasing number of the UI state this request was made from.
@@ -24,6 +24,16 @@ pub enum Request {
         /// Material, lights, solver settings.
         params: SolveParams,
     },
+}
+
+/// Where the mesh comes from.
+pub enum MeshOrigin {
+    /// The built-in default mesh.
+    Default,
+    /// A mesh file.
+    File(PathBuf),
+    /// A mesh already loaded and normalised (from a scene file).
+    Loaded(Box<Mesh>),
 }
 
 /// A reply from the worker.
@@ -76,7 +86,7 @@ fn run(requests: Receiver<Request>, replies: Sender<Reply>, wake: impl Fn()) {
     let mut session = SolverSession::default();
     while let Some(request) = next_coalesced(&requests) {
         let reply = match request {
-            Request::Load(path) => Reply::Loaded(load(path.as_deref())),
+            Request::Load(origin) => Reply::Loaded(load(origin)),
             Request::Solve { generation, mesh, params } => {
                 let solution = session.solve(&mesh, &params);
                 let t = &solution.timings;
@@ -115,10 +125,11 @@ fn next_coalesced(requests: &Receiver<Request>) -> Option<Request> {
     }
 }
 
-fn load(path: Option<&std::path::Path>) -> Result<Mesh, String> {
-    let mesh = match path {
-        Some(p) => core_adapter::load_mesh(p).map_err(|e| format!("{e:#}"))?,
-        None => core_adapter::default_mesh(),
+fn load(origin: MeshOrigin) -> Result<Mesh, String> {
+    let mesh = match origin {
+        MeshOrigin::File(p) => core_adapter::load_mesh(&p).map_err(|e| format!("{e:#}"))?,
+        MeshOrigin::Default => core_adapter::default_mesh(),
+        MeshOrigin::Loaded(mesh) => return Ok(*mesh),
     };
     if mesh.triangles.is_empty() {
         return Err("the mesh has no triangles".into());
