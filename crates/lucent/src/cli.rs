@@ -84,6 +84,14 @@ pub struct RenderArgs {
     /// Solver.
     #[arg(long, value_enum, default_value_t = Method::Hierarchical)]
     pub method: Method,
+    /// Mode of the hierarchical solve (Mertens §5.5).
+    #[arg(long, value_enum, default_value_t = SolveMode::OnTheFly)]
+    pub mode: SolveMode,
+    /// Deform the mesh before solving: `twist:DEGREES`, `bump:x,y,z,radius,height` (mesh
+    /// units) or `noise:amplitude,frequency`. With `--mode incremental` the links are made on
+    /// the rest mesh and updated incrementally to the deformed one.
+    #[arg(long)]
+    pub deform: Option<String>,
     /// Exposure multiplier applied to radiance before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
@@ -167,6 +175,18 @@ pub enum ToneCurve {
     Gamma,
     /// Exposure, Narkowicz's ACES filmic fit, gamma curve.
     Aces,
+}
+
+/// How the hierarchical solver runs (Mertens §5.5).
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SolveMode {
+    /// Refine and gather from scratch, storing no links.
+    #[default]
+    OnTheFly,
+    /// Store the links, then pull, gather and push over them.
+    Render,
+    /// Link on the rest mesh, then update the links to the deformed mesh (`--deform`).
+    Incremental,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -5,7 +5,7 @@
 //! `--method htsm` takes a separate path ([`render_htsm`]): Shopf 2007 renders on the GPU from
 //! light-view maps and has no per-vertex solve.
 
-use crate::cli::{Method, RenderArgs, ToneCurve};
+use crate::cli::{Method, RenderArgs, SolveMode, ToneCurve};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::Rgb;
@@ -217,29 +217,85 @@ pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
 }
 
 /// Per-face `B` by the method chosen.
-fn solve_faces(method: Method, scene: &Scene, face_irradiance: &[Rgb]) -> Result<Vec<Rgb>> {
+fn solve_faces(
+    method: Method,
+    scene: &Scene,
+    rest: &Mesh,
+    mode: SolveMode,
+    face_irradiance: &[Rgb],
+) -> Result<Vec<Rgb>> {
     let opts = FormFactorOptions::default();
     Ok(match method {
         Method::Exact => solver::exact::solve(&scene.mesh, &scene.dipole, face_irradiance, &opts),
-        Method::Hierarchical => solve_hierarchical(scene, face_irradiance, &opts)?,
+        Method::Hierarchical => solve_hierarchical(scene, rest, mode, face_irradiance, &opts)?,
         Method::Htsm => bail!("--method htsm has no per-face solve"),
     })
 }
 
-/// The hierarchical solve (Mertens §5). Until `solver::hierarchical` lands this is the exact
-/// solve, which gives the same answer more slowly.
-fn solve_hierarchical(scene: &Scene, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Result<Vec<Rgb>> {
-    log::warn!("the hierarchical solver is not available yet; using the exact solver");
-    Ok(solver::exact::solve(&scene.mesh, &scene.dipole, face_irradiance, opts))
+/// The hierarchical solve (Mertens §3.2, §5.5) over a face cluster hierarchy, in the mode of
+/// `--mode`. `rest` is the undeformed mesh (links of `--mode incremental` are made on it first).
+fn solve_hierarchical(
+    scene: &Scene,
+    rest: &Mesh,
+    mode: SolveMode,
+    face_irradiance: &[Rgb],
+    opts: &FormFactorOptions,
+) -> Result<Vec<Rgb>> {
+    let h = lucent_core::hierarchy::face_cluster::build(rest);
+    let oracle = solver::Oracle::default();
+    let mut s = solver::HierarchicalSolver::new(rest.clone(), h, scene.dipole, oracle);
+    s.ff_opts = *opts;
+    let sol = match mode {
+        SolveMode::OnTheFly => {
+            s.set_positions(&scene.mesh.positions);
+            s.solve_on_the_fly(face_irradiance)
+        }
+        SolveMode::Render => {
+            s.set_positions(&scene.mesh.positions);
+            s.solve_render(face_irradiance)
+        }
+        SolveMode::Incremental => {
+            s.link();
+            let st = s.update_incremental(&scene.mesh.positions, None);
+            log::info!("incremental update: {} links, {:.1} ms", st.links, st.total_ms);
+            s.solve_render(face_irradiance)
+        }
+    };
+    log::info!(
+        "hierarchical ({mode:?}): {} links, {} form factors, {:.1} ms",
+        sol.stats.links,
+        sol.stats.form_factors,
+        sol.stats.total_ms
+    );
+    Ok(sol.face_b)
 }
 
 /// Mertens 2003: solve on the CPU, then rasterise per-vertex radiance on the GPU.
 fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(image::RgbaImage, Timings)> {
+    // `--deform`: solve and draw the deformed mesh (the rest mesh stays for incremental mode).
+    let deformed = match &args.deform {
+        Some(spec) => {
+            let d: lucent_core::mesh::deform::Deformation =
+                spec.parse().with_context(|| format!("--deform {spec:?}"))?;
+            let mut pos = Vec::new();
+            d.apply(&scene.mesh, 1.0, &mut pos);
+            Some(Scene {
+                source: scene.source.clone(),
+                mesh: Mesh::new(pos, scene.mesh.triangles.clone()),
+                material: scene.material.clone(),
+                dipole: scene.dipole,
+                lights: scene.lights.clone(),
+            })
+        }
+        None => None,
+    };
+    let rest = &scene.mesh;
+    let scene = deformed.as_ref().unwrap_or(scene);
     // The adapter first: without one, fail before the (possibly long) solve.
     let ctx = GpuContext::new()?;
     let t = Instant::now();
     let e = irradiance::face_irradiance(&scene.mesh, &scene.lights, scene.material.eta);
-    let b = solve_faces(method, scene, &e)?;
+    let b = solve_faces(method, scene, rest, args.mode, &e)?;
     let radiance = shading::diffuse_radiance(&scene.mesh.face_to_vertex(&b));
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
 

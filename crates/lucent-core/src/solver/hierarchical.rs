@@ -572,6 +572,15 @@ impl HierarchicalSolver {
         stats
     }
 
+    /// Moves the mesh to `positions` (same topology) and refits the hierarchy, dropping any
+    /// stored links (use [`HierarchicalSolver::update_incremental`] to keep and update them).
+    pub fn set_positions(&mut self, positions: &[glam::Vec3]) {
+        assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
+        self.mesh.positions.copy_from_slice(positions);
+        self.hierarchy.refit(&self.mesh);
+        self.links = None;
+    }
+
     /// Changes the material: every stored link's coefficient becomes stale and is recomputed by
     /// the next [`HierarchicalSolver::update_incremental`] (the oracle is geometric, so the
     /// links themselves stay).
