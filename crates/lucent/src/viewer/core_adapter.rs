@@ -1,18 +1,18 @@
 //! The viewer's only contact with `lucent-core`: mesh loading, deformation, lights and the
 //! solve, each behind one small function so that the viewer follows the core's API in one place.
 
-use super::state::{Deformations, EnvChoice, LightKind, LightSpec, SolveParams};
+use super::state::{Deformations, EnvChoice, LightKind, LightSpec, SolveParams, SolverMode};
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Dipole;
-use lucent_core::formfactor::FormFactorOptions;
+use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{
     EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed,
 };
 use lucent_core::mesh::deform::{self, Deformer as _};
 use lucent_core::mesh::{Mesh, embedded, generate};
 use lucent_core::shading::diffuse_radiance;
-use lucent_core::solver::exact;
+use lucent_core::solver::{HierarchicalSolver, Oracle, SolveStats};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -64,7 +64,7 @@ pub struct Capabilities {
 }
 
 /// This build's capabilities.
-pub const CAPABILITIES: Capabilities = Capabilities { hierarchical: false };
+pub const CAPABILITIES: Capabilities = Capabilities { hierarchical: true };
 
 /// The mesh shown when no `--mesh` is given: the embedded Stanford bunny when the
 /// hierarchical solver is linked, else a coarse sphere the O(N^2) solve handles interactively.
@@ -139,6 +139,14 @@ pub fn core_lights(lights: &[LightSpec]) -> Vec<Light> {
 pub struct SolverSession {
     shadows: Option<(ShadowCaster, usize)>,
     environment: Option<(EnvChoice, Option<Environment>)>,
+    hierarchical: Option<Hierarchical>,
+}
+
+/// The hierarchical solver with what its links were made for.
+struct Hierarchical {
+    solver: HierarchicalSolver,
+    dipole: Dipole,
+    eps: (f64, f64),
 }
 
 impl SolverSession {
@@ -147,9 +155,79 @@ impl SolverSession {
         let t = Instant::now();
         let e = self.irradiance(mesh, params);
         let irradiance_ms = ms_since(t);
-        let mut solution = solve_exact(mesh, params, &e);
+        let mut solution = self.solve_hierarchical(mesh, params, &e);
         solution.timings.irradiance_ms = irradiance_ms;
         solution
+    }
+
+    /// Mertens §5.5: on-the-fly traverses from scratch; render reuses the links and relinks
+    /// from scratch after a geometry, material or threshold change; incremental re-evaluates
+    /// only the links that the change touched.
+    fn solve_hierarchical(&mut self, mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
+        let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
+        let eps = (params.epsilon1, params.epsilon2);
+        let h = self.hierarchy_for(mesh, dipole, eps);
+        let moved = h.solver.mesh.positions != mesh.positions;
+        let changed = moved || h.dipole != dipole || h.eps != eps;
+        let mut link_stats = SolveStats::default();
+        let solution = match params.mode {
+            SolverMode::OnTheFly => {
+                move_to(&mut h.solver, mesh, moved);
+                h.solver.dipole = dipole;
+                h.solver.solve_on_the_fly(e)
+            }
+            SolverMode::Render => {
+                if changed || h.solver.links().is_none() {
+                    move_to(&mut h.solver, mesh, moved);
+                    h.solver.dipole = dipole;
+                    link_stats = h.solver.link();
+                }
+                h.solver.solve_render(e)
+            }
+            SolverMode::Incremental => {
+                if h.dipole != dipole {
+                    h.solver.set_dipole(dipole);
+                }
+                if h.eps != eps {
+                    h.solver.link();
+                }
+                link_stats = h.solver.update_incremental(&mesh.positions, None);
+                h.solver.solve_render(e)
+            }
+        };
+        h.dipole = dipole;
+        h.eps = eps;
+        let s = solution.stats;
+        let clusters = params.cluster_face.and_then(|f| cluster_colours(&h.solver, f as usize));
+        Solution {
+            vertex_radiance: diffuse_radiance(&mesh.face_to_vertex(&solution.face_b)),
+            timings: Timings {
+                irradiance_ms: 0.0,
+                link_ms: s.link_ms + link_stats.link_ms,
+                pull_ms: s.pull_ms,
+                gather_ms: s.gather_ms,
+                push_ms: s.push_ms,
+            },
+            links: Some(s.links),
+            solver: "hierarchical",
+            clusters,
+        }
+    }
+
+    /// The solver for `mesh`'s topology, built (hierarchy and all) when the topology changed.
+    fn hierarchy_for(&mut self, mesh: &Mesh, dipole: Dipole, eps: (f64, f64)) -> &mut Hierarchical {
+        let same = self.hierarchical.as_ref().is_some_and(|h| {
+            h.solver.mesh.triangles == mesh.triangles && h.solver.mesh.positions.len() == mesh.positions.len()
+        });
+        if !same {
+            let oracle = Oracle { eps1: eps.0 as f32, eps2: eps.1 as f32, ..Oracle::default() };
+            let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(mesh), dipole, oracle);
+            self.hierarchical = Some(Hierarchical { solver, dipole, eps });
+        }
+        let h = self.hierarchical.as_mut().expect("set above");
+        h.solver.oracle.eps1 = eps.0 as f32;
+        h.solver.oracle.eps2 = eps.1 as f32;
+        h
     }
 
     /// Fresnel-transmitted irradiance at the face midpoints (Mertens §5.3): lights, shadowed
@@ -211,20 +289,39 @@ pub fn level_colour(level: usize) -> Rgb {
     Rgb::from_array(PALETTE[level % PALETTE.len()])
 }
 
-/// The exact O(N^2) solve (every face against every face) for face irradiance `e`.
-fn solve_exact(mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
-    let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
-    let mut timings = Timings::default();
+/// Moves the solver's mesh to `mesh`'s positions and refits the hierarchy (if `moved`).
+fn move_to(solver: &mut HierarchicalSolver, mesh: &Mesh, moved: bool) {
+    if moved {
+        solver.mesh.positions.copy_from_slice(&mesh.positions);
+        solver.hierarchy.refit(&solver.mesh);
+    }
+}
 
-    let t = Instant::now();
-    let b = exact::solve(mesh, &dipole, e, &FormFactorOptions::default());
-    timings.gather_ms = ms_since(t);
-
-    let t = Instant::now();
-    let vertex_radiance = diffuse_radiance(&mesh.face_to_vertex(&b));
-    timings.push_ms = ms_since(t);
-
-    Solution { vertex_radiance, timings, links: None, solver: "exact O(N^2)", clusters: None }
+/// Figure 6.9: per-vertex colours showing the clusters that face `face` gathers from (the
+/// links of its leaf and of every ancestor), each coloured by its hierarchy level; faces it
+/// does not gather from are dark grey, the face itself white. Needs stored links.
+fn cluster_colours(solver: &HierarchicalSolver, face: usize) -> Option<Vec<Rgb>> {
+    let links = solver.links()?;
+    let h = &solver.hierarchy;
+    let mesh = &solver.mesh;
+    let mut colours = vec![Rgb::splat(0.08); mesh.triangles.len()];
+    let mut r = *h.face_node.get(face)? as usize;
+    loop {
+        for j in links.recv_start[r] as usize..links.recv_start[r + 1] as usize {
+            let e = &h.nodes[links.emitter_of(j)];
+            let c = level_colour(e.level as usize);
+            for leaf in e.leaf_start..e.leaf_end {
+                colours[h.leaf_faces[leaf as usize] as usize] = c;
+            }
+        }
+        let parent = h.nodes[r].parent;
+        if parent as usize >= h.nodes.len() {
+            break;
+        }
+        r = parent as usize;
+    }
+    colours[face] = Rgb::ONE;
+    Some(mesh.face_to_vertex(&colours))
 }
 
 fn ms_since(t: Instant) -> f64 {

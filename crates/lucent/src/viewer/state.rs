@@ -229,7 +229,7 @@ impl ViewState {
                 env: EnvChoice::None,
                 env_rotation_deg: 0.0,
                 env_strength: 1.0,
-                mode: SolverMode::OnTheFly,
+                mode: SolverMode::Render,
                 epsilon1: 1e-3,
                 epsilon2: 1e-2,
                 shadows: true,

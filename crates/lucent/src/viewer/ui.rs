@@ -201,7 +201,7 @@ fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
     ui.add(Slider::new(&mut p.epsilon1, 1e-6..=1e-1).logarithmic(true).text("ε1"));
     ui.add(Slider::new(&mut p.epsilon2, 1e-5..=1.0).logarithmic(true).text("ε2"));
     if !status.caps.hierarchical {
-        ui.weak("hierarchical solver not linked yet: every mode runs the exact O(N²) solve");
+        ui.weak("hierarchical solver not linked");
     }
     ui.checkbox(&mut state.show_clusters, "figure 6.9: clusters gathered by a triangle");
     if state.show_clusters {
