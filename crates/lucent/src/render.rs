@@ -117,7 +117,7 @@ fn output_dir(out: &Path) -> PathBuf {
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     let (source, mesh) = match &args.mesh {
         Some(path) => (path.display().to_string(), lucent_core::mesh::load_mesh(path)?),
-        None => ("embedded bunny".to_string(), default_mesh()),
+        None => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny()),
     };
     let material = Material::by_name(&args.material)?;
     let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, args.scale);
@@ -128,49 +128,6 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         args.light.iter().map(|s| parse_light(s, center)).collect::<Result<Vec<_>>>()?
     };
     Ok(Scene { source, mesh, material, dipole, lights })
-}
-
-/// The mesh of `lucent render` without `--mesh`.
-// TODO(mesh): `lucent_core::mesh::embedded::bunny()` once it is on main; an icosahedron until then.
-fn default_mesh() -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let p = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ];
-    let tris = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    Mesh::new(p.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect(), tris)
 }
 
 /// Behind (-z, away from the default camera) and above the object, at 2.5 bounding radii.
