@@ -17,6 +17,13 @@ const INSIDE: f32 = f32::INFINITY;
 /// near: the one-point estimates the test compares are meaningless that close.
 const MAX_FAR_SOLID_ANGLE: f32 = 1.0;
 
+/// In [`OracleMode::Transport`], a dipole source closer to an emitter's midpoint than this
+/// many emitter radii makes the emitter near: `R_d` is singular at the sources, and a real
+/// source (depth `z_r` below the receiver) can lie right under an emitter on the far side of a
+/// thin part, where one-point estimates miss a spike that dominates `B` (translucent
+/// materials at small scales).
+const SOURCE_MARGIN: f32 = 2.0;
+
 /// Which refinement criteria the oracle applies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OracleMode {
@@ -44,17 +51,23 @@ pub struct Oracle {
     pub mode: OracleMode,
     /// `ε1` (sr): a receiver cluster `R` is opened when the solid angle of the emitter, seen from
     /// `R`'s children's midpoints, deviates from the one seen from `R`'s midpoint by more than
-    /// this. Smaller is more accurate and gives more links. Default 0.02.
+    /// this. Smaller is more accurate and gives more links. In [`OracleMode::Transport`]:
+    /// the largest relative change (unitless) of the one-point transport estimate between
+    /// `R`'s midpoint and its children's. Default 0.1 (transport; the solid-angle mode of the
+    /// paper used 0.02).
     pub eps1: f32,
     /// `ε2` (sr): an emitter seen under a solid angle at most this large from the receiver's
     /// midpoint is linked with a single point sample `A_E R_d` ("far"); larger ones are "near"
     /// (Jensen & Buhler would take more than one sample) and are either integrated with the
-    /// semi-analytic form factor (leaves, flat clusters) or opened. Default 0.05.
+    /// semi-analytic form factor (leaves, flat clusters) or opened. In
+    /// [`OracleMode::Transport`]: the largest relative disagreement (unitless) between `E`'s
+    /// one-point estimate and its children's (in total and in their spread over the children).
+    /// Default 0.1 (transport; the solid-angle mode of the paper used 0.05).
     pub eps2: f32,
     /// Largest solid angle (sr) under which a *near* inner cluster may still be integrated
     /// with the form factor over its projected boundary polygon instead of being opened, if it
     /// is flat enough (`min_flatness`). Setting it to `eps2` or below opens every near cluster
-    /// (only faces are integrated with the form factor). Default 0.5.
+    /// (only faces are integrated with the form factor). Default 0 (off).
     pub eps_near_cluster: f32,
     /// Least curvature measure `A'/A` (0..1) of a near cluster integrated with the form factor
     /// (§5.1.1); more curved near clusters are opened. Default 0.98.
@@ -69,7 +82,7 @@ pub struct Oracle {
     /// [`OracleMode::Transport`] only: absolute error floor per link, relative to the
     /// material's largest `R_d_total` (unitless). Interactions whose estimated error is below
     /// this are accepted whatever their relative error, so negligible far transport stays
-    /// coarse. Default 1e-5.
+    /// coarse. Default 1e-4.
     pub eps_abs: f32,
 }
 
@@ -77,12 +90,12 @@ impl Default for Oracle {
     fn default() -> Self {
         Oracle {
             mode: OracleMode::Transport,
-            eps1: 0.01,
-            eps2: 0.01,
+            eps1: 0.1,
+            eps2: 0.1,
             eps_near_cluster: 0.0,
             min_flatness: 0.98,
             eps_normal: 0.05,
-            eps_abs: 1e-5,
+            eps_abs: 1e-4,
         }
     }
 }
@@ -122,6 +135,10 @@ pub(crate) struct ReceiverView {
     pub child_src: [ReceiverSources; 4],
     /// `1 / R_d_total` per channel.
     pub inv_rtot: [f32; 3],
+    /// Bound on how far the receiver's leaves' normals stray from its average normal (0 for a
+    /// face, up to 2): the leaves' dipole sources lie within `radius + spread z` of the
+    /// receiver's own sources.
+    pub spread: f32,
 }
 
 impl ReceiverView {
@@ -133,7 +150,10 @@ impl ReceiverView {
             let cg = &h.geom[c as usize];
             child_src[k] = ReceiverSources::new(d, cg.midpoint, cg.normal);
         }
-        ReceiverView { src, child_src, inv_rtot }
+        // `sqrt(2 (1 - A'/A))` is an RMS normal deviation; twice it stands in for the maximum.
+        let spread =
+            if h.nodes[r].is_leaf() { 0.0 } else { (2.0 * (2.0 * (1.0 - g.flatness())).sqrt()).min(2.0) };
+        ReceiverView { src, child_src, inv_rtot, spread }
     }
 }
 
@@ -182,51 +202,55 @@ impl Oracle {
             OracleMode::Transport => {
                 // Bounding spheres must be disjoint: one-point estimates at midpoints say
                 // nothing about the near-field where two adjacent clusters touch.
-                separated && w <= MAX_FAR_SOLID_ANGLE && {
-                    let f = view.src.point_sample(d, eg.midpoint, eg.area);
-                    if en.is_leaf() {
-                        // A face cannot be opened: estimate the one-point (midpoint rule)
-                        // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
-                        // face of circumradius r at distance d (a stand-in for Jensen &
-                        // Buhler's sample count that, unlike a solid angle, sees σ_tr).
-                        let dist = (rg.midpoint - eg.midpoint).length();
-                        let err: [f32; 3] = std::array::from_fn(|c| {
-                            let k = d.sigma_tr[c] + 3.0 / dist;
-                            k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
-                        });
-                        self.within(err, f, self.eps2, view.inv_rtot)
-                    } else {
-                        let mut sum = [0.0f32; 3];
-                        let mut fk = [[0.0f32; 3]; 4];
-                        for (j, &k) in en.children().iter().enumerate() {
-                            let kg = &h.geom[k as usize];
-                            fk[j] = view.src.point_sample(d, kg.midpoint, kg.area);
-                            for c in 0..3 {
-                                sum[c] += fk[j][c];
-                            }
-                        }
-                        // The link spreads E's *average* irradiance: besides the total, the
-                        // transport must be spread over E's children like their areas, or a
-                        // non-uniform irradiance would be mis-weighted.
-                        let mut err = [0.0f32; 3];
-                        let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
-                        for c in 0..3 {
-                            err[c] = (f[c] - sum[c]).abs();
+                separated
+                    && w <= MAX_FAR_SOLID_ANGLE
+                    && view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, 0.0, 0.0)
+                    && {
+                        let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                        if en.is_leaf() {
+                            // A face cannot be opened: estimate the one-point (midpoint rule)
+                            // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
+                            // face of circumradius r at distance d (a stand-in for Jensen &
+                            // Buhler's sample count that, unlike a solid angle, sees σ_tr).
+                            let dist = view.src.nearest(eg.midpoint);
+                            let err: [f32; 3] = std::array::from_fn(|c| {
+                                let k = d.sigma_tr[c] + 3.0 / dist[c];
+                                k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
+                            });
+                            self.within(err, f, self.eps2, view.inv_rtot)
+                        } else {
+                            let mut sum = [0.0f32; 3];
+                            let mut fk = [[0.0f32; 3]; 4];
                             for (j, &k) in en.children().iter().enumerate() {
-                                let share = h.geom[k as usize].area * inv_a;
-                                err[c] += (fk[j][c] - share * sum[c]).abs();
+                                let kg = &h.geom[k as usize];
+                                fk[j] = view.src.point_sample(d, kg.midpoint, kg.area);
+                                for c in 0..3 {
+                                    sum[c] += fk[j][c];
+                                }
                             }
+                            // The link spreads E's *average* irradiance: besides the total, the
+                            // transport must be spread over E's children like their areas, or a
+                            // non-uniform irradiance would be mis-weighted.
+                            let mut err = [0.0f32; 3];
+                            let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
+                            for c in 0..3 {
+                                err[c] = (f[c] - sum[c]).abs();
+                                for (j, &k) in en.children().iter().enumerate() {
+                                    let share = h.geom[k as usize].area * inv_a;
+                                    err[c] += (fk[j][c] - share * sum[c]).abs();
+                                }
+                            }
+                            // Keep a better estimate for the link: R_d is convex, so one-point
+                            // estimates fall short systematically, by ~ area x extent² (midpoint
+                            // rule); k children of 1/k the area each err 1/k as much in total, and
+                            // Richardson extrapolation removes the leading term.
+                            let k = en.child_count as f32;
+                            *estimate = Some(std::array::from_fn(|c| {
+                                (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)
+                            }));
+                            self.within(err, sum, self.eps2, view.inv_rtot)
                         }
-                        // Keep a better estimate for the link: R_d is convex, so one-point
-                        // estimates fall short systematically, by ~ area x extent² (midpoint
-                        // rule); k children of 1/k the area each err 1/k as much in total, and
-                        // Richardson extrapolation removes the leading term.
-                        let k = en.child_count as f32;
-                        *estimate =
-                            Some(std::array::from_fn(|c| (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)));
-                        self.within(err, sum, self.eps2, view.inv_rtot)
                     }
-                }
             }
         };
         if !rn.is_leaf() {
@@ -253,7 +277,18 @@ impl Oracle {
                             }
                         }
                     }
-                    OracleMode::Transport if !separated => split = true,
+                    OracleMode::Transport
+                        if !separated
+                            || !view.src.clear_of(
+                                d,
+                                eg.midpoint,
+                                SOURCE_MARGIN * eg.radius,
+                                rg.radius,
+                                view.spread,
+                            ) =>
+                    {
+                        split = true
+                    }
                     OracleMode::Transport => {
                         let f = view.src.point_sample(d, eg.midpoint, eg.area);
                         let mut avg = [0.0f32; 3];
@@ -356,6 +391,26 @@ impl ReceiverSources {
             x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n_o),
             x_v: std::array::from_fn(|c| x_o + d.z_v[c] * n_o),
         }
+    }
+
+    /// Whether every source is farther from `p` than `margin + base + spread z` (its own `z`):
+    /// the sources of all points within `base` of the receiver point whose normals stray by at
+    /// most `spread` stay `margin` away from `p`.
+    #[inline]
+    pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
+        (0..3).all(|c| {
+            let rr = margin + base + spread * d.z_r[c];
+            let rv = margin + base + spread * d.z_v[c];
+            (self.x_r[c] - p).length_squared() > rr * rr && (self.x_v[c] - p).length_squared() > rv * rv
+        })
+    }
+
+    /// Distance from `p` to the nearer of the two sources, per channel.
+    #[inline]
+    pub fn nearest(&self, p: Vec3) -> [f32; 3] {
+        std::array::from_fn(|c| {
+            (self.x_r[c] - p).length_squared().min((self.x_v[c] - p).length_squared()).sqrt()
+        })
     }
 
     /// One-point form factor `A R_d(p)` for an emitter of area `area` at `p`.
