@@ -238,7 +238,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 0.05)]
     pub scale: f64,
     /// Scene file (TOML, as for `lucent render`): mesh, material, scale, exposure, lights and
-    /// environment (courtyard or forest); its deformations are not applied (use the panel).
+    /// environment (courtyard or forest); its deformations are baked into the starting mesh.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Save a PNG of the final frame (3D view and panel) to this path, then exit (scripted run).

@@ -1,7 +1,7 @@
 //! `lucent view --scene FILE`: a TOML scene (see [`crate::scene`]) turned into the viewer's
 //! start-up state. The viewer works in normalised mesh units (centred, bounding-box side 1), so
-//! light positions and intensities are converted; deformations in the file are not applied (the
-//! panel's tools replace them) and are reported.
+//! light positions and intensities are converted. The file's deformations are baked into the mesh
+//! the viewer starts from; the panel's tools (dent, twist, noise) then act on top of them.
 
 use super::core_adapter;
 use super::state::{EnvChoice, LightKind, LightSpec, ViewState};
@@ -22,9 +22,11 @@ pub struct SceneStart {
 /// Loads `path` (errors name the file) and converts it.
 pub fn load(path: &Path) -> anyhow::Result<SceneStart> {
     let scene = Scene::load(path)?;
-    let rest = scene.load_mesh()?;
-    if !scene.deform.is_empty() {
-        log::warn!("{}: deformations are not applied by the viewer (use the panel)", path.display());
+    let mut rest = scene.load_mesh()?;
+    let mut deformed = Vec::new();
+    for d in scene.deformations()? {
+        d.apply(&rest, 1.0, &mut deformed);
+        rest = Mesh::new(std::mem::take(&mut deformed), rest.triangles);
     }
     let (lo, hi) = rest.bounds();
     let (centre, extent) = (0.5 * (lo + hi), rest.extent().max(1e-12));
