@@ -38,43 +38,45 @@ fn differs_from_background(p: &image::Rgb<u8>) -> bool {
     p.0.iter().zip(BACKGROUND).any(|(a, b)| a.abs_diff(b) > 8)
 }
 
-#[test]
-fn scripted_dent_and_light_move_change_the_image() {
+/// Runs `lucent view` under Xvfb in `dir` with `script`, saving the final frame to `last`;
+/// returns the viewer's stdout.
+fn run_viewer(dir: &Path, script: &str, last: &str) -> String {
     let xvfb = find_on_path("xvfb-run").unwrap_or_else(|| {
         panic!(
             "xvfb-run is not installed: the viewer test needs a virtual X server. Install it \
              with `apt-get install xvfb xauth` (CI does this in .ci/run)."
         )
     });
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_xvfb");
-    std::fs::create_dir_all(&dir).unwrap();
-    for f in ["before.png", "after.png"] {
-        let _ = std::fs::remove_file(dir.join(f));
-    }
+    std::fs::create_dir_all(dir).unwrap();
     let output = Command::new(xvfb)
         .args(["-a", "-s", "-screen 0 1280x1024x24"])
         .arg(env!("CARGO_BIN_EXE_lucent"))
         .args(["view", "--width", "720", "--height", "480", "--frames", "6"])
-        .args(["--script", "shot:before.png;dent:0.1,0.15,0.5;light:0,1,-2"])
-        .args(["--screenshot", "after.png"])
-        .current_dir(&dir)
+        .args(["--script", script])
+        .args(["--screenshot", last])
+        .current_dir(dir)
         // Xvfb is an X server: keep winit from choosing a Wayland compositor of the caller's.
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .expect("running xvfb-run");
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
         output.status.success(),
         "lucent view failed ({}):\nstdout:\n{stdout}\nstderr:\n{stderr}",
         output.status
     );
+    stdout
+}
 
-    let before = load(&dir.join("before.png"));
-    let after = load(&dir.join("after.png"));
+/// Checks that the object shows in both screenshots' 3D view and that the view changed between
+/// them; returns the changed fraction of the view.
+fn check_object_and_change(dir: &Path, stdout: &str, first: &str, second: &str) -> f64 {
+    let before = load(&dir.join(first));
+    let after = load(&dir.join(second));
     assert_eq!(before.dimensions(), after.dimensions());
-    let [x, y, w, h] = viewport_of(&stdout, "after.png");
-    assert_eq!([x, y, w, h], viewport_of(&stdout, "before.png"));
+    let [x, y, w, h] = viewport_of(stdout, second);
+    assert_eq!([x, y, w, h], viewport_of(stdout, first));
     assert!(w > 100 && h > 100, "3D viewport too small: {w}x{h}");
 
     // The object is visible: the viewport's centre is not background, its corner is.
@@ -88,7 +90,6 @@ fn scripted_dent_and_light_move_change_the_image() {
         assert!(!differs_from_background(img.get_pixel(x + w - 3, y + 3)));
     }
 
-    // The dent and the light move changed the 3D view.
     let changed = (y..y + h)
         .flat_map(|py| (x..x + w).map(move |px| (px, py)))
         .filter(|&(px, py)| {
@@ -96,6 +97,32 @@ fn scripted_dent_and_light_move_change_the_image() {
             a.0.iter().zip(b.0).any(|(p, q)| p.abs_diff(q) > 8)
         })
         .count();
-    let fraction = changed as f64 / (w * h) as f64;
+    changed as f64 / (w * h) as f64
+}
+
+fn fresh_dir(name: &str, files: &[&str]) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    for f in files {
+        let _ = std::fs::remove_file(dir.join(f));
+    }
+    dir
+}
+
+#[test]
+fn scripted_dent_and_light_move_change_the_image() {
+    let dir = fresh_dir("viewer_xvfb", &["before.png", "after.png"]);
+    let stdout = run_viewer(&dir, "shot:before.png;dent:0.1,0.15,0.5;light:0,1,-2", "after.png");
+    // The dent and the light move changed the 3D view.
+    let fraction = check_object_and_change(&dir, &stdout, "before.png", "after.png");
     assert!(fraction > 0.01, "only {:.3}% of the 3D view changed", 100.0 * fraction);
+}
+
+/// The panel's method switch: the same bunny drawn by HTSM (Shopf 2007) with its default vein
+/// volume instead of the Mertens solve.
+#[test]
+fn switching_to_htsm_draws_the_object_differently() {
+    let dir = fresh_dir("viewer_xvfb_htsm", &["mertens.png", "htsm.png"]);
+    let stdout = run_viewer(&dir, "light:0.2,0.6,-1.5;shot:mertens.png;method:htsm", "htsm.png");
+    let fraction = check_object_and_change(&dir, &stdout, "mertens.png", "htsm.png");
+    assert!(fraction > 0.05, "only {:.3}% of the 3D view changed", 100.0 * fraction);
 }

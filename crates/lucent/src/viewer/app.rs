@@ -5,12 +5,13 @@
 use super::camera::OrbitCamera;
 use super::core_adapter::{self, CAPABILITIES};
 use super::gfx::Gfx;
+use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
 use super::render::{self, DrawParams, ViewRenderer, Viewport};
 use super::scene::Scene;
 use super::screenshot::{self, Offscreen};
 use super::script::{Action, Automation, Step};
-use super::state::ViewState;
+use super::state::{ViewMethod, ViewState};
 use super::ui::{self, Status};
 use super::worker::{MeshOrigin, Request, Worker};
 use anyhow::Context as _;
@@ -55,6 +56,8 @@ struct Surface {
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
     renderer: ViewRenderer,
+    /// The HTSM image of the 3D view when that method is chosen.
+    htsm: HtsmPanel,
 }
 
 /// Smoothed frame statistics.
@@ -131,7 +134,8 @@ impl App {
         );
         let egui_renderer = egui_wgpu::Renderer::new(&gfx.ctx.device, gfx.config.format, Default::default());
         let renderer = ViewRenderer::new(&gfx.ctx, gfx.config.format)?;
-        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, renderer });
+        let htsm = HtsmPanel::default();
+        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, renderer, htsm });
         Ok(())
     }
 
@@ -190,6 +194,17 @@ impl App {
         }
         let status = self.status();
         let Some(surface) = &mut self.surface else { return Ok(()) };
+        // HTSM renders at the previous frame's viewport size, before the UI that shows it.
+        let state = &self.scene.state;
+        if state.method == ViewMethod::Htsm
+            && let Some(mesh) = &self.scene.mesh
+        {
+            let params = draw_params(&self.camera, state, self.viewport, false);
+            let size = (self.viewport.1.x as u32, self.viewport.1.y as u32);
+            let (ctx, lights) = (&surface.gfx.ctx, &state.params.lights);
+            let htsm = &mut surface.htsm;
+            htsm.update(ctx, &surface.egui_ctx, mesh, &state.htsm, lights, params.camera, params.tone, size);
+        }
         let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.camera);
         self.viewport = viewport;
         if requests.reset_camera {
@@ -282,6 +297,7 @@ impl App {
                 state.show_clusters = true;
                 state.picked_face = nearest_face(mesh, p);
             }
+            Action::Htsm(on) => state.method = if on { ViewMethod::Htsm } else { ViewMethod::Mertens },
             Action::Shot(path) => self.pending_shot = Some(path),
         }
         Ok(())
@@ -390,9 +406,16 @@ fn run_ui(
     let raw = surface.egui_state.take_egui_input(&surface.window);
     let mut requests = ui::UiRequests::default();
     let mut central = egui::Rect::NOTHING;
+    let htsm = &surface.htsm;
     let output = surface.egui_ctx.run_ui(raw, |root| {
-        requests = ui::side_panel(root, state, status);
+        requests = ui::side_panel(root, state, status, htsm);
         central = root.available_rect_before_wrap();
+        if state.method == ViewMethod::Htsm
+            && let Some(texture) = htsm.texture()
+        {
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            root.painter().image(texture, central, uv, egui::Color32::WHITE);
+        }
         ui::light_markers(root, central, camera, &state.params.lights);
     });
     surface.egui_state.handle_platform_output(&surface.window, output.platform_output.clone());

@@ -17,6 +17,7 @@ pub mod app;
 pub mod camera;
 pub mod core_adapter;
 pub mod gfx;
+pub mod htsm;
 pub mod input;
 pub mod pick;
 pub mod render;

@@ -15,6 +15,7 @@
 //! | `camera:yaw,pitch,distance` | place the camera (degrees, degrees, mesh units) |
 //! | `exposure:k` | set the exposure multiplier |
 //! | `clusters:x,y,z` | figure 6.9 view for the face nearest to `(x,y,z)` |
+//! | `method:htsm` / `method:mertens` | switch the 3D view's method (HTSM: Shopf 2007) |
 //! | `shot:path` | save a screenshot now |
 
 use anyhow::{Context as _, bail};
@@ -41,6 +42,8 @@ pub enum Action {
     Exposure(f32),
     /// Figure 6.9 view for the face nearest a point.
     Clusters(Vec3),
+    /// Switch the method: `true` for HTSM, `false` for the Mertens solve.
+    Htsm(bool),
     /// Save a screenshot.
     Shot(PathBuf),
 }
@@ -78,6 +81,11 @@ fn parse_action(s: &str) -> anyhow::Result<Action> {
         }
         "exposure" => Action::Exposure(number(arg)?),
         "clusters" => Action::Clusters(vec3(arg)?),
+        "method" => match arg.trim().to_ascii_lowercase().as_str() {
+            "htsm" => Action::Htsm(true),
+            "mertens" | "homogeneous" => Action::Htsm(false),
+            other => bail!("unknown method {other:?}: expected htsm or mertens"),
+        },
         "shot" if !arg.trim().is_empty() => Action::Shot(PathBuf::from(arg.trim())),
         "shot" => bail!("shot needs a file name"),
         other => bail!(

@@ -201,6 +201,19 @@ pub struct ViewState {
     pub picked_face: Option<u32>,
     /// What a left-drag on the mesh does.
     pub tool: Tool,
+    /// Which method draws the 3D view.
+    pub method: ViewMethod,
+    /// Settings of the HTSM method.
+    pub htsm: super::htsm::HtsmSettings,
+}
+
+/// The rendering method of the 3D view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewMethod {
+    /// Homogeneous: the hierarchical dipole solve on the CPU (Mertens et al. 2003).
+    Mertens,
+    /// Heterogeneous: Translucent Shadow Maps with a density volume on the GPU (Shopf 2007).
+    Htsm,
 }
 
 /// What a left-button drag does.
@@ -240,6 +253,8 @@ impl ViewState {
             show_clusters: false,
             picked_face: None,
             tool: Tool::Orbit,
+            method: ViewMethod::Mertens,
+            htsm: Default::default(),
         }
     }
 }

@@ -4,7 +4,8 @@
 
 use super::camera::OrbitCamera;
 use super::core_adapter::{Capabilities, Timings, level_colour};
-use super::state::{EnvChoice, LightKind, LightSpec, SolverMode, Tool, ViewState};
+use super::htsm::HtsmPanel;
+use super::state::{EnvChoice, LightKind, LightSpec, SolverMode, Tool, ViewMethod, ViewState};
 use egui::{Color32, ComboBox, Slider, Ui};
 use glam::{Vec2, Vec3};
 use lucent_core::bssrdf::{Material, PRESETS};
@@ -49,11 +50,12 @@ pub struct UiRequests {
 pub const PANEL_WIDTH: f32 = 300.0;
 
 /// Draws the side panel inside `ui` (the root) and returns the requests made this frame.
-pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status) -> UiRequests {
+pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status, htsm: &HtsmPanel) -> UiRequests {
     let mut req = UiRequests::default();
     egui::Panel::left("lucent-panel").resizable(false).exact_size(PANEL_WIDTH).show(ui, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             header(ui, status, &mut req);
+            section(ui, "Method", true, |ui| method(ui, state, htsm));
             section(ui, "Material", true, |ui| material(ui, state));
             section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights));
             section(ui, "Environment", false, |ui| environment(ui, state));
@@ -63,6 +65,17 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status) -> UiRequ
         });
     });
     req
+}
+
+/// The homogeneous (Mertens) or heterogeneous (HTSM) method, and HTSM's settings.
+fn method(ui: &mut Ui, state: &mut ViewState, htsm: &HtsmPanel) {
+    ui.horizontal(|ui| {
+        ui.radio_value(&mut state.method, ViewMethod::Mertens, "homogeneous (Mertens)");
+        ui.radio_value(&mut state.method, ViewMethod::Htsm, "HTSM (Shopf)");
+    });
+    if state.method == ViewMethod::Htsm {
+        super::htsm::controls(ui, &mut state.htsm, htsm);
+    }
 }
 
 fn section(ui: &mut Ui, title: &str, open: bool, body: impl FnOnce(&mut Ui)) {
