@@ -29,7 +29,7 @@ const CLEAR_TRANSPORT_DISTANCE: f32 = 1.0e4;
 /// Renders `scene` with HTSM; returns the image and the timings of the summary line.
 pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
     let gltf = match &args.mesh {
-        Some(path) if is_gltf(path) => gltf_volume_params(path)?,
+        Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
         _ => None,
     };
     let params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
@@ -86,18 +86,6 @@ fn is_gltf(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
-}
-
-/// The first material's `KHR_materials_volume` `(attenuation colour, attenuation distance in mesh
-/// units)`, or `None` when there is none.
-pub fn gltf_volume_params(path: &Path) -> Result<Option<([f32; 3], f32)>> {
-    let gltf = gltf::Gltf::open(path).with_context(|| format!("{}: cannot read glTF", path.display()))?;
-    Ok(gltf
-        .document
-        .materials()
-        .next()
-        .and_then(|m| m.volume())
-        .map(|v| (v.attenuation_color(), v.attenuation_distance())))
 }
 
 /// Parses `r,g,b`.
