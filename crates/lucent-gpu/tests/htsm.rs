@@ -15,78 +15,15 @@ use lucent_gpu::GpuContext;
 use lucent_gpu::camera::{OrbitCamera, bounding_sphere};
 use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel};
 use lucent_gpu::readback::read_texture;
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 fn ctx() -> GpuContext {
     GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A unit icosphere, `subdivisions` times split (20 * 4^s triangles), counter-clockwise outside.
-fn icosphere(subdivisions: u32) -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
-            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                positions.push((positions[a as usize] + positions[b as usize]).normalize());
-                positions.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(triangles.len() * 4);
-        for [a, b, c] in triangles {
-            let ab = mid(a, b, &mut positions);
-            let bc = mid(b, c, &mut positions);
-            let ca = mid(c, a, &mut positions);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        triangles = next;
-    }
-    Mesh::new(positions, triangles)
-}
-
 /// The test object: an ellipsoid with semi-axes `(1, 0.7, half_depth)` mesh units.
 fn ellipsoid(half_depth: f32) -> Mesh {
-    let mut m = icosphere(4);
+    let mut m = lucent_core::mesh::generate::icosphere(4);
     for p in &mut m.positions {
         *p *= Vec3::new(1.0, 0.7, half_depth);
     }
