@@ -6,6 +6,7 @@ use super::{
 };
 use crate::camera::bounding_sphere;
 use crate::context::{DEPTH_FORMAT, GpuContext, HDR_FORMAT, LDR_FORMAT};
+use crate::readback::read_texture;
 use crate::tonemap::ToneMapPass;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -52,8 +53,6 @@ struct Targets {
     ldr: wgpu::Texture,
     ldr_view: wgpu::TextureView,
     tonemap_bind_group: wgpu::BindGroup,
-    readback: wgpu::Buffer,
-    padded_row: u32,
 }
 
 /// An HTSM renderer for one mesh and one density volume: pipelines, mesh buffers, the density
@@ -593,14 +592,6 @@ impl HtsmRenderer {
         );
         let hdr_view = hdr.create_view(&Default::default());
         let tonemap_bind_group = self.tonemap.bind(ctx, &hdr_view);
-        let padded_row =
-            (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("htsm readback"),
-            size: padded_row as u64 * height as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         self.targets = Some(Targets {
             width,
             height,
@@ -609,8 +600,6 @@ impl HtsmRenderer {
             ldr_view: ldr.create_view(&Default::default()),
             ldr,
             tonemap_bind_group,
-            readback,
-            padded_row,
         });
         Ok(())
     }
@@ -802,48 +791,11 @@ impl HtsmRenderer {
         view: &HtsmView,
         params: &HtsmParams,
     ) -> Result<image::RgbaImage, HtsmError> {
-        let mut encoder = self.encode(ctx, view, params)?;
-        let t = self.targets.as_ref().expect("encode ensures targets");
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &t.ldr,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &t.readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(t.padded_row),
-                    rows_per_image: Some(t.height),
-                },
-            },
-            wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 },
-        );
+        let encoder = self.encode(ctx, view, params)?;
         self.queue.submit([encoder.finish()]);
-        let slice = t.readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| HtsmError::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| HtsmError::Readback(e.to_string()))?
-            .map_err(|e| HtsmError::Readback(e.to_string()))?;
-        let mut pixels = Vec::with_capacity((4 * t.width * t.height) as usize);
-        {
-            let data = slice.get_mapped_range().map_err(|e| HtsmError::Readback(e.to_string()))?;
-            for row in data.chunks(t.padded_row as usize).take(t.height as usize) {
-                pixels.extend_from_slice(&row[..(4 * t.width) as usize]);
-            }
-        }
-        t.readback.unmap();
         ctx.check("rendering HTSM")?;
-        image::RgbaImage::from_raw(t.width, t.height, pixels)
-            .ok_or_else(|| HtsmError::Readback("image size mismatch".into()))
+        let t = self.targets.as_ref().expect("encode ensures targets");
+        Ok(read_texture(ctx, &t.ldr, 0)?.to_rgba_image()?)
     }
 
     /// Renders one frame without read-back and blocks until the queue has finished it
