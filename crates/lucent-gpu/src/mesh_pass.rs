@@ -191,7 +191,13 @@ struct MeshUniforms {
 struct LightUniform {
     position: [f32; 4],
     intensity: [f32; 4],
+    /// Spot lights: unit axis (xyz) and cone half-angle in radians (w); `w > pi` for none.
+    /// `intensity.w` holds the soft-edge fraction.
+    spot: [f32; 4],
 }
+
+/// No cone: the half-angle the shader reads for point and directional lights.
+const NO_CONE: f32 = 4.0;
 
 /// The mesh pipeline and its uniforms. Draws into a render pass whose colour target has the
 /// format and sample count given to [`MeshPass::new`] and whose depth target is
@@ -347,20 +353,27 @@ impl MeshPass {
         if shading.lights.len() > MAX_LIGHTS {
             log::warn!("{} lights given; the highlight uses the first {MAX_LIGHTS}", shading.lights.len());
         }
-        let mut lights = [LightUniform { position: [0.0; 4], intensity: [0.0; 4] }; MAX_LIGHTS];
+        let mut lights =
+            [LightUniform { position: [0.0; 4], intensity: [0.0; 4], spot: [0.0; 4] }; MAX_LIGHTS];
         for (dst, l) in lights.iter_mut().zip(&shading.lights) {
+            let no_cone = [0.0, 0.0, 0.0, NO_CONE];
             *dst = match *l {
-                // The highlight treats a spot as a point light (its cone is applied to the
-                // subsurface irradiance on the CPU, not here yet).
-                Light::Point { position, intensity } | Light::Spot { position, intensity, .. } => {
-                    LightUniform {
-                        position: position.extend(1.0).to_array(),
-                        intensity: intensity.extend(0.0).to_array(),
-                    }
-                }
+                Light::Point { position, intensity } => LightUniform {
+                    position: position.extend(1.0).to_array(),
+                    intensity: intensity.extend(0.0).to_array(),
+                    spot: no_cone,
+                },
+                // The same cone and smoothstep edge as the subsurface irradiance
+                // (`lucent_core::irradiance::spot_falloff`).
+                Light::Spot { position, direction, intensity, cone_angle, soft_edge } => LightUniform {
+                    position: position.extend(1.0).to_array(),
+                    intensity: intensity.extend(soft_edge.clamp(0.0, 1.0)).to_array(),
+                    spot: direction.normalize_or_zero().extend(cone_angle).to_array(),
+                },
                 Light::Directional { direction, irradiance } => LightUniform {
                     position: direction.extend(0.0).to_array(),
                     intensity: irradiance.extend(0.0).to_array(),
+                    spot: no_cone,
                 },
             };
         }

@@ -55,46 +55,84 @@ pub enum Method {
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:\n  \
     lucent render --mesh bunny.obj --material marble --scale 0.1 --light dir:1,-1,1 --out m.png\n  \
-    lucent render --method exact --mesh small.ply --out exact.png")]
+    lucent render --method exact --mesh small.ply --out exact.png\n  \
+    lucent render --scene examples/scenes/candle.toml --out candle.png\n  \
+    lucent render --env courtyard --material marble --scale 0.1\n  \
+    lucent render --scene examples/scenes/candle.toml --frames 48 --out frames/\n  \
+    lucent render --frames 36 --orbit-light --out orbit/\n\n\
+    Precedence: a flag given on the command line overrides the scene file's value (--mesh, \
+    --material, --scale, --exposure, --yaw, --pitch, --distance, --deform, --env, --env-rotation); \
+    any --light replaces all of the scene's lights; --no-shadows turns off every light's shadows. \
+    Values neither given nor in the scene take the defaults shown.")]
 pub struct RenderArgs {
-    /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the embedded bunny when absent.
+    /// Scene file (TOML; see examples/scenes/): mesh, material, scale, exposure, lights,
+    /// environment, camera and deformations. Flags given explicitly override it.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the scene's mesh, else the embedded bunny.
     #[arg(long)]
     pub mesh: Option<PathBuf>,
     /// Material preset (case-insensitive): apple, chicken1, chicken2, cream, ketchup, marble,
-    /// potato, skimmilk, skin1, skin2, wholemilk, wax.
-    #[arg(long, default_value = "skimmilk")]
-    pub material: String,
-    /// Model scale: the largest side of the mesh's bounding box, in metres.
-    #[arg(long, default_value_t = 0.05)]
-    pub scale: f64,
+    /// potato, skimmilk, skin1, skin2, wholemilk, wax. Default: the scene's, else skimmilk.
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Model scale: the largest side of the mesh's bounding box, in metres. Default: the
+    /// scene's, else 0.05.
+    #[arg(long)]
+    pub scale: Option<f64>,
     /// A light: `point:x,y,z` (mesh units) or `dir:x,y,z` (direction the light travels).
-    /// Repeatable. White; a point light gives irradiance 1 at the distance of the object's
-    /// centre, a directional light irradiance 1. Default: a point light behind and above.
+    /// Repeatable; replaces the scene's lights. White; a point light gives irradiance 1 at the
+    /// distance of the object's centre, a directional light irradiance 1. Default: the scene's
+    /// lights, else (without an environment) a point light behind and above.
     #[arg(long)]
     pub light: Vec<String>,
+    /// Lights cast no shadows (by default command-line lights cast BVH ray-cast shadows and
+    /// scene lights follow their `shadows` flag).
+    #[arg(long)]
+    pub no_shadows: bool,
+    /// Environment light and reflection map: `courtyard`, `forest` (the maps in assets/) or an
+    /// equirectangular .hdr/.exr path. Replaces the scene's environment.
+    #[arg(long)]
+    pub env: Option<String>,
+    /// Rotation of the environment about +Y, degrees. Default: the scene's, else 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub env_rotation: Option<f32>,
     /// Image width in pixels.
     #[arg(long, default_value_t = 800)]
     pub width: u32,
     /// Image height in pixels.
     #[arg(long, default_value_t = 600)]
     pub height: u32,
-    /// Output PNG file.
-    #[arg(long, default_value = "lucent.png")]
-    pub out: PathBuf,
+    /// Output PNG file; with --frames, the output directory (created if its parent exists).
+    /// Default lucent.png, or frames/ with --frames.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// Solver.
     #[arg(long, value_enum, default_value_t = Method::Hierarchical)]
     pub method: Method,
-    /// Mode of the hierarchical solve (Mertens §5.5).
-    #[arg(long, value_enum, default_value_t = SolveMode::OnTheFly)]
-    pub mode: SolveMode,
+    /// Mode of the hierarchical solve (Mertens §5.5). Default on-the-fly for one image,
+    /// incremental for an animation (links made once, updated per frame).
+    #[arg(long, value_enum)]
+    pub mode: Option<SolveMode>,
     /// Deform the mesh before solving: `twist:DEGREES`, `bump:x,y,z,radius,height` (mesh
-    /// units) or `noise:amplitude,frequency`. With `--mode incremental` the links are made on
-    /// the rest mesh and updated incrementally to the deformed one.
+    /// units) or `noise:amplitude,frequency`; replaces the scene's deformations. With `--mode
+    /// incremental` the links are made on the rest mesh and updated incrementally to the
+    /// deformed one.
     #[arg(long)]
     pub deform: Option<String>,
-    /// Exposure multiplier applied to radiance before tone mapping.
-    #[arg(long, default_value_t = 1.0)]
-    pub exposure: f32,
+    /// Render an animation of N frames into the --out directory (frame_0001.png, ...): the
+    /// deformation ramped from the rest pose to full, or with --orbit-light the lights turning
+    /// once about the vertical axis through the object.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// With --frames: move the lights on a circle about the vertical axis through the object's
+    /// centre (one full turn over the animation) instead of ramping the deformation.
+    #[arg(long, requires = "frames")]
+    pub orbit_light: bool,
+    /// Exposure multiplier applied to radiance before tone mapping. Default: the scene's,
+    /// else 1.
+    #[arg(long)]
+    pub exposure: Option<f32>,
     /// Tone curve: `gamma` (clamp, then the gamma curve, as in the paper) or `aces` (a filmic
     /// roll-off of highlights, then the gamma curve).
     #[arg(long, value_enum, default_value_t = ToneCurve::Gamma)]
@@ -102,14 +140,15 @@ pub struct RenderArgs {
     /// Display gamma of the tone curve.
     #[arg(long, default_value_t = 2.2)]
     pub gamma: f32,
-    /// Camera yaw about the vertical axis, degrees (0: looking along -z; lights default behind).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub yaw: f32,
-    /// Camera pitch above the horizon, degrees (-89..89).
-    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
-    pub pitch: f32,
+    /// Camera yaw about the vertical axis, degrees (0: looking along -z; lights default
+    /// behind). Default: the scene's, else 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub yaw: Option<f32>,
+    /// Camera pitch above the horizon, degrees (-89..89). Default: the scene's, else 15.
+    #[arg(long, allow_negative_numbers = true)]
+    pub pitch: Option<f32>,
     /// Camera distance from the object's centre in bounding-sphere radii (> 1); by default the
-    /// object just fits the image.
+    /// scene's, else the object just fits the image.
     #[arg(long)]
     pub distance: Option<f32>,
     /// HTSM options (`--method htsm`, Shopf 2007).

@@ -7,7 +7,7 @@
 //! object units), else the defaults. HTSM renders from one light: the first `--light`.
 
 use crate::cli::{HtsmArgs, HtsmModel, RenderArgs};
-use crate::render::{Scene, Timings, orbit_camera, tone_map};
+use crate::render::{Scene, Timings, tone_map};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::mesh::Mesh;
@@ -28,12 +28,14 @@ const CLEAR_TRANSPORT_DISTANCE: f32 = 1.0e4;
 
 /// Renders `scene` with HTSM; returns the image and the timings of the summary line.
 pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
-    let gltf = match &args.mesh {
+    let gltf = match &scene.mesh_path {
         Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
         _ => None,
     };
-    let params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
-    let light = *scene.lights.first().context("HTSM needs a light")?;
+    let mut params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
+    params.tone = tone_map(args, scene.exposure);
+    let light =
+        scene.lights.first().context("HTSM needs a light (an environment alone is not enough)")?.light;
     if scene.lights.len() > 1 {
         log::warn!("HTSM renders from one light; using the first of {}", scene.lights.len());
     }
@@ -48,7 +50,7 @@ pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Tim
         .with_context(|| format!("setting up HTSM for {}", scene.source))?;
     let (centre, radius) = bounding_sphere(&scene.mesh.positions);
     let view = HtsmView {
-        camera: orbit_camera(args).frame(centre, radius, args.width as f32 / args.height as f32),
+        camera: scene.camera.frame(centre, radius, args.width as f32 / args.height as f32),
         light,
         width: args.width,
         height: args.height,
@@ -134,7 +136,7 @@ pub fn htsm_params(
             HtsmModel::Thesis => TransportModel::Thesis,
             HtsmModel::BeerLambert => TransportModel::BeerLambert,
         },
-        tone: tone_map(args),
+        tone: tone_map(args, args.exposure.unwrap_or(1.0)),
         ..HtsmParams::default()
     };
     params.validate()?;

@@ -30,8 +30,6 @@
 //! distance = 3.0              # bounding-sphere radii (optional: frame the object)
 //! fov = 35.0                  # vertical, degrees
 //! ```
-// The render command and the viewer use this module once `--scene` is wired in.
-#![allow(dead_code)]
 
 use anyhow::{Context, Result, bail};
 use glam::Vec3;

@@ -1,6 +1,6 @@
-//! `lucent render` end to end: the default scene renders to a PNG of the requested size with
-//! the object in it; bad input gives exit code 1, a one-line message naming the culprit, and no
-//! output file.
+//! `lucent render` end to end: the default scene, the example scene files and animations render
+//! to PNGs of the requested size with the object in it; bad input gives exit code 1, a one-line
+//! message naming the culprit, and no output file or directory.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -124,4 +124,155 @@ fn unusable_backend_says_what_to_install() {
     let absent = if cfg!(target_os = "macos") { "dx12" } else { "metal" };
     let run = lucent(&["render", "--out", out.to_str().unwrap()], &[("WGPU_BACKEND", absent)]);
     assert_clean_failure(&run, "mesa-vulkan-drivers", &out);
+}
+
+fn examples() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes")
+}
+
+/// Mean luminance of the pixels that differ from the background.
+fn object_luminance(img: &image::RgbaImage) -> f32 {
+    let bg = lucent_gpu::tonemap::ToneMap::default().background.map(|c| (c * 255.0).round() as u8);
+    let lums: Vec<f32> = img.pixels().filter(|p| p.0[..3] != bg).map(luminance).collect();
+    assert!(lums.len() > 100, "the object covers only {} pixels", lums.len());
+    lums.iter().sum::<f32>() / lums.len() as f32
+}
+
+#[test]
+fn example_scenes_render() {
+    let dir = scratch("scenes");
+    for name in ["candle", "bunny_courtyard"] {
+        let out = dir.join(format!("{name}.png"));
+        let scene = examples().join(format!("{name}.toml"));
+        let (s, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
+        let run = lucent(&["render", "--scene", s, "--width", "96", "--height", "72", "--out", o], &[]);
+        assert!(run.status.success(), "{name}: {:?}", stderr_lines(&run));
+        let img = image::open(&out).unwrap().to_rgba8();
+        assert_eq!(img.dimensions(), (96, 72));
+        assert!(object_luminance(&img) > 20.0, "{name}: the object is lit");
+    }
+}
+
+/// A flag given on the command line wins over the scene file: a quarter of the exposure gives a
+/// darker image of the same scene.
+#[test]
+fn flags_override_the_scene() {
+    let dir = scratch("override");
+    let scene = examples().join("candle.toml");
+    let mut lum = Vec::new();
+    for exposure in [None, Some("0.25")] {
+        let out = dir.join(format!("c{}.png", lum.len()));
+        let mut a = vec!["render", "--scene", scene.to_str().unwrap(), "--width", "64", "--height", "64"];
+        a.extend(["--out", out.to_str().unwrap()]);
+        if let Some(e) = exposure {
+            a.extend(["--exposure", e]);
+        }
+        let run = lucent(&a, &[]);
+        assert!(run.status.success(), "{:?}", stderr_lines(&run));
+        lum.push(object_luminance(&image::open(&out).unwrap().to_rgba8()));
+    }
+    assert!(lum[1] < 0.8 * lum[0], "--exposure 0.25 should darken the scene's image: {lum:?}");
+}
+
+#[test]
+fn missing_scene_file_is_one_clean_error() {
+    let dir = scratch("scene_missing");
+    let out = dir.join("never.png");
+    let scene = dir.join("no-such-scene.toml");
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], &[]);
+    assert_clean_failure(&run, "no-such-scene.toml", &out);
+}
+
+#[test]
+fn bad_scene_field_is_one_clean_error_naming_file_and_field() {
+    let dir = scratch("scene_bad");
+    let out = dir.join("never.png");
+    let scene = dir.join("bad.toml");
+    std::fs::write(
+        &scene,
+        "mesh = \"sphere\"\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nbrightness = 3\n",
+    )
+    .unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], &[]);
+    assert_clean_failure(&run, "bad.toml", &out);
+    assert!(stderr_lines(&run).iter().any(|l| l.contains("brightness")), "{:?}", stderr_lines(&run));
+    // A missing environment map named inside the file: both names in the one line.
+    std::fs::write(&scene, "mesh = \"sphere\"\n[environment]\npath = \"gone.exr\"\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], &[]);
+    assert_clean_failure(&run, "gone.exr", &out);
+    assert!(stderr_lines(&run).iter().any(|l| l.contains("bad.toml")), "{:?}", stderr_lines(&run));
+}
+
+/// An animation: numbered frames for video tools, nothing else in the directory, timings on
+/// stdout, and the deformation visible as frames that differ.
+#[test]
+fn frames_write_a_numbered_sequence() {
+    let dir = scratch("frames");
+    let out = dir.join("anim");
+    let run = lucent(
+        &[
+            "render",
+            "--frames",
+            "3",
+            "--deform",
+            "twist:90",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(stdout.contains("median"), "timings should be printed: {stdout}");
+    let mut names: Vec<String> =
+        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    assert_eq!(names, ["frame_0001.png", "frame_0002.png", "frame_0003.png"]);
+    let first = image::open(out.join("frame_0001.png")).unwrap().to_rgba8();
+    let last = image::open(out.join("frame_0003.png")).unwrap().to_rgba8();
+    assert_eq!(first.dimensions(), (64, 48));
+    assert_ne!(first, last, "the twist ramps from the rest pose to full");
+}
+
+#[test]
+fn orbit_light_frames_differ() {
+    let dir = scratch("orbit");
+    let out = dir.join("orbit");
+    let o = out.to_str().unwrap();
+    let run = lucent(
+        &["render", "--frames", "2", "--orbit-light", "--width", "48", "--height", "48", "--out", o],
+        &[],
+    );
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let a = image::open(out.join("frame_0001.png")).unwrap().to_rgba8();
+    let b = image::open(out.join("frame_0002.png")).unwrap().to_rgba8();
+    assert_ne!(a, b, "the light moved half a turn");
+}
+
+#[test]
+fn bad_animations_are_clean_errors_without_output() {
+    let dir = scratch("frames_bad");
+    // --out is a file.
+    let file = dir.join("taken.png");
+    std::fs::write(&file, b"x").unwrap();
+    let run =
+        lucent(&["render", "--frames", "2", "--deform", "twist:10", "--out", file.to_str().unwrap()], &[]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr_lines(&run).iter().any(|l| l.starts_with("lucent: error:") && l.contains("taken.png")));
+    // Nothing to animate; a bad deformation; zero frames: no directory is created.
+    let out = dir.join("never");
+    for extra in [&["--frames", "2"][..], &["--frames", "2", "--deform", "twist"], &["--frames", "0"]] {
+        let mut a = vec!["render", "--out", out.to_str().unwrap()];
+        a.extend_from_slice(extra);
+        let run = lucent(&a, &[]);
+        assert_eq!(run.status.code(), Some(1), "{extra:?}");
+        let errors: Vec<_> =
+            stderr_lines(&run).into_iter().filter(|l| l.starts_with("lucent: error:")).collect();
+        assert_eq!(errors.len(), 1, "{extra:?}: {errors:?}");
+        assert!(!out.exists(), "{extra:?}: no output directory on error");
+    }
 }

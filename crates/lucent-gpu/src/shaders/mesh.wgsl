@@ -10,8 +10,11 @@ const MAX_LIGHTS: u32 = 8u;
 struct Light {
     // xyz: position (mesh units) when w = 1; direction the light travels when w = 0.
     position: vec4<f32>,
-    // rgb: radiant intensity (point, W/sr) or irradiance (directional, W/m^2).
+    // rgb: radiant intensity (point, spot on its axis, W/sr) or irradiance (directional, W/m^2);
+    // w: a spot's soft-edge fraction (0..1).
     intensity: vec4<f32>,
+    // xyz: a spot's unit axis (the way it shines); w: cone half-angle, radians (> pi: no cone).
+    spot: vec4<f32>,
 };
 
 struct Uniforms {
@@ -69,6 +72,24 @@ fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return 0.5 * (r_par * r_par + r_perp * r_perp);
 }
 
+// The spot's angular falloff, as lucent-core's irradiance::spot_falloff: 1 inside the inner
+// angle cone * (1 - soft_edge), 0 outside the cone, a smoothstep in angle between.
+fn spot_falloff(cos_angle: f32, cone: f32, soft_edge: f32) -> f32 {
+    if (cone > PI) {
+        return 1.0;
+    }
+    let angle = acos(clamp(cos_angle, -1.0, 1.0));
+    let inner = cone * (1.0 - clamp(soft_edge, 0.0, 1.0));
+    if (angle >= cone) {
+        return 0.0;
+    }
+    if (angle <= inner) {
+        return 1.0;
+    }
+    let t = (cone - angle) / (cone - inner);
+    return t * t * (3.0 - 2.0 * t);
+}
+
 fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
     let u_ = atan2(d.x, -d.z) / (2.0 * PI) + 0.5;
     let v_ = acos(clamp(d.y, -1.0, 1.0)) / PI;
@@ -101,7 +122,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
                 let d = light.position.xyz - in.world;
                 let d2 = max(dot(d, d), 1e-12);
                 wi = d * inverseSqrt(d2);
-                e = light.intensity.rgb / d2;
+                e = light.intensity.rgb / d2 * spot_falloff(dot(light.spot.xyz, -wi), light.spot.w, light.intensity.w);
             } else {
                 wi = -normalize(light.position.xyz);
                 e = light.intensity.rgb;

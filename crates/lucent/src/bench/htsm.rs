@@ -9,7 +9,7 @@
 //! with mips.
 
 use crate::cli::{BenchArgs, Cli, Command, RenderArgs};
-use crate::render::{load_scene, orbit_camera};
+use crate::render::load_scene;
 use crate::render_htsm::{build_volume, htsm_params};
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -35,7 +35,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         _ => unreachable!("render is a subcommand"),
     };
     let scene = load_scene(&render_args)?;
-    let light = *scene.lights.first().context("the default scene has a light")?;
+    let light = scene.lights.first().context("the default scene has a light")?.light;
     let base = htsm_params(&render_args.htsm, &scene.mesh, None, &render_args)?;
     let volume = build_volume(&render_args.htsm, &scene.mesh)?;
     let ctx = GpuContext::new()?;
@@ -59,12 +59,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         println!("{:>3} {:>11} {:>12} {:>9} {:>7}", "n", "size", "ms/frame", "fps", "frames");
     }
     for size in SIZES {
-        let view = HtsmView {
-            camera: orbit_camera(&render_args).frame(centre, radius, 1.0),
-            light,
-            width: size,
-            height: size,
-        };
+        let view =
+            HtsmView { camera: scene.camera.frame(centre, radius, 1.0), light, width: size, height: size };
         for samples in SAMPLES {
             let params = HtsmParams { samples, ..base };
             for _ in 0..WARMUP {

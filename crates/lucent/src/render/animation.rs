@@ -1,0 +1,197 @@
+//! `lucent render --frames N --out DIR`: an animation, rendered frame by frame into
+//! `DIR/frame_0001.png`, ... (each written atomically). Either the scene's deformation ramps
+//! from the rest pose (frame 1) to full (frame N), or with `--orbit-light` the lights make one
+//! turn about the vertical axis through the object. The hierarchical solver keeps its links
+//! across frames (Mertens §5.5: incremental mode by default, render mode for lighting alone).
+
+use super::frame::{FrameSolver, GpuFrame};
+use super::setup::{Scene, orbit_lights};
+use super::{method_name, tone_map, write_png_atomically};
+use crate::cli::{RenderArgs, SolveMode};
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use lucent_gpu::GpuContext;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The frames' file name: 1-based, four digits, as video tools expect (`frame_%04d.png`).
+pub fn frame_name(index: u32) -> String {
+    format!("frame_{:04}.png", index + 1)
+}
+
+/// Checks the output directory before any work: an existing directory, or a path whose parent
+/// exists (it is created once everything else has succeeded).
+pub fn check_out_dir(out: &Path) -> Result<()> {
+    if out.is_dir() {
+        return Ok(());
+    }
+    if out.exists() {
+        bail!("{}: --out must be a directory with --frames (this is a file)", out.display());
+    }
+    let parent = super::output_dir(out);
+    if !parent.is_dir() {
+        bail!("{}: the output directory's parent {} does not exist", out.display(), parent.display());
+    }
+    Ok(())
+}
+
+/// Renders the animation and prints per-frame medians.
+pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<()> {
+    if frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if scene.deform.is_empty() && !args.orbit_light {
+        bail!("--frames animates a deformation (--deform or the scene's) or the lights (--orbit-light)");
+    }
+    // Incremental by default: the links made on the first frame are updated, not rebuilt.
+    let mode = args.mode.unwrap_or(SolveMode::Incremental);
+    let mut ctx = Some(GpuContext::new()?);
+    let started = Instant::now();
+    let mut solver = FrameSolver::new(scene, args.method, mode)?;
+    let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
+    let frame_at = |i: u32| {
+        let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
+        if args.orbit_light {
+            // One turn, the last frame one step short of the first (the loop closes).
+            let angle = std::f32::consts::TAU * i as f32 / frames as f32;
+            (scene.deformed(1.0), orbit_lights(&scene.lights, center, angle))
+        } else {
+            (scene.deformed(t), scene.lights.clone())
+        }
+    };
+
+    let mut gpu: Option<GpuFrame> = None;
+    let mut times = Times::default();
+    let bar = ProgressBar::new(frames as u64).with_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} (eta {eta}) {msg}")
+            .expect("valid template"),
+    );
+    let mut created_dir = false;
+    let mut first_links = None;
+    for i in 0..frames {
+        let (mesh, lights) = frame_at(i);
+        let solved = solver.solve(&mesh, &lights)?;
+        first_links = first_links.or(solved.links);
+        let t = Instant::now();
+        let image = match &mut gpu {
+            Some(g) => {
+                g.draw((!scene.deform.is_empty()).then_some(&mesh), &solved.vertex_radiance, &lights)?
+            }
+            None => {
+                let ctx = ctx.take().expect("used once");
+                let g = gpu.insert(GpuFrame::new(
+                    ctx,
+                    scene,
+                    (args.width, args.height),
+                    tone_map(args, scene.exposure),
+                    &mesh,
+                    &solved.vertex_radiance,
+                )?);
+                g.draw(None, &solved.vertex_radiance, &lights)?
+            }
+        };
+        let render_ms = ms_since(t);
+        let t = Instant::now();
+        if !created_dir {
+            std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
+            created_dir = true;
+        }
+        write_png_atomically(&image, &out.join(frame_name(i)))?;
+        times.push(&solved, render_ms, ms_since(t));
+        bar.set_message(format!("solve {:.0} ms", solved.total_ms()));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let adapter = gpu.as_ref().map(GpuFrame::adapter).unwrap_or_default();
+    println!(
+        "lucent: {}: {} triangles, {} at {} m, {} ({}), {} frames in {:.1} s on {} -> {}",
+        scene.source,
+        scene.mesh.triangles.len(),
+        scene.material.name,
+        scene.scale,
+        method_name(args.method),
+        mode_name(mode),
+        frames,
+        started.elapsed().as_secs_f64(),
+        adapter,
+        out.join(frame_name(0)).display(),
+    );
+    println!(
+        "lucent: per frame (median of {frames}): irradiance {:.1} ms, link/update {:.1} ms, solve {:.1} ms, \
+         render {:.1} ms, write {:.1} ms; first frame link/update {:.1} ms{}",
+        median(&mut times.irradiance),
+        median(&mut times.link),
+        median(&mut times.solve),
+        median(&mut times.render),
+        median(&mut times.write),
+        times.link.first().copied().unwrap_or(0.0),
+        first_links.map(|l| format!(", {l} links")).unwrap_or_default(),
+    );
+    Ok(())
+}
+
+/// The default output directory of an animation.
+pub fn default_out() -> PathBuf {
+    PathBuf::from("frames")
+}
+
+fn mode_name(m: SolveMode) -> &'static str {
+    match m {
+        SolveMode::OnTheFly => "on-the-fly",
+        SolveMode::Render => "render mode",
+        SolveMode::Incremental => "incremental",
+    }
+}
+
+/// Per-frame times, milliseconds, in frame order.
+#[derive(Default)]
+struct Times {
+    irradiance: Vec<f64>,
+    link: Vec<f64>,
+    solve: Vec<f64>,
+    render: Vec<f64>,
+    write: Vec<f64>,
+}
+
+impl Times {
+    fn push(&mut self, s: &super::frame::Solved, render_ms: f64, write_ms: f64) {
+        self.irradiance.push(s.irradiance_ms);
+        self.link.push(s.link_ms);
+        self.solve.push(s.solve_ms);
+        self.render.push(render_ms);
+        self.write.push(write_ms);
+    }
+}
+
+/// The median (the mean of the middle two for an even count); 0 when empty. Sorts `v`.
+pub fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_names_sort_and_start_at_one() {
+        assert_eq!(frame_name(0), "frame_0001.png");
+        assert_eq!(frame_name(41), "frame_0042.png");
+        assert!(frame_name(8) < frame_name(9));
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut []), 0.0);
+    }
+}

@@ -1,0 +1,190 @@
+//! `lucent render`: mesh ─► irradiance at the faces with ray-cast shadows and the SH environment
+//! (Mertens §5.3) ─► subsurface solve (§3, §5.2, §5.5) ─► area-weighted per-vertex `B / pi`
+//! (§3.2) ─► GPU raster with the exit Fresnel factor, highlights and the Fresnel-weighted
+//! environment reflection, tone mapped (§5.4) ─► PNG, written atomically.
+//!
+//! * [`setup`]: the scene from the flags and an optional scene file (flags win).
+//! * [`frame`]: the solve and the GPU frame, reusable across frames.
+//! * [`animation`]: `--frames N`, a deformation ramp or an orbiting light.
+//!
+//! `--method htsm` takes a separate path ([`render_htsm`]): Shopf 2007 renders on the GPU from
+//! light-view maps and has no per-vertex solve.
+
+pub mod animation;
+pub mod frame;
+pub mod setup;
+
+pub use setup::{Scene, load_scene};
+
+use crate::cli::{Method, RenderArgs, SolveMode, ToneCurve};
+use anyhow::{Context, Result, bail};
+use frame::{FrameSolver, GpuFrame};
+use lucent_gpu::GpuContext;
+use lucent_gpu::tonemap::{ToneMap, ToneOperator};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    check_args(args)?;
+    let scene = load_scene(args)?;
+    if let Some(frames) = args.frames {
+        if args.method == Method::Htsm {
+            bail!("--frames works with --method hierarchical or exact, not htsm");
+        }
+        let out = args.out.clone().unwrap_or_else(animation::default_out);
+        return animation::run(args, &scene, frames, &out);
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("lucent.png"));
+    let started = Instant::now();
+    let (image, timings) = match args.method {
+        Method::Htsm => render_htsm(&scene, args)?,
+        method => render_mertens(&scene, args, method)?,
+    };
+    write_png_atomically(&image, &out)?;
+    println!(
+        "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms, render {:.0} ms on {}, total {:.0} ms -> {}",
+        scene.source,
+        scene.mesh.triangles.len(),
+        scene.material.name,
+        scene.scale,
+        method_name(args.method),
+        timings.solve_ms,
+        timings.render_ms,
+        timings.adapter,
+        started.elapsed().as_secs_f64() * 1e3,
+        out.display()
+    );
+    Ok(())
+}
+
+/// Wall-clock times of the stages, for the summary line.
+pub struct Timings {
+    /// Irradiance plus solve plus per-vertex averaging, milliseconds.
+    pub solve_ms: f64,
+    /// GPU upload, draw, tone map and read-back (not adapter start-up), milliseconds.
+    pub render_ms: f64,
+    /// The adapter used, e.g. `"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)"`.
+    pub adapter: String,
+}
+
+pub(crate) fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Hierarchical => "hierarchical",
+        Method::Exact => "exact",
+        Method::Htsm => "htsm",
+    }
+}
+
+/// Rejects bad numbers and an unwritable output location before any work is done.
+fn check_args(args: &RenderArgs) -> Result<()> {
+    if let Some(scale) = args.scale
+        && !(scale.is_finite() && scale > 0.0)
+    {
+        bail!("--scale must be a positive number of metres, got {scale}");
+    }
+    if let Some(e) = args.exposure
+        && !(e.is_finite() && e > 0.0)
+    {
+        bail!("--exposure must be a positive number, got {e}");
+    }
+    if !(args.gamma.is_finite() && args.gamma > 0.0) {
+        bail!("--gamma must be a positive number, got {}", args.gamma);
+    }
+    if args.width == 0 || args.height == 0 {
+        bail!("--width and --height must be at least 1, got {}x{}", args.width, args.height);
+    }
+    if let Some(d) = args.distance
+        && !(d.is_finite() && d > 1.0)
+    {
+        bail!("--distance is in bounding-sphere radii and must be > 1, got {d}");
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    if args.frames.is_some() {
+        return animation::check_out_dir(&args.out.clone().unwrap_or_else(animation::default_out));
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("lucent.png"));
+    let dir = output_dir(&out);
+    if !dir.is_dir() {
+        bail!("{}: the output directory {} does not exist", out.display(), dir.display());
+    }
+    if out.is_dir() {
+        bail!("{}: --out names a directory; give a .png file (or use --frames)", out.display());
+    }
+    Ok(())
+}
+
+pub(crate) fn output_dir(out: &Path) -> PathBuf {
+    match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Mertens 2003: solve on the CPU (with `--deform` applied in full), then rasterise per-vertex
+/// radiance on the GPU.
+fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(image::RgbaImage, Timings)> {
+    // The adapter first: without one, fail before the (possibly long) solve.
+    let ctx = GpuContext::new()?;
+    let mesh = scene.deformed(1.0);
+    let t = Instant::now();
+    let mut solver = FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly))?;
+    let solved = solver.solve(&mesh, &scene.lights)?;
+    let solve_ms = t.elapsed().as_secs_f64() * 1e3;
+    log::info!(
+        "irradiance {:.1} ms, link {:.1} ms, solve {:.1} ms",
+        solved.irradiance_ms,
+        solved.link_ms,
+        solved.solve_ms
+    );
+
+    let t = Instant::now();
+    let size = (args.width, args.height);
+    let mut gpu =
+        GpuFrame::new(ctx, scene, size, tone_map(args, scene.exposure), &mesh, &solved.vertex_radiance)?;
+    let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights)?;
+    let render_ms = t.elapsed().as_secs_f64() * 1e3;
+    Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter() }))
+}
+
+/// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.
+fn render_htsm(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
+    crate::render_htsm::render(scene, args)
+}
+
+pub(crate) fn tone_map(args: &RenderArgs, exposure: f32) -> ToneMap {
+    ToneMap {
+        exposure,
+        gamma: args.gamma,
+        operator: match args.tonemap {
+            ToneCurve::Gamma => ToneOperator::Gamma,
+            ToneCurve::Aces => ToneOperator::AcesFilmic,
+        },
+        ..Default::default()
+    }
+}
+
+/// Encodes `image` as PNG into a temporary file next to `out`, then renames it over `out`:
+/// readers never see a partial file, and on error `out` is left untouched.
+pub fn write_png_atomically(image: &image::RgbaImage, out: &Path) -> Result<()> {
+    let mut png = Vec::new();
+    image
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .context("encoding the PNG")?;
+    let name =
+        out.file_name().with_context(|| format!("{}: not a file name", out.display()))?.to_string_lossy();
+    let tmp = output_dir(out).join(format!(".{name}.{}.png.tmp", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(&png)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, out)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("{}: cannot write the image", out.display()));
+    }
+    Ok(())
+}

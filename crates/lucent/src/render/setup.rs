@@ -1,0 +1,359 @@
+//! What `lucent render` draws, resolved from the command line and an optional scene file
+//! ([`crate::scene`]): a flag given explicitly wins over the file, the file over the defaults.
+//! Everything that can fail (files, numbers, names) fails here, before any output exists.
+
+use crate::cli::RenderArgs;
+use crate::scene::{self as scene_file, LoadedEnvironment};
+use anyhow::{Context, Result, bail};
+use glam::Vec3;
+use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use lucent_core::mesh::Mesh;
+use lucent_core::mesh::deform::Deformation;
+use lucent_gpu::camera::OrbitCamera;
+use std::path::{Path, PathBuf};
+
+/// Side of the equirect copy of an environment map that the GPU reflects (as the scene module).
+const REFLECTION_SIZE: (usize, usize) = (256, 128);
+
+/// What `lucent render` works on, after loading and parsing.
+pub struct Scene {
+    /// Where the mesh came from, for messages (`"embedded bunny"`, a built-in name or the path).
+    pub source: String,
+    /// The mesh in its rest pose (before [`Scene::deform`]), mesh units.
+    pub mesh: Mesh,
+    /// The mesh file, when the mesh came from one (HTSM reads glTF volume parameters from it).
+    pub mesh_path: Option<PathBuf>,
+    /// The scattering material.
+    pub material: Material,
+    /// Model scale: the largest side of the mesh's bounding box, metres.
+    pub scale: f64,
+    /// Dipole coefficients converted to mesh units by the model scale.
+    pub dipole: Dipole,
+    /// Lights (mesh units) with whether each casts shadows.
+    pub lights: Vec<SceneLight>,
+    /// Distant environment: SH for the solve, a small map for the GPU reflection.
+    pub environment: Option<LoadedEnvironment>,
+    /// Deformations applied in order to the rest mesh (empty: none).
+    pub deform: Vec<Deformation>,
+    /// The camera around the rest mesh's bounding sphere.
+    pub camera: OrbitCamera,
+    /// Exposure multiplier before tone mapping (> 0).
+    pub exposure: f32,
+}
+
+impl Scene {
+    /// The rest mesh deformed by every deformation at animation parameter `t` (0 = rest pose,
+    /// 1 = as specified; see `Deformation::apply`).
+    pub fn deformed(&self, t: f32) -> Mesh {
+        let mut mesh = self.mesh.clone();
+        let mut pos = Vec::with_capacity(mesh.positions.len());
+        for d in &self.deform {
+            d.apply(&mesh, t, &mut pos);
+            std::mem::swap(&mut mesh.positions, &mut pos);
+        }
+        mesh
+    }
+
+    /// The lights alone, for the GPU highlight.
+    pub fn plain_lights(&self) -> Vec<Light> {
+        self.lights.iter().map(|l| l.light).collect()
+    }
+}
+
+/// Loads the scene file (if any), the mesh, material, lights and environment named by `args`.
+pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    let file = args.scene.as_deref().map(scene_file::Scene::load).transpose()?;
+    // Errors from the file's contents (mesh, environment) name the file too.
+    let in_file = |e: anyhow::Error| match &args.scene {
+        Some(p) => e.context(format!("scene file {}", p.display())),
+        None => e,
+    };
+    let (source, mesh, mesh_path) = match (&args.mesh, &file) {
+        (Some(path), _) => {
+            (path.display().to_string(), lucent_core::mesh::load_mesh(path)?, Some(path.clone()))
+        }
+        (None, Some(f)) => {
+            let mesh = f.load_mesh().map_err(in_file)?;
+            match f.mesh_source() {
+                scene_file::MeshSource::File(p) => (p.display().to_string(), mesh, Some(p)),
+                scene_file::MeshSource::Builtin(name) => (format!("built-in {name}"), mesh, None),
+            }
+        }
+        (None, None) => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny(), None),
+    };
+    let material = match (&args.material, &file) {
+        (Some(name), _) => Material::by_name(name)?,
+        (None, Some(f)) => f.material()?,
+        (None, None) => Material::by_name("skimmilk")?,
+    };
+    let scale = args.scale.or(file.as_ref().map(|f| f.scale)).unwrap_or(0.05);
+    if !(scale.is_finite() && scale > 0.0) {
+        bail!("--scale must be a positive number of metres, got {scale}");
+    }
+    let exposure = args.exposure.or(file.as_ref().map(|f| f.exposure)).unwrap_or(1.0);
+    if !(exposure.is_finite() && exposure > 0.0) {
+        bail!("--exposure must be a positive number, got {exposure}");
+    }
+    let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, scale);
+    let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+
+    let environment = match (&args.env, &file) {
+        (Some(spec), _) => {
+            let rotation = args.env_rotation.unwrap_or(0.0);
+            Some(load_environment(&resolve_env(spec)?, rotation, 1.0)?)
+        }
+        (None, Some(f)) => {
+            let mut f = f.clone();
+            if let (Some(spec), Some(r)) = (&mut f.environment, args.env_rotation) {
+                spec.rotation = r;
+            }
+            f.environment().map_err(in_file)?
+        }
+        (None, None) => None,
+    };
+    if let Some(env) = &environment {
+        // The DC term: the map's mean radiance, what decides an environment-lit image's level.
+        let mean = env.environment.sh.coeffs[0] * (0.282_094_8 * env.environment.intensity);
+        log::info!("environment: mean radiance {mean:.3}, rotation {} deg", env.environment.rotation_deg);
+    }
+    let mut lights: Vec<SceneLight> = if !args.light.is_empty() {
+        args.light.iter().map(|s| parse_light(s, center).map(SceneLight::from)).collect::<Result<Vec<_>>>()?
+    } else if let Some(f) = &file {
+        f.lights(center)
+    } else {
+        Vec::new()
+    };
+    if lights.is_empty() && environment.is_none() {
+        lights.push(default_light(&mesh).into());
+    }
+    if args.no_shadows {
+        lights.iter_mut().for_each(|l| l.shadows = false);
+    }
+    let deform = match (&args.deform, &file) {
+        (Some(spec), _) => vec![spec.parse::<Deformation>().with_context(|| format!("--deform {spec:?}"))?],
+        (None, Some(f)) => f.deformations()?,
+        (None, None) => Vec::new(),
+    };
+    let mut camera = file.as_ref().map(|f| f.camera()).unwrap_or_default();
+    if let Some(y) = args.yaw {
+        camera.yaw_deg = y;
+    }
+    if let Some(p) = args.pitch {
+        camera.pitch_deg = p;
+    }
+    if args.distance.is_some() {
+        camera.distance = args.distance;
+    }
+    if !camera.yaw_deg.is_finite() || !(-89.0..=89.0).contains(&camera.pitch_deg) {
+        bail!("--pitch must be within -89..89 degrees and --yaw finite");
+    }
+    if let Some(d) = camera.distance
+        && !(d.is_finite() && d > 1.0)
+    {
+        bail!("--distance is in bounding-sphere radii and must be > 1, got {d}");
+    }
+    Ok(Scene {
+        source,
+        mesh,
+        mesh_path,
+        material,
+        scale,
+        dipole,
+        lights,
+        environment,
+        deform,
+        camera,
+        exposure,
+    })
+}
+
+/// `courtyard` and `forest` name the maps in the repository's `assets/` (looked up from the
+/// working directory, then from the source tree); anything else is a path.
+fn resolve_env(spec: &str) -> Result<PathBuf> {
+    let name = spec.trim().to_ascii_lowercase();
+    if name == "courtyard" || name == "forest" {
+        let rel = PathBuf::from("assets").join(format!("{name}.exr"));
+        let in_tree = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(&rel);
+        return [rel, in_tree]
+            .into_iter()
+            .find(|p| p.is_file())
+            .with_context(|| format!("--env {spec}: assets/{name}.exr not found (run from the repository)"));
+    }
+    Ok(PathBuf::from(spec))
+}
+
+/// Loads an equirect map: SH projection for the solve and the rotated reflection copy.
+fn load_environment(path: &Path, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
+    if !rotation.is_finite() {
+        bail!("--env-rotation must be finite");
+    }
+    let map = EnvMap::load(path)?;
+    let environment = Environment { rotation_deg: rotation, intensity, ..Environment::from_map(&map) };
+    let (w, h) = REFLECTION_SIZE;
+    Ok(LoadedEnvironment { environment, reflection: map.downsampled(w, h).rotated(rotation) })
+}
+
+/// Behind (-z, away from the default camera) and above the object, at 2.5 bounding radii.
+fn default_light(mesh: &Mesh) -> Light {
+    let (center, radius) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+    let position = center + Vec3::new(0.0, 1.2, -2.2) * radius;
+    point_light(position, center)
+}
+
+/// A white point light whose irradiance at the object's centre distance is 1 (arbitrary but
+/// consistent units), so images look alike whatever the mesh units.
+fn point_light(position: Vec3, center: Vec3) -> Light {
+    let d2 = position.distance_squared(center).max(1e-12);
+    Light::Point { position, intensity: Vec3::splat(d2) }
+}
+
+/// Parses `point:x,y,z` (position, mesh units) or `dir:x,y,z` (direction the light travels).
+/// Point lights give irradiance 1 at the distance of `center`; directional lights give 1.
+pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
+    let usage = "expected point:x,y,z (position, mesh units) or dir:x,y,z (direction of travel)";
+    let (kind, rest) = spec.split_once(':').with_context(|| format!("--light {spec:?}: {usage}"))?;
+    let v: Vec<f32> = rest
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("--light {spec:?}: {e}; {usage}"))?;
+    let [x, y, z] = v[..] else {
+        bail!("--light {spec:?}: {} numbers given; {usage}", v.len());
+    };
+    let p = Vec3::new(x, y, z);
+    if !p.is_finite() {
+        bail!("--light {spec:?}: coordinates must be finite");
+    }
+    match kind.trim().to_ascii_lowercase().as_str() {
+        "point" => Ok(point_light(p, center)),
+        "dir" | "directional" => {
+            if p.length_squared() == 0.0 {
+                bail!("--light {spec:?}: a direction cannot be zero");
+            }
+            Ok(Light::Directional { direction: p.normalize(), irradiance: Vec3::ONE })
+        }
+        other => bail!("--light {spec:?}: unknown kind {other:?}; {usage}"),
+    }
+}
+
+/// The lights turned by `angle` radians about the vertical axis through `center` (positions
+/// and directions), for `--orbit-light`.
+pub fn orbit_lights(lights: &[SceneLight], center: Vec3, angle: f32) -> Vec<SceneLight> {
+    let q = glam::Quat::from_rotation_y(angle);
+    let turn = |p: Vec3| center + q * (p - center);
+    lights
+        .iter()
+        .map(|l| SceneLight {
+            light: match l.light {
+                Light::Point { position, intensity } => Light::Point { position: turn(position), intensity },
+                Light::Directional { direction, irradiance } => {
+                    Light::Directional { direction: q * direction, irradiance }
+                }
+                Light::Spot { position, direction, intensity, cone_angle, soft_edge } => Light::Spot {
+                    position: turn(position),
+                    direction: q * direction,
+                    intensity,
+                    cone_angle,
+                    soft_edge,
+                },
+            },
+            shadows: l.shadows,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+
+    fn args(extra: &[&str]) -> RenderArgs {
+        let mut v = vec!["lucent", "render"];
+        v.extend_from_slice(extra);
+        match Cli::parse_from(v).command {
+            Some(Command::Render(a)) => a,
+            _ => unreachable!(),
+        }
+    }
+
+    fn candle() -> String {
+        format!("{}/../../examples/scenes/candle.toml", env!("CARGO_MANIFEST_DIR"))
+    }
+
+    #[test]
+    fn lights_parse_and_bad_ones_are_rejected() {
+        let c = Vec3::ZERO;
+        assert_eq!(
+            parse_light("point:0,3,4", c).unwrap(),
+            Light::Point { position: Vec3::new(0.0, 3.0, 4.0), intensity: Vec3::splat(25.0) }
+        );
+        assert_eq!(
+            parse_light("dir: 0, -2, 0", c).unwrap(),
+            Light::Directional { direction: Vec3::NEG_Y, irradiance: Vec3::ONE }
+        );
+        for bad in ["point:1,2", "spot:1,2,3", "point", "dir:0,0,0", "point:a,b,c", "point:1,2,inf"] {
+            let e = parse_light(bad, c).unwrap_err().to_string();
+            assert!(e.contains(bad), "{bad}: {e}");
+        }
+    }
+
+    /// Flags given explicitly win over the scene file; the rest comes from the file.
+    #[test]
+    fn flags_override_the_scene_file() {
+        let s = load_scene(&args(&["--scene", &candle()])).unwrap();
+        assert_eq!(s.material.name, "Wax");
+        assert_eq!((s.scale, s.exposure, s.camera.yaw_deg), (0.1, 1.0, 20.0));
+        assert_eq!(s.lights.len(), 2);
+        assert!(s.lights[0].shadows && !s.lights[1].shadows);
+        assert_eq!(s.deform, vec![Deformation::Twist { degrees: 40.0 }]);
+
+        let s = load_scene(&args(&[
+            "--scene",
+            &candle(),
+            "--material",
+            "marble",
+            "--scale",
+            "0.2",
+            "--exposure",
+            "2",
+            "--yaw",
+            "-10",
+            "--light",
+            "dir:0,-1,0",
+            "--deform",
+            "twist:10",
+            "--no-shadows",
+        ]))
+        .unwrap();
+        assert_eq!(s.material.name, "Marble");
+        assert_eq!((s.scale, s.exposure, s.camera.yaw_deg, s.camera.pitch_deg), (0.2, 2.0, -10.0, 10.0));
+        assert_eq!(s.lights.len(), 1);
+        assert!(!s.lights[0].shadows);
+        assert_eq!(s.deform, vec![Deformation::Twist { degrees: 10.0 }]);
+    }
+
+    #[test]
+    fn defaults_without_a_scene() {
+        let s = load_scene(&args(&[])).unwrap();
+        assert_eq!((s.material.name.as_str(), s.scale, s.exposure), ("Skimmilk", 0.05, 1.0));
+        assert_eq!(s.lights.len(), 1, "the default light");
+        assert!(s.lights[0].shadows, "command-line lights cast shadows by default");
+        assert!(s.environment.is_none() && s.deform.is_empty());
+        // An environment alone needs no extra light.
+        let s = load_scene(&args(&["--env", "forest", "--env-rotation", "45"])).unwrap();
+        assert!(s.lights.is_empty());
+        assert_eq!(s.environment.unwrap().environment.rotation_deg, 45.0);
+    }
+
+    /// Orbiting keeps the distance to the centre and turns about +Y.
+    #[test]
+    fn orbit_turns_about_the_vertical_axis() {
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let l = [SceneLight::from(Light::Point { position: c + Vec3::X, intensity: Vec3::ONE })];
+        let turned = orbit_lights(&l, c, std::f32::consts::FRAC_PI_2);
+        let Light::Point { position, .. } = turned[0].light else { panic!() };
+        assert!((position - (c - Vec3::Z)).length() < 1e-6, "{position}");
+    }
+}
