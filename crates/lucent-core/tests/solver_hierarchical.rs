@@ -280,3 +280,47 @@ fn bunny_incremental_matches_on_the_fly_after_deformation() {
         }
     }
 }
+
+/// A local bump on the bunny: the incremental update keeps the untouched receivers' links and
+/// ends with exactly the links and values a fresh solve of the bumped mesh has, also when a
+/// per-frame form factor budget spreads the work over several updates.
+#[test]
+fn bunny_local_incremental_update_equals_fresh_links() {
+    use lucent_core::mesh::deform::{Deformer, bump};
+    let mesh = lucent_core::mesh::embedded::bunny();
+    let h = face_cluster::build(&mesh);
+    let ext = mesh.extent();
+    let tip = mesh.positions.iter().copied().max_by(|a, b| a.y.total_cmp(&b.y)).unwrap();
+    let bumped = bump(tip, 0.1 * ext, 0.02 * ext).deformed(&mesh);
+    assert!(
+        bumped.positions.iter().zip(&mesh.positions).filter(|(a, b)| a != b).count()
+            < mesh.positions.len() / 4
+    );
+    let lights = light_for(&mesh);
+    for (name, scale) in [("skimmilk", 0.1), ("ketchup", 0.01)] {
+        let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), ext as f64, scale);
+        let e = face_irradiance(&bumped, &lights, d.eta);
+        let mut fresh = HierarchicalSolver::new(bumped.clone(), h.clone(), d, Oracle::default());
+        let want_links = fresh.link().links;
+        let want = fresh.solve_render(&e).face_b;
+        for budget in [None, Some(300)] {
+            let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            inc.link();
+            let first = inc.update_incremental(&bumped.positions, budget);
+            let mut frames = 1;
+            while inc.links().unwrap().dirty.iter().any(|&x| x) {
+                inc.update_incremental(&bumped.positions, budget);
+                frames += 1;
+                assert!(frames < 1000, "budgeted updates do not converge");
+            }
+            assert_eq!(inc.links().unwrap().len(), want_links, "{name} {budget:?}");
+            let got = inc.solve_render(&e).face_b;
+            let err = rel_rmse(&bumped.face_to_vertex(&want), &bumped.face_to_vertex(&got));
+            println!(
+                "bunny bump {name} at {scale} m, budget {budget:?}: {} form factors in the first update, {frames} updates, {:.2e} vs fresh",
+                first.form_factors, err
+            );
+            assert!(err <= 1e-5, "{name} {budget:?}: {err:e}");
+        }
+    }
+}

@@ -46,6 +46,10 @@ pub struct LinkSet {
     /// Links whose coefficient is stale (left over when an incremental update ran out of
     /// budget); recomputed first by the next update.
     pub dirty: Vec<bool>,
+    /// Order-independent hash of each receiver's candidate emitters (per cluster), which
+    /// tells an incremental update whether a receiver subtree sees the same candidates as
+    /// before.
+    cand_hash: Vec<u64>,
 }
 
 impl LinkSet {
@@ -196,12 +200,127 @@ impl<'a> Ctx<'a> {
     }
 }
 
+impl Ctx<'_> {
+    /// [`Ctx::receive`] for an incremental relink: a pair whose clusters both kept their
+    /// geometry and that was linked before (clean) is linked again with its old coefficient
+    /// without asking the oracle (its verdict depends only on the two clusters and their
+    /// children); form factor evaluations draw on `reuse.remaining`, and once it is spent a
+    /// link keeps its old coefficient of the same kind (or gets a one-point estimate) and is
+    /// marked dirty.
+    fn receive_reusing(
+        &mut self,
+        oracle: &Oracle,
+        r: usize,
+        cands: &[u32],
+        defer: &mut Vec<u32>,
+        reuse: &Reuse,
+        chunk: &mut LinkChunk,
+    ) {
+        let h = self.ev.h;
+        let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
+        let src = view.src;
+        self.stack.clear();
+        self.stack.extend_from_slice(cands);
+        let (mut estimate, mut recv_scale) = (None, None);
+        while let Some(e) = self.stack.pop() {
+            let e = e as usize;
+            let unchanged = !reuse.changed[r] && !reuse.changed[e];
+            let old = reuse.old_link(r, e);
+            if unchanged && let Some((kind, f, false)) = old {
+                chunk.push(r, e, kind, f, false);
+                continue;
+            }
+            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate, &mut recv_scale) {
+                Decision::Link(kind) => {
+                    let over =
+                        kind == LinkKind::FormFactor && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
+                    if over {
+                        let f = match old {
+                            Some((LinkKind::FormFactor, f, _)) => f,
+                            _ => {
+                                self.point_samples += 1;
+                                self.ev.eval(&src, r, e, LinkKind::PointSample)
+                            }
+                        };
+                        chunk.push(r, e, kind, f, true);
+                        continue;
+                    }
+                    let mut f = match (kind, estimate) {
+                        (LinkKind::PointSample, Some(f)) => f,
+                        _ => self.ev.eval(&src, r, e, kind),
+                    };
+                    if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
+                        f = std::array::from_fn(|c| f[c] * s[c]);
+                    }
+                    match kind {
+                        LinkKind::FormFactor => self.form_factors += 1,
+                        LinkKind::PointSample => self.point_samples += 1,
+                    }
+                    chunk.push(r, e, kind, f, false);
+                }
+                Decision::SplitReceiver => defer.push(e as u32),
+                Decision::SplitEmitter => self.stack.extend_from_slice(h.nodes[e].children()),
+            }
+        }
+    }
+}
+
 /// Links found in one subtree, in receiver preorder.
 #[derive(Default)]
 struct LinkChunk {
     recv: Vec<u32>,
     emitter: Vec<u32>,
     ff: Vec<[f32; 3]>,
+    dirty: Vec<bool>,
+    /// `(receiver, candidate hash)` of the receivers visited.
+    hashes: Vec<(u32, u64)>,
+}
+
+/// Order-independent hash of a candidate list.
+fn cand_hash(cands: &[u32]) -> u64 {
+    cands.iter().fold(0u64, |acc, &e| {
+        // splitmix64 of each emitter, summed.
+        let mut z = (e as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        acc.wrapping_add(z ^ (z >> 31))
+    })
+}
+
+impl LinkChunk {
+    #[inline]
+    fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: [f32; 3], dirty: bool) {
+        self.recv.push(r as u32);
+        self.emitter.push(match kind {
+            LinkKind::FormFactor => e as u32 | FF_BIT,
+            LinkKind::PointSample => e as u32,
+        });
+        self.ff.push(f);
+        self.dirty.push(dirty);
+    }
+}
+
+/// What an incremental relink may keep from the previous link set.
+struct Reuse<'a> {
+    /// The links before the update.
+    old: &'a LinkSet,
+    /// Clusters with a moved face in their subtree (their geometry, or a descendant's, changed).
+    changed: &'a [bool],
+    /// Receivers with a dirty link in their subtree.
+    stale: &'a [bool],
+    /// Form factor evaluations left in this update's budget.
+    remaining: &'a AtomicI64,
+}
+
+impl Reuse<'_> {
+    /// The old, clean link `e -> r` of this kind, if any.
+    #[inline]
+    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, [f32; 3], bool)> {
+        let o = self.old;
+        (o.recv_start[r] as usize..o.recv_start[r + 1] as usize)
+            .find(|&j| o.emitter_of(j) == e)
+            .map(|j| (o.kind_of(j), o.ff[j], o.dirty[j]))
+    }
 }
 
 impl HierarchicalSolver {
@@ -312,18 +431,31 @@ impl HierarchicalSolver {
     /// Refines from the root's self-link and stores the links (render and incremental modes).
     pub fn link(&mut self) -> SolveStats {
         let t0 = Instant::now();
+        let mut stats = self.relink(None);
+        stats.link_ms = ms(t0.elapsed());
+        stats.total_ms = stats.link_ms;
+        stats
+    }
+
+    /// Runs the receiver-driven refinement from the root and stores the resulting links. With
+    /// `reuse`, receiver subtrees whose candidates and own geometry are unchanged take their old
+    /// links verbatim, and unchanged pairs keep their old coefficients (see
+    /// [`HierarchicalSolver::update_incremental`]).
+    fn relink(&mut self, reuse: Option<&Reuse>) -> SolveStats {
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
-        let mut set = LinkSet { recv_start: vec![0; h.len() + 1], ..Default::default() };
+        let mut set =
+            LinkSet { recv_start: vec![0; h.len() + 1], cand_hash: vec![0; h.len()], ..Default::default() };
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::default()];
-            self.link_rec(&mut ctx, 0, &[0], &mut chunks);
+            self.link_rec(&mut ctx, 0, &[0], &mut chunks, reuse);
             stats.form_factors = ctx.form_factors;
             stats.point_samples = ctx.point_samples;
             let total: usize = chunks.iter().map(|c| c.recv.len()).sum();
             set.emitter.reserve_exact(total);
             set.ff.reserve_exact(total);
+            set.dirty.reserve_exact(total);
             let mut counts = vec![0u32; h.len()];
             for c in &chunks {
                 for &r in &c.recv {
@@ -331,33 +463,63 @@ impl HierarchicalSolver {
                 }
                 set.emitter.extend_from_slice(&c.emitter);
                 set.ff.extend_from_slice(&c.ff);
+                set.dirty.extend_from_slice(&c.dirty);
+                for &(r, hash) in &c.hashes {
+                    set.cand_hash[r as usize] = hash;
+                }
             }
             for (i, &c) in counts.iter().enumerate() {
                 set.recv_start[i + 1] = set.recv_start[i] + c;
             }
-            set.dirty = vec![false; total];
         }
         stats.links = set.len();
         self.links = Some(set);
-        stats.link_ms = ms(t0.elapsed());
-        stats.total_ms = stats.link_ms;
         stats
     }
 
-    fn link_rec(&self, ctx: &mut Ctx, r: usize, cands: &[u32], chunks: &mut Vec<LinkChunk>) {
+    fn link_rec(
+        &self,
+        ctx: &mut Ctx,
+        r: usize,
+        cands: &[u32],
+        chunks: &mut Vec<LinkChunk>,
+        reuse: Option<&Reuse>,
+    ) {
+        let h = &self.hierarchy;
+        let n = h.nodes[r];
+        let hash = cand_hash(cands);
+        if let Some(u) = reuse
+            && !u.changed[r]
+            && !u.stale[r]
+            && u.old.cand_hash[r] == hash
+            && cands.iter().all(|&e| !u.changed[e as usize])
+        {
+            // Same candidates, and nothing this subtree's decisions read has changed: same
+            // links, same values.
+            let chunk = chunks.last_mut().expect("a chunk");
+            let old = u.old;
+            for q in r..n.subtree_end as usize {
+                let k = (old.recv_start[q + 1] - old.recv_start[q]) as usize;
+                chunk.recv.extend(std::iter::repeat_n(q as u32, k));
+                chunk.hashes.push((q as u32, old.cand_hash[q]));
+            }
+            let (a, z) = (old.recv_start[r] as usize, old.recv_start[n.subtree_end as usize] as usize);
+            chunk.emitter.extend_from_slice(&old.emitter[a..z]);
+            chunk.ff.extend_from_slice(&old.ff[a..z]);
+            chunk.dirty.extend(std::iter::repeat_n(false, z - a));
+            return;
+        }
         let mut defer = Vec::new();
         {
             let chunk = chunks.last_mut().expect("a chunk");
-            ctx.receive(&self.oracle, r, cands, &mut defer, |e, kind, f| {
-                chunk.recv.push(r as u32);
-                chunk.emitter.push(match kind {
-                    LinkKind::FormFactor => e as u32 | FF_BIT,
-                    LinkKind::PointSample => e as u32,
-                });
-                chunk.ff.push(f);
-            });
+            chunk.hashes.push((r as u32, hash));
+            match reuse {
+                None => ctx.receive(&self.oracle, r, cands, &mut defer, |e, kind, f| {
+                    chunk.push(r, e, kind, f, false);
+                }),
+                Some(u) => ctx.receive_reusing(&self.oracle, r, cands, &mut defer, u, chunk),
+            }
         }
-        let n = self.hierarchy.nodes[r];
         if n.is_leaf() {
             return;
         }
@@ -368,7 +530,7 @@ impl HierarchicalSolver {
                 .map(|&c| {
                     let mut sub = Ctx::new(self);
                     let mut sub_chunks = vec![LinkChunk::default()];
-                    self.link_rec(&mut sub, c as usize, &defer, &mut sub_chunks);
+                    self.link_rec(&mut sub, c as usize, &defer, &mut sub_chunks, reuse);
                     (sub, sub_chunks)
                 })
                 .collect();
@@ -379,7 +541,7 @@ impl HierarchicalSolver {
             chunks.push(LinkChunk::default());
         } else {
             for &c in n.children() {
-                self.link_rec(ctx, c as usize, &defer, chunks);
+                self.link_rec(ctx, c as usize, &defer, chunks, reuse);
             }
         }
     }
@@ -450,17 +612,17 @@ impl HierarchicalSolver {
     }
 
     /// Incremental mode (§5.5): moves the mesh to `positions` (same topology), refits the
-    /// hierarchy, and revisits every stored link whose receiver or emitter moved (or that is
-    /// stale from an earlier budget cut or a material change): the oracle is asked again and, if
-    /// the link still holds, its coefficient is recomputed. `budget` bounds the number of
-    /// coefficient evaluations in this call (links beyond it stay stale, marked dirty, and are
-    /// done first next time), which bounds the frame time as in the paper.
+    /// hierarchy and brings the stored links up to date with the oracle, locally: the
+    /// receiver-driven refinement is re-run from the root, but a receiver subtree whose own
+    /// clusters did not move, holds no stale link, and whose candidate emitters did not move
+    /// keeps its old links wholesale, and a link between two unmoved clusters keeps its old
+    /// coefficient. Links are thus promoted or demoted only where geometry changed, and the
+    /// result is the link set on-the-fly mode would build (identical once no link is stale).
     ///
-    /// Links whose verdict changed (a link to be moved down or up the hierarchy) are not
-    /// patched one level at a time: the whole link set is rebuilt from the root, which is what
-    /// "promotion/demotion until consistent" converges to and keeps the result identical to
-    /// on-the-fly mode. `stats.link_ms` is the whole update; a relink is visible as
-    /// `stats.links` changing.
+    /// `budget` bounds the number of semi-analytic form factor evaluations in this call; links
+    /// beyond it keep their old coefficient (or a one-point estimate if they are new), are
+    /// marked dirty, and are recomputed first by the next call, which bounds the frame time as
+    /// in the paper. `stats.link_ms` is the whole update.
     pub fn update_incremental(&mut self, positions: &[glam::Vec3], budget: Option<usize>) -> SolveStats {
         let t0 = Instant::now();
         assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
@@ -471,102 +633,41 @@ impl HierarchicalSolver {
         }
         let moved_vertex: Vec<bool> =
             self.mesh.positions.iter().zip(positions).map(|(a, b)| a != b).collect();
-        self.mesh.positions.copy_from_slice(positions);
-        self.hierarchy.refit(&self.mesh);
+        let any_moved = moved_vertex.iter().any(|&m| m);
+        if any_moved {
+            self.mesh.positions.copy_from_slice(positions);
+            self.hierarchy.refit(&self.mesh);
+        }
+        let old = self.links.take().expect("links stored");
         let h = &self.hierarchy;
-        let mut moved = vec![false; h.len()];
+        let mut changed = vec![false; h.len()];
+        let mut stale = vec![false; h.len()];
         for i in (0..h.len()).rev() {
             let n = &h.nodes[i];
-            if n.is_leaf() {
+            if n.is_leaf() && any_moved {
                 let t = self.mesh.triangles[h.leaf_faces[n.leaf_start as usize] as usize];
-                moved[i] = t.iter().any(|&v| moved_vertex[v as usize]);
+                changed[i] |= t.iter().any(|&v| moved_vertex[v as usize]);
             }
-            if moved[i] && n.parent != crate::hierarchy::NO_NODE {
-                moved[n.parent as usize] = true;
+            let (a, z) = (old.recv_start[i] as usize, old.recv_start[i + 1] as usize);
+            stale[i] |= old.dirty[a..z].iter().any(|&d| d);
+            if n.parent != crate::hierarchy::NO_NODE {
+                let p = n.parent as usize;
+                changed[p] |= changed[i];
+                stale[p] |= stale[i];
             }
+        }
+        if !changed[0] && !stale[0] {
+            self.links = Some(old);
+            let stats = SolveStats {
+                links: self.links.as_ref().map_or(0, |l| l.len()),
+                link_ms: ms(t0.elapsed()),
+                ..Default::default()
+            };
+            return SolveStats { total_ms: stats.link_ms, ..stats };
         }
         let remaining = AtomicI64::new(budget.map(|b| b as i64).unwrap_or(i64::MAX));
-        let restructure = std::sync::atomic::AtomicBool::new(false);
-        let mut links = self.links.take().expect("links stored");
-        // Split the link arrays by chunks of receivers, then work on chunks in parallel.
-        const CHUNK: usize = 1024;
-        let mut parts = Vec::new();
-        {
-            let (mut em, mut ff, mut dirty) =
-                (&mut links.emitter[..], &mut links.ff[..], &mut links.dirty[..]);
-            for a in (0..h.len()).step_by(CHUNK) {
-                let b = (a + CHUNK).min(h.len());
-                let len = (links.recv_start[b] - links.recv_start[a]) as usize;
-                let (e1, e2) = em.split_at_mut(len);
-                let (f1, f2) = ff.split_at_mut(len);
-                let (d1, d2) = dirty.split_at_mut(len);
-                parts.push((a, b, e1, f1, d1));
-                (em, ff, dirty) = (e2, f2, d2);
-            }
-        }
-        let recv_start = &links.recv_start;
-        let counts: Vec<(usize, usize)> = parts
-            .into_par_iter()
-            .map(|(a, b, em, ff, dirty)| {
-                let mut ctx = Ctx::new(self);
-                let base = recv_start[a] as usize;
-                let (mut est, mut scale) = (None, None);
-                for r in a..b {
-                    let (lo, hi) = (recv_start[r] as usize - base, recv_start[r + 1] as usize - base);
-                    let touched = (lo..hi).any(|j| dirty[j] || moved[r] || moved[(em[j] & !FF_BIT) as usize]);
-                    if !touched {
-                        continue;
-                    }
-                    let view = ReceiverView::new(h, &ctx.ev.d32, ctx.inv_rtot, r);
-                    for j in lo..hi {
-                        let e = (em[j] & !FF_BIT) as usize;
-                        if !(dirty[j] || moved[r] || moved[e]) {
-                            continue;
-                        }
-                        let kind = match self.oracle.decide(h, &ctx.ev.d32, &view, r, e, &mut est, &mut scale)
-                        {
-                            Decision::Link(k) => k,
-                            _ => {
-                                restructure.store(true, Ordering::Relaxed);
-                                continue;
-                            }
-                        };
-                        if remaining.fetch_sub(1, Ordering::Relaxed) <= 0 {
-                            dirty[j] = true;
-                            continue;
-                        }
-                        let mut f = match (kind, est) {
-                            (LinkKind::PointSample, Some(f)) => f,
-                            _ => ctx.ev.eval(&view.src, r, e, kind),
-                        };
-                        if let (LinkKind::PointSample, Some(s)) = (kind, scale) {
-                            f = std::array::from_fn(|c| f[c] * s[c]);
-                        }
-                        match kind {
-                            LinkKind::FormFactor => ctx.form_factors += 1,
-                            LinkKind::PointSample => ctx.point_samples += 1,
-                        }
-                        ff[j] = f;
-                        em[j] = match kind {
-                            LinkKind::FormFactor => e as u32 | FF_BIT,
-                            LinkKind::PointSample => e as u32,
-                        };
-                        dirty[j] = false;
-                    }
-                }
-                (ctx.form_factors, ctx.point_samples)
-            })
-            .collect();
-        self.links = Some(links);
-        let mut stats = SolveStats::default();
-        if restructure.load(Ordering::Relaxed) {
-            stats = self.link();
-        }
-        for (f, p) in counts {
-            stats.form_factors += f;
-            stats.point_samples += p;
-        }
-        stats.links = self.links.as_ref().map_or(0, |l| l.len());
+        let reuse = Reuse { old: &old, changed: &changed, stale: &stale, remaining: &remaining };
+        let mut stats = self.relink(Some(&reuse));
         stats.link_ms = ms(t0.elapsed());
         stats.total_ms = stats.link_ms;
         stats
