@@ -121,8 +121,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub deform: Option<String>,
     /// Render an animation of N frames into the --out directory (frame_0001.png, ...): the
-    /// deformation ramped from the rest pose to full, or with --orbit-light the lights turning
-    /// once about the vertical axis through the object.
+    /// deformation ramped from the rest pose to full (a noise deformation flows through the
+    /// surface instead), or with --orbit-light the lights turning once about the vertical axis
+    /// through the object.
     #[arg(long)]
     pub frames: Option<u32>,
     /// With --frames: move the lights on a circle about the vertical axis through the object's

@@ -116,6 +116,8 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         adapter,
         out.join(frame_name(0)).display(),
     );
+    // Before the medians sort the columns.
+    let first_link_ms = times.link.first().copied().unwrap_or(0.0);
     println!(
         "lucent: per frame (median of {frames}): irradiance {:.1} ms, link/update {:.1} ms, solve {:.1} ms, \
          render {:.1} ms, write {:.1} ms; first frame link/update {:.1} ms{}",
@@ -124,7 +126,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         median(&mut times.solve),
         median(&mut times.render),
         median(&mut times.write),
-        times.link.first().copied().unwrap_or(0.0),
+        first_link_ms,
         first_links.map(|l| format!(", {l} links")).unwrap_or_default(),
     );
     Ok(())
