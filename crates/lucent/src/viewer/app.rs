@@ -11,7 +11,7 @@ use super::render::{self, DrawParams, ViewRenderer, Viewport};
 use super::scene::Scene;
 use super::screenshot::{self, Offscreen};
 use super::script::{Action, Automation, Step};
-use super::state::{ViewMethod, ViewState};
+use super::state::{EnvChoice, ViewMethod, ViewState};
 use super::ui::{self, Status};
 use super::worker::{MeshOrigin, Request, Worker};
 use anyhow::Context as _;
@@ -217,7 +217,10 @@ impl App {
         upload_scene(surface, &mut self.scene)?;
         let ui = EguiFrame::new(surface, output);
         let false_colour = self.scene.solution.clusters.is_some();
-        let params = draw_params(&self.camera, &self.scene.state, viewport, false_colour);
+        let mut params = draw_params(&self.camera, &self.scene.state, viewport, false_colour);
+        if !surface.renderer.reflects() {
+            params.shading.environment = 0.0;
+        }
         if let Some(frame) = surface.gfx.acquire() {
             let view = frame.texture.create_view(&Default::default());
             encode_and_submit(surface, &view, viewport, &params, &ui)?;
@@ -378,6 +381,11 @@ fn draw_params(
             eta: state.params.material.eta as f32,
             lights: core_adapter::core_lights(&state.params.lights),
             specular: if false_colour { 0.0 } else { 1.0 },
+            environment: if false_colour || state.params.env == EnvChoice::None {
+                0.0
+            } else {
+                state.params.env_strength
+            },
             ..Default::default()
         },
         tone: render::tone_map(if false_colour { 1.0 } else { state.exposure }),
@@ -472,6 +480,8 @@ fn upload_scene(surface: &mut Surface, scene: &mut Scene) -> anyhow::Result<()> 
         }
         scene.geometry_dirty = false;
     }
+    let p = &scene.state.params;
+    surface.renderer.set_environment(ctx, p.env, p.env_rotation_deg);
     if scene.radiance_dirty {
         // The figure 6.9 false colours replace the radiance while that view is on.
         let colours = scene.solution.clusters.as_ref().unwrap_or(&scene.solution.vertex_radiance);

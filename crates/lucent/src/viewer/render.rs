@@ -2,13 +2,16 @@
 //! (per-vertex `B/pi`, exit Fresnel per pixel, highlight) into an HDR target with 4x MSAA, then
 //! the tone-map pass (exposure, gamma curve, background) into the colour target, both restricted
 //! to the viewport beside the panel. The HDR targets have the size of the whole colour target so
-//! that the tone-map pass reads the texel under each pixel.
+//! that the tone-map pass reads the texel under each pixel. With an environment chosen, the mesh
+//! pass also reflects a small copy of the map, Fresnel-weighted (§5.4).
 
+use super::state::EnvChoice;
 use glam::Vec3;
 use lucent_core::Rgb;
+use lucent_core::irradiance::EnvMap;
 use lucent_core::mesh::Mesh;
 use lucent_gpu::camera::CameraView;
-use lucent_gpu::mesh_pass::{GpuMesh, MeshPass, Shading};
+use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, MeshPass, Shading};
 use lucent_gpu::tonemap::{ToneMap, ToneMapPass};
 use lucent_gpu::{DEPTH_FORMAT, GpuContext, HDR_FORMAT};
 
@@ -59,7 +62,15 @@ pub struct ViewRenderer {
     topology: (usize, usize),
     targets: Option<Targets>,
     srgb_target: bool,
+    /// The chosen map, downsampled for the reflection (`None` inside: none or unreadable).
+    env_map: Option<(EnvChoice, Option<EnvMap>)>,
+    /// The choice and rotation (in map columns) on the GPU now.
+    env_uploaded: Option<(EnvChoice, i64)>,
 }
+
+/// Size of the map copy the reflection samples (mirror reflection of a smooth surface: detail
+/// beyond this is lost in the Fresnel weight anyway).
+const REFLECTION_SIZE: (usize, usize) = (256, 128);
 
 impl ViewRenderer {
     /// Builds the passes for colour targets of `format`.
@@ -71,7 +82,46 @@ impl ViewRenderer {
             topology: (0, 0),
             targets: None,
             srgb_target: format.is_srgb(),
+            env_map: None,
+            env_uploaded: None,
         })
+    }
+
+    /// Whether the last [`ViewRenderer::set_environment`] set a map.
+    pub fn reflects(&self) -> bool {
+        matches!(self.env_map, Some((_, Some(_)))) && self.env_uploaded.is_some()
+    }
+
+    /// Sets the map that the Fresnel-weighted reflection samples: `choice`'s map (loaded once
+    /// per choice), rotated by `rotation_deg` about +Y to the nearest map column, as the SH
+    /// lighting is. Returns whether a map is set (false for none or an unreadable file).
+    pub fn set_environment(&mut self, ctx: &GpuContext, choice: EnvChoice, rotation_deg: f32) -> bool {
+        if self.env_map.as_ref().is_none_or(|(c, _)| *c != choice) {
+            let map = choice.path().and_then(|path| match EnvMap::load(std::path::Path::new(path)) {
+                Ok(m) => Some(m.downsampled(REFLECTION_SIZE.0, REFLECTION_SIZE.1)),
+                Err(e) => {
+                    log::warn!("environment reflection {path}: {e}");
+                    None
+                }
+            });
+            self.env_map = Some((choice, map));
+            self.env_uploaded = None;
+        }
+        let Some((_, Some(map))) = &self.env_map else { return false };
+        let columns = (rotation_deg / 360.0 * map.width as f32).round() as i64;
+        if self.env_uploaded != Some((choice, columns)) {
+            let rotated = map.rotated(rotation_deg);
+            let texels: Vec<[f32; 4]> = rotated.texels.iter().map(|t| t.extend(1.0).to_array()).collect();
+            match EnvironmentMap::from_rgba_f32(ctx, map.width as u32, map.height as u32, &texels) {
+                Ok(gpu) => self.mesh_pass.set_environment(ctx, &gpu),
+                Err(e) => {
+                    log::warn!("environment reflection: {e}");
+                    return false;
+                }
+            }
+            self.env_uploaded = Some((choice, columns));
+        }
+        true
     }
 
     /// Uploads `mesh`'s positions and normals: in place when the topology is unchanged
