@@ -12,6 +12,8 @@ use std::path::PathBuf;
         lucent render                                   # the embedded default scene -> lucent.png\n  \
         lucent render --mesh bunny.obj --material skimmilk --scale 0.05 --out bunny.png\n  \
         lucent render --light point:0,2,-3 --light dir:0,-1,0 --width 1024 --height 768\n  \
+        lucent render --scene examples/scenes/bunny_courtyard.toml --out courtyard.png\n  \
+        lucent render --deform twist:60 --frames 30 --out frames/  # frames/frame_0001.png ...\n  \
         lucent bench formfactor --json\n  \
         lucent view --mesh bunny.obj"
 )]

@@ -276,3 +276,22 @@ fn bad_animations_are_clean_errors_without_output() {
         assert!(!out.exists(), "{extra:?}: no output directory on error");
     }
 }
+
+/// `--env courtyard` lights the object by itself (no default light is added) and colours it after
+/// the map (warmer than it is blue); a missing map is a clean error naming it.
+#[test]
+fn environment_flag_lights_the_object() {
+    let dir = scratch("env");
+    let out = dir.join("env.png");
+    let o = out.to_str().unwrap();
+    let run = lucent(&["render", "--env", "courtyard", "--width", "64", "--height", "64", "--out", o], &[]);
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let img = image::open(&out).unwrap().to_rgba8();
+    assert!(object_luminance(&img) > 60.0, "the environment lights the bunny");
+    let centre = img.get_pixel(32, 36);
+    assert!(centre[0] > centre[2], "the courtyard's light is warm: {centre:?}");
+
+    let never = dir.join("never.png");
+    let run = lucent(&["render", "--env", "no-such-map.exr", "--out", never.to_str().unwrap()], &[]);
+    assert_clean_failure(&run, "no-such-map.exr", &never);
+}
