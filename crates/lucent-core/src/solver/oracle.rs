@@ -53,7 +53,7 @@ pub struct Oracle {
     /// `R`'s children's midpoints, deviates from the one seen from `R`'s midpoint by more than
     /// this. Smaller is more accurate and gives more links. In [`OracleMode::Transport`]:
     /// the largest relative change (unitless) of the one-point transport estimate between
-    /// `R`'s midpoint and its children's. Default 0.1 (transport; the solid-angle mode of the
+    /// `R`'s midpoint and its children's. Default 0.3 (transport; the solid-angle mode of the
     /// paper used 0.02).
     pub eps1: f32,
     /// `ε2` (sr): an emitter seen under a solid angle at most this large from the receiver's
@@ -82,7 +82,7 @@ pub struct Oracle {
     /// [`OracleMode::Transport`] only: absolute error floor per link, relative to the
     /// material's largest `R_d_total` (unitless). Interactions whose estimated error is below
     /// this are accepted whatever their relative error, so negligible far transport stays
-    /// coarse. Default 1e-4.
+    /// coarse. Default 1e-3.
     pub eps_abs: f32,
 }
 
@@ -90,12 +90,12 @@ impl Default for Oracle {
     fn default() -> Self {
         Oracle {
             mode: OracleMode::Transport,
-            eps1: 0.1,
+            eps1: 0.3,
             eps2: 0.1,
             eps_near_cluster: 0.0,
             min_flatness: 0.98,
             eps_normal: 0.05,
-            eps_abs: 1e-4,
+            eps_abs: 1e-3,
         }
     }
 }
@@ -196,8 +196,14 @@ impl Oracle {
         let separated = w != INSIDE
             && (rg.midpoint - eg.midpoint).length_squared()
                 > (rg.radius + eg.radius) * (rg.radius + eg.radius);
-        // Emitter verdict: far (one point sample is enough) or near.
-        let far = match self.mode {
+        let f_mid = if self.mode == OracleMode::Transport {
+            view.src.point_sample(d, eg.midpoint, eg.area)
+        } else {
+            [0.0; 3]
+        };
+        // Emitter verdict: far (one point sample is enough) or near. Evaluated only when
+        // needed (it costs five point samples).
+        let far_test = |estimate: &mut Option<[f32; 3]>, f_mid: [f32; 3]| match self.mode {
             OracleMode::SolidAngle => w <= self.eps2,
             OracleMode::Transport => {
                 // Bounding spheres must be disjoint: one-point estimates at midpoints say
@@ -206,7 +212,7 @@ impl Oracle {
                     && w <= MAX_FAR_SOLID_ANGLE
                     && view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, 0.0, 0.0)
                     && {
-                        let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                        let f = f_mid;
                         if en.is_leaf() {
                             // A face cannot be opened: estimate the one-point (midpoint rule)
                             // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
@@ -290,7 +296,7 @@ impl Oracle {
                         split = true
                     }
                     OracleMode::Transport => {
-                        let f = view.src.point_sample(d, eg.midpoint, eg.area);
+                        let f = f_mid;
                         let mut avg = [0.0f32; 3];
                         let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
                         for (k, &c) in rn.children().iter().enumerate() {
@@ -326,13 +332,14 @@ impl Oracle {
                 }
             }
             if split {
-                if !en.is_leaf() && !far && eg.area > rg.area {
+                if !en.is_leaf() && eg.area > rg.area && !far_test(estimate, f_mid) {
                     return Decision::SplitEmitter;
                 }
+                *estimate = None;
                 return Decision::SplitReceiver;
             }
         }
-        if far {
+        if far_test(estimate, f_mid) {
             return Decision::Link(LinkKind::PointSample);
         }
         if en.is_leaf() {
