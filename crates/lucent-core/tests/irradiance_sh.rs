@@ -346,3 +346,15 @@ fn bad_files_give_errors_naming_the_file() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The probes compiled into the binary decode to exactly the files in `assets/`.
+#[test]
+fn builtin_probes_equal_the_asset_files() {
+    for name in ["courtyard", "forest"] {
+        let builtin = EnvMap::builtin(&name.to_ascii_uppercase()).expect("a built-in name").unwrap();
+        let file = EnvMap::load(&asset(&format!("{name}.exr"))).unwrap();
+        assert_eq!((builtin.width, builtin.height), (file.width, file.height));
+        assert!(builtin.texels == file.texels, "{name}: texels differ");
+    }
+    assert!(EnvMap::builtin("studio").is_none());
+}

@@ -100,15 +100,31 @@ impl EnvMap {
     pub fn load(path: &Path) -> Result<EnvMap, EnvMapError> {
         let name = path.display().to_string();
         let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-        let (width, height, texels) = match ext.as_deref() {
-            Some("exr") => {
-                load_exr(path).map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?
-            }
-            Some("hdr") => {
-                load_hdr(path).map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?
-            }
+        let decoded = match ext.as_deref() {
+            Some("exr") => std::fs::read(path).map_err(|e| e.to_string()).and_then(|b| decode_exr(&b)),
+            Some("hdr") => std::fs::read(path).map_err(|e| e.to_string()).and_then(|b| decode_hdr(&b)),
             _ => return Err(EnvMapError::Format { path: name }),
         };
+        let (width, height, texels) =
+            decoded.map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?;
+        EnvMap::checked(name, width, height, texels)
+    }
+
+    /// One of the light probes compiled into lucent, by name (case-insensitive): `courtyard` or
+    /// `forest` (see [`BUILTIN_PROBES`]); `None` for any other name.
+    pub fn builtin(name: &str) -> Option<Result<EnvMap, EnvMapError>> {
+        let wanted = name.trim().to_ascii_lowercase();
+        let (probe, bytes) = BUILTIN_PROBES.iter().find(|(n, _)| *n == wanted)?;
+        let label = format!("built-in probe {probe}");
+        Some(
+            decode_exr(bytes)
+                .map_err(|reason| EnvMapError::Read { path: label.clone(), reason })
+                .and_then(|(w, h, texels)| EnvMap::checked(label, w, h, texels)),
+        )
+    }
+
+    /// Rejects empty images and non-finite texels (naming `name`), clamps negative ones.
+    fn checked(name: String, width: usize, height: usize, texels: Vec<Rgb>) -> Result<EnvMap, EnvMapError> {
         if width == 0 || height == 0 {
             return Err(EnvMapError::Invalid { path: name, reason: "image has no texels".into() });
         }
@@ -249,33 +265,44 @@ impl EnvMap {
     }
 }
 
-fn load_exr(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
+/// The light probes compiled into lucent, `(name, OpenEXR bytes)`: 1024 x 512 equirectangular,
+/// DWAB-compressed, CC0 (assets/README.md gives their source and licence).
+pub const BUILTIN_PROBES: [(&str, &[u8]); 2] = [
+    ("courtyard", include_bytes!("../../../../assets/courtyard.exr")),
+    ("forest", include_bytes!("../../../../assets/forest.exr")),
+];
+
+fn decode_exr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
     use exr::prelude::*;
     struct Pixels {
         width: usize,
         texels: Vec<Rgb>,
     }
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _channels| Pixels {
-            width: resolution.width(),
-            texels: vec![Rgb::ZERO; resolution.width() * resolution.height()],
-        },
-        |pixels: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            pixels.texels[pos.y() * pixels.width + pos.x()] = Rgb::new(r, g, b);
-        },
-    )
-    .map_err(|e| e.to_string())?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution, _channels: &RgbaChannels| Pixels {
+                width: resolution.width(),
+                texels: vec![Rgb::ZERO; resolution.width() * resolution.height()],
+            },
+            |pixels: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                pixels.texels[pos.y() * pixels.width + pos.x()] = Rgb::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     let pixels = image.layer_data.channel_data.pixels;
     let size = image.layer_data.size;
     Ok((size.width(), size.height(), pixels.texels))
 }
 
-fn load_hdr(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
-    let reader = image::ImageReader::open(path).map_err(|e| e.to_string())?;
-    let mut reader = reader;
-    reader.set_format(image::ImageFormat::Hdr);
-    let img = reader.decode().map_err(|e| e.to_string())?.into_rgb32f();
+fn decode_hdr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)
+        .map_err(|e| e.to_string())?
+        .into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let texels = img.pixels().map(|p| Rgb::new(p.0[0], p.0[1], p.0[2])).collect();
     Ok((w, h, texels))
