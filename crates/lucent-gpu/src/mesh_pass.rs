@@ -6,7 +6,8 @@
 //! mapping or phong shading").
 //!
 //! Output is HDR radiance in an [`HDR_FORMAT`](crate::HDR_FORMAT) target with alpha = coverage;
-//! [`crate::tonemap`] turns it into an image.
+//! [`crate::tonemap`] turns it into an image. Optionally the environment map itself is drawn
+//! behind the mesh first ([`Shading::background`], alpha 1, tone mapped with the mesh).
 //!
 //! Bind groups: 0 = [`MeshUniforms`] (camera and shading), 1 = environment map and sampler.
 
@@ -167,11 +168,21 @@ pub struct Shading {
     /// Scale of the Fresnel-weighted environment reflection; 0 (default) disables it. Has an
     /// effect only after [`MeshPass::set_environment`].
     pub environment: f32,
+    /// Scale of the environment map drawn behind the mesh (radiance multiplier, >= 0); 0
+    /// (default) draws none, and the tone map's flat background shows.
+    pub background: f32,
 }
 
 impl Default for Shading {
     fn default() -> Self {
-        Shading { eta: 1.3, lights: Vec::new(), specular: 1.0, shininess: 64.0, environment: 0.0 }
+        Shading {
+            eta: 1.3,
+            lights: Vec::new(),
+            specular: 1.0,
+            shininess: 64.0,
+            environment: 0.0,
+            background: 0.0,
+        }
     }
 }
 
@@ -180,9 +191,13 @@ impl Default for Shading {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct MeshUniforms {
     view_proj: [[f32; 4]; 4],
+    // Clip to world, for the background's view rays.
+    inv_view_proj: [[f32; 4]; 4],
     eye: [f32; 4],
     params: [f32; 4],
     counts: [u32; 4],
+    // x: environment background scale (0 = none).
+    background: [f32; 4],
     lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -204,6 +219,9 @@ const NO_CONE: f32 = 4.0;
 /// [`DEPTH_FORMAT`].
 pub struct MeshPass {
     pipeline: wgpu::RenderPipeline,
+    background_pipeline: wgpu::RenderPipeline,
+    // Set by `prepare` (which takes `&self`), read by `draw`.
+    draw_background: std::cell::Cell<bool>,
     uniforms: wgpu::Buffer,
     uniform_group: wgpu::BindGroup,
     env_layout: wgpu::BindGroupLayout,
@@ -313,6 +331,38 @@ impl MeshPass {
             multiview_mask: None,
             cache: None,
         });
+        // A full-screen triangle behind everything: no depth written, so the mesh draws over it.
+        let background_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lucent environment background"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_background"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: sample_count, ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_background"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: color_format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lucent mesh uniforms"),
             size: std::mem::size_of::<MeshUniforms>() as u64,
@@ -340,7 +390,16 @@ impl MeshPass {
                 message: e.to_string(),
             });
         }
-        Ok(MeshPass { pipeline, uniforms, uniform_group, env_layout, env_group, sampler })
+        Ok(MeshPass {
+            pipeline,
+            background_pipeline,
+            draw_background: std::cell::Cell::new(false),
+            uniforms,
+            uniform_group,
+            env_layout,
+            env_group,
+            sampler,
+        })
     }
 
     /// Sets the environment map the reflection samples (see [`Shading::environment`]).
@@ -379,6 +438,7 @@ impl MeshPass {
         }
         let u = MeshUniforms {
             view_proj: camera.view_proj.to_cols_array_2d(),
+            inv_view_proj: camera.view_proj.inverse().to_cols_array_2d(),
             eye: camera.eye.extend(1.0).to_array(),
             params: [
                 shading.eta,
@@ -387,16 +447,23 @@ impl MeshPass {
                 shading.environment.max(0.0),
             ],
             counts: [shading.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            background: [shading.background.max(0.0), 0.0, 0.0, 0.0],
             lights,
         };
         ctx.queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        self.draw_background.set(shading.background > 0.0);
     }
 
-    /// Records the draw of `mesh` into `pass`.
+    /// Records the draw of `mesh` into `pass` (after the environment background, when the
+    /// last [`MeshPass::prepare`] asked for one).
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &GpuMesh) {
-        pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.uniform_group, &[]);
         pass.set_bind_group(1, &self.env_group, &[]);
+        if self.draw_background.get() {
+            pass.set_pipeline(&self.background_pipeline);
+            pass.draw(0..3, 0..1);
+        }
+        pass.set_pipeline(&self.pipeline);
         pass.set_vertex_buffer(0, mesh.geometry.slice(..));
         pass.set_vertex_buffer(1, mesh.radiance.slice(..));
         pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);

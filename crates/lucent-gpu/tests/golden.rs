@@ -113,6 +113,7 @@ fn torus_filmic() {
             specular: 1.0,
             shininess: 32.0,
             environment: 0.0,
+            background: 0.0,
         },
         tone: ToneMap { exposure: 1.5, operator: ToneOperator::AcesFilmic, ..Default::default() },
     };

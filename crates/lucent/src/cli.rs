@@ -99,6 +99,10 @@ pub struct RenderArgs {
     /// Rotation of the environment about +Y, degrees. Default: the scene's, else 0.
     #[arg(long, allow_negative_numbers = true)]
     pub env_rotation: Option<f32>,
+    /// Keep the flat background with an environment (by default the map is drawn behind the
+    /// object, at the environment's intensity).
+    #[arg(long)]
+    pub no_env_background: bool,
     /// Image width in pixels.
     #[arg(long, default_value_t = 800)]
     pub width: u32,

@@ -278,18 +278,31 @@ fn bad_animations_are_clean_errors_without_output() {
 }
 
 /// `--env courtyard` lights the object by itself (no default light is added) and colours it after
-/// the map (warmer than it is blue); a missing map is a clean error naming it.
+/// the map (warmer than it is blue), and draws the map behind it unless --no-env-background; a
+/// missing map is a clean error naming it.
 #[test]
 fn environment_flag_lights_the_object() {
     let dir = scratch("env");
     let out = dir.join("env.png");
     let o = out.to_str().unwrap();
-    let run = lucent(&["render", "--env", "courtyard", "--width", "64", "--height", "64", "--out", o], &[]);
+    let size = ["--width", "64", "--height", "64"];
+    let run = lucent(
+        &[&["render", "--env", "courtyard", "--no-env-background", "--out", o][..], &size].concat(),
+        &[],
+    );
     assert!(run.status.success(), "{:?}", stderr_lines(&run));
     let img = image::open(&out).unwrap().to_rgba8();
     assert!(object_luminance(&img) > 60.0, "the environment lights the bunny");
     let centre = img.get_pixel(32, 36);
     assert!(centre[0] > centre[2], "the courtyard's light is warm: {centre:?}");
+    let bg = lucent_gpu::tonemap::ToneMap::default().background.map(|c| (c * 255.0).round() as u8);
+    assert_eq!(img.get_pixel(0, 0).0[..3], bg, "flat background");
+
+    let run = lucent(&[&["render", "--env", "courtyard", "--out", o][..], &size].concat(), &[]);
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let img = image::open(&out).unwrap().to_rgba8();
+    let corners = [(0, 0), (63, 0), (0, 63), (63, 63)];
+    assert!(corners.iter().all(|&(x, y)| img.get_pixel(x, y).0[..3] != bg), "the map is drawn behind");
 
     let never = dir.join("never.png");
     let run = lucent(&["render", "--env", "no-such-map.exr", "--out", never.to_str().unwrap()], &[]);

@@ -19,6 +19,8 @@ struct Light {
 
 struct Uniforms {
     view_proj: mat4x4<f32>,
+    // Clip space to world (mesh units), for the background's view rays.
+    inv_view_proj: mat4x4<f32>,
     // xyz: eye position, mesh units.
     eye: vec4<f32>,
     // x: eta (relative index), y: specular strength (0 = none), z: Blinn-Phong exponent,
@@ -26,6 +28,8 @@ struct Uniforms {
     params: vec4<f32>,
     // x: number of lights in use (<= MAX_LIGHTS).
     counts: vec4<u32>,
+    // x: scale of the environment drawn behind the mesh (0 = none).
+    background: vec4<f32>,
     lights: array<Light, MAX_LIGHTS>,
 };
 
@@ -144,4 +148,29 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
         l += env * fresnel_dielectric(cos_o, eta) * c;
     }
     return vec4<f32>(l, 1.0);
+}
+
+// Background: a full-screen triangle showing the environment map along each pixel's view ray
+// (drawn first, without depth, so the mesh covers it). Alpha 1: tone mapped like the mesh.
+struct BackgroundOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) ndc: vec2<f32>,
+};
+
+@vertex
+fn vs_background(@builtin(vertex_index) i: u32) -> BackgroundOut {
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+    var o: BackgroundOut;
+    o.clip = vec4<f32>(xy, 0.0, 1.0);
+    o.ndc = xy;
+    return o;
+}
+
+@fragment
+fn fs_background(in: BackgroundOut) -> @location(0) vec4<f32> {
+    let near = u.inv_view_proj * vec4<f32>(in.ndc, 0.0, 1.0);
+    let far = u.inv_view_proj * vec4<f32>(in.ndc, 1.0, 1.0);
+    let d = normalize(far.xyz / far.w - near.xyz / near.w);
+    let c = textureSampleLevel(env_map, env_sampler, equirect_uv(d), 0.0).rgb;
+    return vec4<f32>(u.background.x * c, 1.0);
 }

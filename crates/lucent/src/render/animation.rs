@@ -86,6 +86,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
                     tone_map(args, scene.exposure),
                     &mesh,
                     &solved.vertex_radiance,
+                    !args.no_env_background,
                 )?);
                 g.draw(None, &solved.vertex_radiance, &lights)?
             }

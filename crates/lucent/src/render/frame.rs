@@ -159,7 +159,8 @@ pub struct GpuFrame {
 
 impl GpuFrame {
     /// Targets of `width` x `height`, `mesh` uploaded with `radiance`, the environment map (if
-    /// any) set, and the camera framed on the scene's rest mesh (fixed over an animation).
+    /// any) set for the reflection and, with `env_background`, drawn behind the mesh, and the
+    /// camera framed on the scene's rest mesh (fixed over an animation).
     pub fn new(
         ctx: GpuContext,
         scene: &Scene,
@@ -167,6 +168,7 @@ impl GpuFrame {
         tone: ToneMap,
         mesh: &Mesh,
         radiance: &[Rgb],
+        env_background: bool,
     ) -> Result<Self> {
         let normals = mesh.vertex_normals();
         let gpu_mesh = GpuMesh::new(&ctx, &mesh.positions, &normals, radiance, &mesh.triangles)?;
@@ -181,6 +183,9 @@ impl GpuFrame {
                 let map = EnvironmentMap::from_rgba_f32(&ctx, w, h, &env.reflection_rgba())?;
                 renderer.mesh_pass_mut().set_environment(&ctx, &map);
                 shading.environment = env.environment.intensity;
+                if env_background {
+                    shading.background = env.environment.intensity;
+                }
                 Some(map)
             }
             None => None,

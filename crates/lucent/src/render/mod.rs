@@ -142,8 +142,15 @@ fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(i
 
     let t = Instant::now();
     let size = (args.width, args.height);
-    let mut gpu =
-        GpuFrame::new(ctx, scene, size, tone_map(args, scene.exposure), &mesh, &solved.vertex_radiance)?;
+    let mut gpu = GpuFrame::new(
+        ctx,
+        scene,
+        size,
+        tone_map(args, scene.exposure),
+        &mesh,
+        &solved.vertex_radiance,
+        !args.no_env_background,
+    )?;
     let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter() }))
