@@ -101,7 +101,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     let environment = match (&args.env, &file) {
         (Some(spec), _) => {
             let rotation = args.env_rotation.unwrap_or(0.0);
-            Some(load_environment(&resolve_env(spec)?, rotation, 1.0)?)
+            Some(environment_of(&load_env_map(spec)?, rotation, 1.0)?)
         }
         (None, Some(f)) => {
             let mut f = f.clone();
@@ -168,28 +168,21 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     })
 }
 
-/// `courtyard` and `forest` name the maps in the repository's `assets/` (looked up from the
-/// working directory, then from the source tree); anything else is a path.
-fn resolve_env(spec: &str) -> Result<PathBuf> {
-    let name = spec.trim().to_ascii_lowercase();
-    if name == "courtyard" || name == "forest" {
-        let rel = PathBuf::from("assets").join(format!("{name}.exr"));
-        let in_tree = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(&rel);
-        return [rel, in_tree]
-            .into_iter()
-            .find(|p| p.is_file())
-            .with_context(|| format!("--env {spec}: assets/{name}.exr not found (run from the repository)"));
-    }
-    Ok(PathBuf::from(spec))
+/// `courtyard` and `forest` name the light probes compiled into lucent; anything else is a path
+/// to an equirectangular `.hdr` or `.exr` map.
+fn load_env_map(spec: &str) -> Result<EnvMap> {
+    Ok(match EnvMap::builtin(spec) {
+        Some(map) => map?,
+        None => EnvMap::load(Path::new(spec))?,
+    })
 }
 
-/// Loads an equirect map: SH projection for the solve and the rotated reflection copy.
-fn load_environment(path: &Path, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
+/// The SH projection for the solve and the rotated reflection copy of `map`.
+fn environment_of(map: &EnvMap, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
     if !rotation.is_finite() {
         bail!("--env-rotation must be finite");
     }
-    let map = EnvMap::load(path)?;
-    let environment = Environment { rotation_deg: rotation, intensity, ..Environment::from_map(&map) };
+    let environment = Environment { rotation_deg: rotation, intensity, ..Environment::from_map(map) };
     let (w, h) = REFLECTION_SIZE;
     Ok(LoadedEnvironment { environment, reflection: map.downsampled(w, h).rotated(rotation) })
 }

@@ -92,18 +92,19 @@ impl ViewRenderer {
         matches!(self.env_map, Some((_, Some(_)))) && self.env_uploaded.is_some()
     }
 
-    /// Sets the map that the Fresnel-weighted reflection samples: `choice`'s map (loaded once
-    /// per choice), rotated by `rotation_deg` about +Y to the nearest map column, as the SH
+    /// Sets the map that the Fresnel-weighted reflection samples: `choice`'s map (the compiled-in
+    /// probe, loaded once per choice), rotated by `rotation_deg` about +Y to the nearest map column, as the SH
     /// lighting is. Returns whether a map is set (false for none or an unreadable file).
     pub fn set_environment(&mut self, ctx: &GpuContext, choice: EnvChoice, rotation_deg: f32) -> bool {
         if self.env_map.as_ref().is_none_or(|(c, _)| *c != choice) {
-            let map = choice.path().and_then(|path| match EnvMap::load(std::path::Path::new(path)) {
-                Ok(m) => Some(m.downsampled(REFLECTION_SIZE.0, REFLECTION_SIZE.1)),
-                Err(e) => {
-                    log::warn!("environment reflection {path}: {e}");
-                    None
-                }
+            // The compiled-in probe of that name, else the asset file.
+            let loaded = choice.path().map(|path| {
+                EnvMap::builtin(choice.label())
+                    .unwrap_or_else(|| EnvMap::load(std::path::Path::new(path)))
+                    .map_err(|e| log::warn!("environment reflection {path}: {e}"))
             });
+            let map =
+                loaded.and_then(Result::ok).map(|m| m.downsampled(REFLECTION_SIZE.0, REFLECTION_SIZE.1));
             self.env_map = Some((choice, map));
             self.env_uploaded = None;
         }
