@@ -531,7 +531,7 @@ mod tests {
 
     #[test]
     fn example_scenes_parse() {
-        for name in ["candle.toml", "bunny_courtyard.toml"] {
+        for name in ["candle.toml", "bunny_courtyard.toml", "bunny_spot.toml"] {
             let s = Scene::load(&examples().join(name)).unwrap_or_else(|e| panic!("{e:#}"));
             assert!(!s.lights.is_empty() || s.environment.is_some(), "{name}");
         }

@@ -141,7 +141,7 @@ fn object_luminance(img: &image::RgbaImage) -> f32 {
 #[test]
 fn example_scenes_render() {
     let dir = scratch("scenes");
-    for name in ["candle", "bunny_courtyard"] {
+    for name in ["candle", "bunny_courtyard", "bunny_spot"] {
         let out = dir.join(format!("{name}.png"));
         let scene = examples().join(format!("{name}.toml"));
         let (s, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
