@@ -7,7 +7,7 @@
 use super::frame::{FrameSolver, GpuFrame};
 use super::setup::{Scene, orbit_lights};
 use super::{method_name, tone_map, write_png_atomically};
-use crate::cli::{RenderArgs, SolveMode};
+use crate::cli::{Method, RenderArgs, SolveMode};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lucent_gpu::GpuContext;
@@ -105,13 +105,13 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     bar.finish_and_clear();
     let adapter = gpu.as_ref().map(GpuFrame::adapter).unwrap_or_default();
     println!(
-        "lucent: {}: {} triangles, {} at {} m, {} ({}), {} frames in {:.1} s on {} -> {}",
+        "lucent: {}: {} triangles, {} at {} m, {}{}, {} frames in {:.1} s on {} -> {}",
         scene.source,
         scene.mesh.triangles.len(),
         scene.material.name,
         scene.scale,
         method_name(args.method),
-        mode_name(mode),
+        if args.method == Method::Hierarchical { format!(" ({})", mode_name(mode)) } else { String::new() },
         frames,
         started.elapsed().as_secs_f64(),
         adapter,
