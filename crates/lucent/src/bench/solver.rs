@@ -240,6 +240,7 @@ fn run_sweep(json: bool) -> anyhow::Result<()> {
                 ..Oracle::default()
             });
         }
+        oracles.push(Oracle::default());
         for o in oracles {
             let solver = HierarchicalSolver::new(mesh.clone(), h.clone(), dipole, o);
             let mut links = 0;
