@@ -6,9 +6,7 @@ use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Dipole;
 use lucent_core::hierarchy::face_cluster;
-use lucent_core::irradiance::{
-    EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed,
-};
+use lucent_core::irradiance::{Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
 use lucent_core::mesh::deform::{self, Deformer as _};
 use lucent_core::mesh::{Mesh, embedded, generate};
 use lucent_core::shading::diffuse_radiance;
@@ -261,10 +259,10 @@ impl SolverSession {
     /// is logged and lights nothing.
     fn environment(&mut self, choice: EnvChoice) -> Option<Environment> {
         if self.environment.as_ref().is_none_or(|(c, _)| *c != choice) {
-            let env = choice.path().and_then(|path| match EnvMap::load(Path::new(path)) {
+            let env = choice.load().and_then(|r| match r {
                 Ok(map) => Some(Environment::from_map(&map)),
                 Err(e) => {
-                    log::warn!("environment {path}: {e}");
+                    log::warn!("environment {}: {e}", choice.label());
                     None
                 }
             });

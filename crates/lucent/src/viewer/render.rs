@@ -97,12 +97,7 @@ impl ViewRenderer {
     /// lighting is. Returns whether a map is set (false for none or an unreadable file).
     pub fn set_environment(&mut self, ctx: &GpuContext, choice: EnvChoice, rotation_deg: f32) -> bool {
         if self.env_map.as_ref().is_none_or(|(c, _)| *c != choice) {
-            // The compiled-in probe of that name, else the asset file.
-            let loaded = choice.path().map(|path| {
-                EnvMap::builtin(choice.label())
-                    .unwrap_or_else(|| EnvMap::load(std::path::Path::new(path)))
-                    .map_err(|e| log::warn!("environment reflection {path}: {e}"))
-            });
+            let loaded = choice.load().map(|r| r.map_err(|e| log::warn!("environment reflection: {e}")));
             let map =
                 loaded.and_then(Result::ok).map(|m| m.downsampled(REFLECTION_SIZE.0, REFLECTION_SIZE.1));
             self.env_map = Some((choice, map));

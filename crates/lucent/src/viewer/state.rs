@@ -90,12 +90,23 @@ impl EnvChoice {
         }
     }
 
-    /// The asset file, relative to the repository root, if any.
+    /// The asset file, relative to the repository root, if any (scene files name it so).
     pub fn path(self) -> Option<&'static str> {
         match self {
             EnvChoice::None => None,
             EnvChoice::Courtyard => Some("assets/courtyard.exr"),
             EnvChoice::Forest => Some("assets/forest.exr"),
+        }
+    }
+
+    /// The map: the probe compiled into the binary (so the viewer works from any directory);
+    /// `None` for [`EnvChoice::None`].
+    pub fn load(
+        self,
+    ) -> Option<Result<lucent_core::irradiance::EnvMap, lucent_core::irradiance::EnvMapError>> {
+        match self {
+            EnvChoice::None => None,
+            named => lucent_core::irradiance::EnvMap::builtin(named.label()),
         }
     }
 }
@@ -175,9 +186,11 @@ pub struct SolveParams {
     pub env_strength: f32,
     /// Solver mode.
     pub mode: SolverMode,
-    /// Refinement oracle threshold ε1 (form-factor bound; smaller refines more).
+    /// Refinement oracle threshold ε1 at the receiver (`Oracle::eps1`, transport mode: largest
+    /// relative change of the transport over a receiver cluster; smaller refines more).
     pub epsilon1: f64,
-    /// Refinement oracle threshold ε2 (minimum cluster area ratio; smaller refines more).
+    /// Refinement oracle threshold ε2 at the emitter (`Oracle::eps2`, transport mode: largest
+    /// relative disagreement of an emitter's one-point estimate; smaller refines more).
     pub epsilon2: f64,
     /// Whether lights are shadowed by the mesh.
     pub shadows: bool,
@@ -243,8 +256,9 @@ impl ViewState {
                 env_rotation_deg: 0.0,
                 env_strength: 1.0,
                 mode: SolverMode::Render,
-                epsilon1: 1e-3,
-                epsilon2: 1e-2,
+                // The solver's defaults (transport oracle), which meet 1% of the exact solve.
+                epsilon1: lucent_core::solver::Oracle::default().eps1 as f64,
+                epsilon2: lucent_core::solver::Oracle::default().eps2 as f64,
                 shadows: true,
                 cluster_face: None,
             },

@@ -211,8 +211,9 @@ fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
             ui.radio_value(&mut p.mode, m, m.label());
         }
     });
-    ui.add(Slider::new(&mut p.epsilon1, 1e-6..=1e-1).logarithmic(true).text("ε1"));
-    ui.add(Slider::new(&mut p.epsilon2, 1e-5..=1.0).logarithmic(true).text("ε2"));
+    // Transport-oracle thresholds (relative errors): smaller refines more.
+    ui.add(Slider::new(&mut p.epsilon1, 1e-3..=1.0).logarithmic(true).text("ε1 receiver"));
+    ui.add(Slider::new(&mut p.epsilon2, 1e-3..=1.0).logarithmic(true).text("ε2 emitter"));
     if !status.caps.hierarchical {
         ui.weak("hierarchical solver not linked");
     }
