@@ -85,7 +85,8 @@ pub struct RenderArgs {
     /// A light: `point:x,y,z` (mesh units) or `dir:x,y,z` (direction the light travels).
     /// Repeatable; replaces the scene's lights. White; a point light gives irradiance 1 at the
     /// distance of the object's centre, a directional light irradiance 1. Default: the scene's
-    /// lights, else (without an environment) a point light behind and above.
+    /// lights, else (without an environment) a key light in front, above and to the right, and
+    /// a back light behind and above.
     #[arg(long)]
     pub light: Vec<String>,
     /// Lights cast no shadows (by default command-line lights cast BVH ray-cast shadows and

@@ -125,7 +125,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         Vec::new()
     };
     if lights.is_empty() && environment.is_none() {
-        lights.push(default_light(&mesh).into());
+        lights.extend(default_lights(&mesh).map(SceneLight::from));
     }
     if args.no_shadows {
         lights.iter_mut().for_each(|l| l.shadows = false);
@@ -187,11 +187,14 @@ fn environment_of(map: &EnvMap, rotation: f32, intensity: f32) -> Result<LoadedE
     Ok(LoadedEnvironment { environment, reflection: map.downsampled(w, h).rotated(rotation) })
 }
 
-/// Behind (-z, away from the default camera) and above the object, at 2.5 bounding radii.
-fn default_light(mesh: &Mesh) -> Light {
+/// A key light in front of the object (towards the default camera), above and to the right, and
+/// a back light behind and above that shows the translucency of thin parts (Mertens fig. 6.3);
+/// each gives irradiance 1 at the object's centre.
+fn default_lights(mesh: &Mesh) -> [Light; 2] {
     let (center, radius) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
-    let position = center + Vec3::new(0.0, 1.2, -2.2) * radius;
-    point_light(position, center)
+    let key = center + Vec3::new(1.0, 1.1, 1.8) * radius;
+    let back = center + Vec3::new(-0.3, 0.6, -2.2) * radius;
+    [point_light(key, center), point_light(back, center)]
 }
 
 /// A white point light whose irradiance at the object's centre distance is 1 (arbitrary but
@@ -331,8 +334,8 @@ mod tests {
     fn defaults_without_a_scene() {
         let s = load_scene(&args(&[])).unwrap();
         assert_eq!((s.material.name.as_str(), s.scale, s.exposure), ("Skimmilk", 0.05, 1.0));
-        assert_eq!(s.lights.len(), 1, "the default light");
-        assert!(s.lights[0].shadows, "command-line lights cast shadows by default");
+        assert_eq!(s.lights.len(), 2, "the default key and back lights");
+        assert!(s.lights.iter().all(|l| l.shadows), "default lights cast shadows");
         assert!(s.environment.is_none() && s.deform.is_empty());
         // An environment alone needs no extra light.
         let s = load_scene(&args(&["--env", "forest", "--env-rotation", "45"])).unwrap();
