@@ -20,7 +20,7 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
-use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView};
+use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverSources, ReceiverView};
 use crate::Rgb;
 use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
@@ -154,6 +154,32 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// The transport coefficient of an accepted link `e -> r`: the oracle's one-point
+    /// `estimate` for a point sample when it made one (scaled to the receiver by `recv_scale`),
+    /// else a fresh evaluation; counted by kind.
+    fn coefficient(
+        &mut self,
+        src: &ReceiverSources,
+        r: usize,
+        e: usize,
+        kind: LinkKind,
+        estimate: Option<[f32; 3]>,
+        recv_scale: Option<[f32; 3]>,
+    ) -> [f32; 3] {
+        let mut f = match (kind, estimate) {
+            (LinkKind::PointSample, Some(f)) => f,
+            _ => self.ev.eval(src, r, e, kind),
+        };
+        if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
+            f = std::array::from_fn(|c| f[c] * s[c]);
+        }
+        match kind {
+            LinkKind::FormFactor => self.form_factors += 1,
+            LinkKind::PointSample => self.point_samples += 1,
+        }
+        f
+    }
+
     fn absorb(&mut self, o: &Ctx) {
         self.form_factors += o.form_factors;
         self.point_samples += o.point_samples;
@@ -180,17 +206,7 @@ impl<'a> Ctx<'a> {
             let e = e as usize;
             match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate, &mut recv_scale) {
                 Decision::Link(kind) => {
-                    let mut f = match (kind, estimate) {
-                        (LinkKind::PointSample, Some(f)) => f,
-                        _ => self.ev.eval(&src, r, e, kind),
-                    };
-                    if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
-                        f = std::array::from_fn(|c| f[c] * s[c]);
-                    }
-                    match kind {
-                        LinkKind::FormFactor => self.form_factors += 1,
-                        LinkKind::PointSample => self.point_samples += 1,
-                    }
+                    let f = self.coefficient(&src, r, e, kind, estimate, recv_scale);
                     on_link(e, kind, f);
                 }
                 Decision::SplitReceiver => defer.push(e as u32),
@@ -245,17 +261,7 @@ impl Ctx<'_> {
                         chunk.push(r, e, kind, f, true);
                         continue;
                     }
-                    let mut f = match (kind, estimate) {
-                        (LinkKind::PointSample, Some(f)) => f,
-                        _ => self.ev.eval(&src, r, e, kind),
-                    };
-                    if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
-                        f = std::array::from_fn(|c| f[c] * s[c]);
-                    }
-                    match kind {
-                        LinkKind::FormFactor => self.form_factors += 1,
-                        LinkKind::PointSample => self.point_samples += 1,
-                    }
+                    let f = self.coefficient(&src, r, e, kind, estimate, recv_scale);
                     chunk.push(r, e, kind, f, false);
                 }
                 Decision::SplitReceiver => defer.push(e as u32),
