@@ -392,7 +392,13 @@ impl Scene {
             MeshSource::File(path) => lucent_core::mesh::load_mesh(&path)?,
             MeshSource::Builtin(name) => match name.as_str() {
                 "bunny" => embedded::bunny(),
-                "candle" => generate::candle(&generate::CandleParams::default()),
+                // Finer than the generator's default, so Gouraud shading shows no bands along the side
+                // and a twist bends the side visibly.
+                "candle" => generate::candle(&generate::CandleParams {
+                    segments: 64,
+                    side_rings: 32,
+                    ..Default::default()
+                }),
                 "cube" => generate::cube(32),
                 "sphere" | "icosphere" => generate::icosphere(5),
                 other => bail!(

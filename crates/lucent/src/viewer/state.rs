@@ -249,7 +249,7 @@ impl ViewState {
                 material,
                 scale_m,
                 lights: vec![
-                    LightSpec::point(Vec3::new(0.6, 1.0, 1.4)),
+                    LightSpec::point(Vec3::new(1.0, 1.1, 1.8)),
                     LightSpec::point(Vec3::new(-0.3, 0.4, -1.5)),
                 ],
                 env: EnvChoice::None,
