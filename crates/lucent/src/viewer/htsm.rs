@@ -40,9 +40,11 @@ impl Default for HtsmSettings {
 }
 
 /// Everything an HTSM image depends on, to know when to render again.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 struct Inputs {
-    mesh: usize,
+    /// Held (not just its address) so that a freed mesh's address cannot be reused by a new
+    /// one and pass for it.
+    mesh: Arc<Mesh>,
     volume: String,
     params: HtsmParams,
     camera: CameraView,
@@ -50,10 +52,19 @@ struct Inputs {
     size: (u32, u32),
 }
 
+impl Inputs {
+    /// The same mesh (by identity) and equal everything else.
+    fn same_as(&self, other: &Inputs) -> bool {
+        Arc::ptr_eq(&self.mesh, &other.mesh)
+            && (&self.volume, &self.params, &self.camera, &self.light, self.size)
+                == (&other.volume, &other.params, &other.camera, &other.light, other.size)
+    }
+}
+
 /// The HTSM renderer of the current mesh and volume, and its last image.
 #[derive(Default)]
 pub struct HtsmPanel {
-    renderer: Option<(usize, String, HtsmRenderer)>,
+    renderer: Option<(Arc<Mesh>, String, HtsmRenderer)>,
     last: Option<Inputs>,
     texture: Option<egui::TextureHandle>,
     /// GPU time of the last HTSM frame (encode to read-back), milliseconds.
@@ -82,20 +93,19 @@ impl HtsmPanel {
             .into_iter()
             .next()
             .unwrap_or(Light::Directional { direction: Vec3::NEG_Z, irradiance: Vec3::ONE });
-        let mesh_id = Arc::as_ptr(mesh) as usize;
         let inputs = Inputs {
-            mesh: mesh_id,
+            mesh: mesh.clone(),
             volume: settings.volume.clone(),
             params: HtsmParams { tone, ..settings.params },
             camera,
             light,
             size: (size.0.max(1), size.1.max(1)),
         };
-        if self.last.as_ref() == Some(&inputs) {
+        if self.last.as_ref().is_some_and(|last| last.same_as(&inputs)) {
             return;
         }
         self.last = Some(inputs.clone());
-        match self.render(ctx, mesh, &inputs) {
+        match self.render(ctx, &inputs) {
             Ok(image) => {
                 let pixels = egui::ColorImage::from_rgba_unmultiplied(
                     [image.width() as usize, image.height() as usize],
@@ -114,15 +124,16 @@ impl HtsmPanel {
         }
     }
 
-    fn render(&mut self, ctx: &GpuContext, mesh: &Mesh, inputs: &Inputs) -> anyhow::Result<image::RgbaImage> {
+    fn render(&mut self, ctx: &GpuContext, inputs: &Inputs) -> anyhow::Result<image::RgbaImage> {
         inputs.params.validate()?;
-        let stale = !matches!(&self.renderer, Some((m, v, _)) if *m == inputs.mesh && *v == inputs.volume);
+        let stale =
+            !matches!(&self.renderer, Some((m, v, _)) if Arc::ptr_eq(m, &inputs.mesh) && *v == inputs.volume);
         if stale {
             self.renderer = None;
             let spec: VolumeSpec = inputs.volume.parse()?;
-            let volume = spec.build(volume_dims_for(mesh, VOLUME_RES))?;
-            let renderer = HtsmRenderer::new(ctx, mesh, &volume, REFERENCE_SIZE)?;
-            self.renderer = Some((inputs.mesh, inputs.volume.clone(), renderer));
+            let volume = spec.build(volume_dims_for(&inputs.mesh, VOLUME_RES))?;
+            let renderer = HtsmRenderer::new(ctx, &inputs.mesh, &volume, REFERENCE_SIZE)?;
+            self.renderer = Some((inputs.mesh.clone(), inputs.volume.clone(), renderer));
         }
         let (_, _, renderer) = self.renderer.as_mut().expect("made above");
         let view = HtsmView {
