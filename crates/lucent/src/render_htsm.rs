@@ -92,15 +92,7 @@ fn is_gltf(path: &Path) -> bool {
 
 /// Parses `r,g,b`.
 pub fn parse_rgb(flag: &str, s: &str) -> Result<Vec3> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!("{flag} {s:?}: {e}; expected r,g,b"))?;
-    let [r, g, b] = v[..] else {
-        bail!("{flag} {s:?}: {} numbers given; expected r,g,b", v.len());
-    };
-    Ok(Vec3::new(r, g, b))
+    crate::render::setup::parse_three(&format!("{flag} {s:?}"), s, "expected r,g,b")
 }
 
 /// The HTSM parameters from the flags, falling back on the glTF material's

@@ -204,20 +204,25 @@ fn point_light(position: Vec3, center: Vec3) -> Light {
     Light::Point { position, intensity: Vec3::splat(d2) }
 }
 
+/// Parses three comma-separated numbers; errors start with `label` and end with `usage`.
+pub(crate) fn parse_three(label: &str, text: &str, usage: &str) -> Result<Vec3> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("{label}: {e}; {usage}"))?;
+    let [x, y, z] = v[..] else {
+        bail!("{label}: {} numbers given; {usage}", v.len());
+    };
+    Ok(Vec3::new(x, y, z))
+}
+
 /// Parses `point:x,y,z` (position, mesh units) or `dir:x,y,z` (direction the light travels).
 /// Point lights give irradiance 1 at the distance of `center`; directional lights give 1.
 pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
     let usage = "expected point:x,y,z (position, mesh units) or dir:x,y,z (direction of travel)";
     let (kind, rest) = spec.split_once(':').with_context(|| format!("--light {spec:?}: {usage}"))?;
-    let v: Vec<f32> = rest
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!("--light {spec:?}: {e}; {usage}"))?;
-    let [x, y, z] = v[..] else {
-        bail!("--light {spec:?}: {} numbers given; {usage}", v.len());
-    };
-    let p = Vec3::new(x, y, z);
+    let p = parse_three(&format!("--light {spec:?}"), rest, usage)?;
     if !p.is_finite() {
         bail!("--light {spec:?}: coordinates must be finite");
     }
