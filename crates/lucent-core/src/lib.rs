@@ -11,6 +11,7 @@
 //!
 //! * [`bssrdf`]: the dipole diffusion model (Jensen et al. 2001; Mertens table 1), the measured
 //!   materials and the dielectric Fresnel terms.
+//! * [`fastexp`]: inlined, vectorisable exponentials for the hot loops.
 //! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
 //!   reference for the same integral.
 //! * [`mesh`]: triangle meshes, file loading and validation, generators and deformers.
@@ -25,6 +26,7 @@
 //! units, with coefficients converted by [`bssrdf::Dipole::new`].
 
 pub mod bssrdf;
+pub mod fastexp;
 pub mod formfactor;
 pub mod hierarchy;
 pub mod irradiance;

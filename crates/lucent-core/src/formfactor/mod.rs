@@ -46,6 +46,7 @@
 //! Everything is `f64`, allocation free and deterministic.
 
 use crate::bssrdf::Dipole;
+use crate::fastexp::exp_neg_f64;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -221,7 +222,7 @@ pub fn form_factor_counted(
     let mut f = [0.0; 3];
     for (k, s) in src.iter().enumerate() {
         let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
-        let i1 = theta * (-s.sigma * s.h).exp() / s.h;
+        let i1 = theta * exp_neg_f64(-s.sigma * s.h) / s.h;
         let c = k / 2;
         f[c] += s.z * (i1 - s.i2);
     }
@@ -330,7 +331,7 @@ fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) ->
     let s = s2.sqrt();
     let f = |t: f64| {
         let s = (s2 + t * t).sqrt();
-        (-sigma * s).exp() / (s * (r2 + t * t))
+        exp_neg_f64(-sigma * s) / (s * (r2 + t * t))
     };
     let mut sum = 0.0;
     let mut segments = 0;
@@ -345,7 +346,7 @@ fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) ->
         let g = |p: f64| {
             let t = r * p.tan();
             let s = (s2 + t * t).sqrt();
-            (-sigma * s).exp() / s
+            exp_neg_f64(-sigma * s) / s
         };
         let dp = hp * GL_X;
         sum += hp * (GL_W_CENTER * g(p0) + GL_W_OUTER * (g(p0 - dp) + g(p0 + dp)));

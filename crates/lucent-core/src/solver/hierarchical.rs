@@ -20,7 +20,8 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
-use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverSources, ReceiverView};
+use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
+use super::point_sample::ReceiverSources;
 use crate::Rgb;
 use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
@@ -130,7 +131,9 @@ pub struct HierarchicalSolver {
 /// Per-task state of a traversal.
 struct Ctx<'a> {
     ev: Evaluator<'a>,
-    stack: Vec<u32>,
+    /// Candidate emitters of the current receiver still to decide, with their one-point
+    /// estimate when the decision that opened their parent made it.
+    stack: Vec<(u32, Option<[f32; 3]>)>,
     inv_rtot: [f32; 3],
     form_factors: usize,
     point_samples: usize,
@@ -199,19 +202,35 @@ impl<'a> Ctx<'a> {
         let h = self.ev.h;
         let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
         let src = view.src;
-        self.stack.clear();
-        self.stack.extend_from_slice(cands);
-        let (mut estimate, mut recv_scale) = (None, None);
-        while let Some(e) = self.stack.pop() {
+        self.start(cands);
+        let mut samples = Samples::default();
+        while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
-            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate, &mut recv_scale) {
+            samples.f_mid = f_mid;
+            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
                 Decision::Link(kind) => {
-                    let f = self.coefficient(&src, r, e, kind, estimate, recv_scale);
+                    let f = self.coefficient(&src, r, e, kind, samples.estimate, samples.recv_scale);
                     on_link(e, kind, f);
                 }
                 Decision::SplitReceiver => defer.push(e as u32),
-                Decision::SplitEmitter => self.stack.extend_from_slice(h.nodes[e].children()),
+                Decision::SplitEmitter => self.open_emitter(e, &samples),
             }
+        }
+    }
+
+    /// Starts a receiver's traversal with candidates `cands`.
+    fn start(&mut self, cands: &[u32]) {
+        self.stack.clear();
+        self.stack.extend(cands.iter().map(|&e| (e, None)));
+    }
+
+    /// Replaces emitter `e` on the stack by its children, with their estimates if `decide`
+    /// made them.
+    fn open_emitter(&mut self, e: usize, samples: &Samples) {
+        let kids = self.ev.h.nodes[e].children();
+        match samples.children {
+            Some(f) => self.stack.extend(kids.iter().zip(f).map(|(&k, f)| (k, Some(f)))),
+            None => self.stack.extend(kids.iter().map(|&k| (k, None))),
         }
     }
 }
@@ -235,10 +254,9 @@ impl Ctx<'_> {
         let h = self.ev.h;
         let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
         let src = view.src;
-        self.stack.clear();
-        self.stack.extend_from_slice(cands);
-        let (mut estimate, mut recv_scale) = (None, None);
-        while let Some(e) = self.stack.pop() {
+        self.start(cands);
+        let mut samples = Samples::default();
+        while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
             let unchanged = !reuse.changed[r] && !reuse.changed[e];
             let old = reuse.old_link(r, e);
@@ -246,7 +264,8 @@ impl Ctx<'_> {
                 chunk.push(r, e, kind, f, false);
                 continue;
             }
-            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut estimate, &mut recv_scale) {
+            samples.f_mid = f_mid;
+            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
                 Decision::Link(kind) => {
                     let over =
                         kind == LinkKind::FormFactor && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
@@ -261,11 +280,11 @@ impl Ctx<'_> {
                         chunk.push(r, e, kind, f, true);
                         continue;
                     }
-                    let f = self.coefficient(&src, r, e, kind, estimate, recv_scale);
+                    let f = self.coefficient(&src, r, e, kind, samples.estimate, samples.recv_scale);
                     chunk.push(r, e, kind, f, false);
                 }
                 Decision::SplitReceiver => defer.push(e as u32),
-                Decision::SplitEmitter => self.stack.extend_from_slice(h.nodes[e].children()),
+                Decision::SplitEmitter => self.open_emitter(e, &samples),
             }
         }
     }

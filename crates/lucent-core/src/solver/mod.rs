@@ -4,10 +4,12 @@
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
 //!   §5.5) in on-the-fly, render and incremental modes.
 //! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
+//! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
 pub mod exact;
 pub mod hierarchical;
 pub mod oracle;
+pub mod point_sample;
 
 pub use hierarchical::{HierarchicalSolver, LinkSet, Solution, SolveStats};
 pub use oracle::{LinkKind, Oracle};

@@ -3,6 +3,8 @@
 //! emitter (`ε2`), the `A'/A` curvature test for near clusters (§5.1.1), and the choice between
 //! a one-point estimate and the semi-analytic form factor (§4).
 
+use super::point_sample::point_samples_from;
+pub use super::point_sample::{DipoleF32, ReceiverSources};
 use crate::bssrdf::Dipole;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
@@ -120,6 +122,23 @@ pub enum Decision {
     SplitEmitter,
 }
 
+/// One-point estimates that [`Oracle::decide`] takes and leaves for its caller, so none is
+/// made twice.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Samples {
+    /// In: the estimate `A_E R_d` from the emitter to the receiver's midpoint, if known (left
+    /// by the decision that opened the emitter's parent). Consumed.
+    pub f_mid: Option<[f32; 3]>,
+    /// Out, with a point-sample link: a better estimate of its coefficient than `f_mid`.
+    pub estimate: Option<[f32; 3]>,
+    /// Out, with a point-sample link at an inner receiver: the factor from the estimate at the
+    /// receiver's midpoint to its average over the receiver.
+    pub recv_scale: Option<[f32; 3]>,
+    /// Out, with [`Decision::SplitEmitter`]: the estimates from the emitter's children (in
+    /// order), when the emitter test made them.
+    pub children: Option<[[f32; 3]; 4]>,
+}
+
 /// Solid angle `A_E / d²` of cluster `e` seen from `x`, or infinity inside its bounding sphere.
 #[inline]
 pub fn solid_angle(x: Vec3, e: &ClusterGeom) -> f32 {
@@ -172,7 +191,6 @@ impl Oracle {
     /// (`ε2`). When the receiver test fails but the emitter is near and larger, the emitter is
     /// opened first (it would be anyway), which keeps links at the higher receiver level.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn decide(
         &self,
         h: &Hierarchy,
@@ -180,11 +198,13 @@ impl Oracle {
         view: &ReceiverView,
         r: usize,
         e: usize,
-        estimate: &mut Option<[f32; 3]>,
-        recv_scale: &mut Option<[f32; 3]>,
+        samples: &mut Samples,
     ) -> Decision {
+        let known_f_mid = samples.f_mid.take();
+        let Samples { estimate, recv_scale, children, .. } = samples;
         *estimate = None;
         *recv_scale = None;
+        *children = None;
         let rn = &h.nodes[r];
         let en = &h.nodes[e];
         let rg = &h.geom[r];
@@ -196,14 +216,17 @@ impl Oracle {
         let separated = w != INSIDE
             && (rg.midpoint - eg.midpoint).length_squared()
                 > (rg.radius + eg.radius) * (rg.radius + eg.radius);
-        let f_mid = if self.mode == OracleMode::Transport {
-            view.src.point_sample(d, eg.midpoint, eg.area)
+        // Both transport tests stop at `!separated` before reading it.
+        let f_mid = if self.mode == OracleMode::Transport && separated {
+            known_f_mid.unwrap_or_else(|| view.src.point_sample(d, eg.midpoint, eg.area))
         } else {
             [0.0; 3]
         };
         // Emitter verdict: far (one point sample is enough) or near. Evaluated only when
         // needed (it costs five point samples).
-        let far_test = |estimate: &mut Option<[f32; 3]>, f_mid: [f32; 3]| match self.mode {
+        let far_test = |estimate: &mut Option<[f32; 3]>,
+                        children: &mut Option<[[f32; 3]; 4]>,
+                        f_mid: [f32; 3]| match self.mode {
             OracleMode::SolidAngle => w <= self.eps2,
             OracleMode::Transport => {
                 // Bounding spheres must be disjoint: one-point estimates at midpoints say
@@ -225,15 +248,17 @@ impl Oracle {
                             });
                             self.within(err, f, self.eps2, view.inv_rtot)
                         } else {
-                            let mut sum = [0.0f32; 3];
-                            let mut fk = [[0.0f32; 3]; 4];
+                            // Padding lanes have area 0 and add nothing.
+                            let mut pts = [eg.midpoint; 4];
+                            let mut areas = [0.0f32; 4];
                             for (j, &k) in en.children().iter().enumerate() {
                                 let kg = &h.geom[k as usize];
-                                fk[j] = view.src.point_sample(d, kg.midpoint, kg.area);
-                                for c in 0..3 {
-                                    sum[c] += fk[j][c];
-                                }
+                                pts[j] = kg.midpoint;
+                                areas[j] = kg.area;
                             }
+                            let fk = view.src.point_samples(d, &pts, &areas);
+                            *children = Some(fk);
+                            let sum: [f32; 3] = std::array::from_fn(|c| fk.iter().map(|f| f[c]).sum());
                             // The link spreads E's *average* irradiance: besides the total, the
                             // transport must be spread over E's children like their areas, or a
                             // non-uniform irradiance would be mis-weighted.
@@ -241,9 +266,8 @@ impl Oracle {
                             let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
                             for c in 0..3 {
                                 err[c] = (f[c] - sum[c]).abs();
-                                for (j, &k) in en.children().iter().enumerate() {
-                                    let share = h.geom[k as usize].area * inv_a;
-                                    err[c] += (fk[j][c] - share * sum[c]).abs();
+                                for j in 0..en.child_count as usize {
+                                    err[c] += (fk[j][c] - areas[j] * inv_a * sum[c]).abs();
                                 }
                             }
                             // Keep a better estimate for the link: R_d is convex, so one-point
@@ -299,13 +323,14 @@ impl Oracle {
                         let f = f_mid;
                         let mut avg = [0.0f32; 3];
                         let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
+                        let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
                         for (k, &c) in rn.children().iter().enumerate() {
                             let cg = &h.geom[c as usize];
                             if solid_angle(cg.midpoint, eg) == INSIDE {
                                 split = true;
                                 break;
                             }
-                            let fc = view.child_src[k].point_sample(d, eg.midpoint, eg.area);
+                            let fc = f_children[k];
                             let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
                             if !self.within(diff, f, self.eps1, view.inv_rtot) {
                                 split = true;
@@ -332,14 +357,15 @@ impl Oracle {
                 }
             }
             if split {
-                if !en.is_leaf() && eg.area > rg.area && !far_test(estimate, f_mid) {
+                if !en.is_leaf() && eg.area > rg.area && !far_test(estimate, children, f_mid) {
                     return Decision::SplitEmitter;
                 }
                 *estimate = None;
+                *children = None;
                 return Decision::SplitReceiver;
             }
         }
-        if far_test(estimate, f_mid) {
+        if far_test(estimate, children, f_mid) {
             return Decision::Link(LinkKind::PointSample);
         }
         if en.is_leaf() {
@@ -353,84 +379,6 @@ impl Oracle {
             return Decision::Link(LinkKind::FormFactor);
         }
         Decision::SplitEmitter
-    }
-}
-
-/// The dipole's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
-/// lengths in mesh units).
-#[derive(Clone, Copy, Debug)]
-pub struct DipoleF32 {
-    /// `sigma_tr` per channel, per mesh unit.
-    pub sigma_tr: [f32; 3],
-    /// `z_r` per channel, mesh units.
-    pub z_r: [f32; 3],
-    /// `z_v` per channel, mesh units.
-    pub z_v: [f32; 3],
-    /// `alpha' / 4π` per channel.
-    pub k: [f32; 3],
-}
-
-impl DipoleF32 {
-    /// The `f32` copy of `d`.
-    pub fn new(d: &Dipole) -> Self {
-        DipoleF32 {
-            sigma_tr: d.sigma_tr.map(|v| v as f32),
-            z_r: d.z_r.map(|v| v as f32),
-            z_v: d.z_v.map(|v| v as f32),
-            k: d.alpha_prime.map(|v| (v / (4.0 * std::f64::consts::PI)) as f32),
-        }
-    }
-}
-
-/// The dipole sources of one receiver point (the dipole sits at the receiver, §4's inverse
-/// interpretation): real sources `x_o - z_r n_o`, virtual sources `x_o + z_v n_o`, per channel.
-#[derive(Clone, Copy, Debug)]
-pub struct ReceiverSources {
-    x_r: [Vec3; 3],
-    x_v: [Vec3; 3],
-}
-
-impl ReceiverSources {
-    /// The sources for receiver point `x_o` with unit normal `n_o`.
-    #[inline]
-    pub fn new(d: &DipoleF32, x_o: Vec3, n_o: Vec3) -> Self {
-        ReceiverSources {
-            x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n_o),
-            x_v: std::array::from_fn(|c| x_o + d.z_v[c] * n_o),
-        }
-    }
-
-    /// Whether every source is farther from `p` than `margin + base + spread z` (its own `z`):
-    /// the sources of all points within `base` of the receiver point whose normals stray by at
-    /// most `spread` stay `margin` away from `p`.
-    #[inline]
-    pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
-        (0..3).all(|c| {
-            let rr = margin + base + spread * d.z_r[c];
-            let rv = margin + base + spread * d.z_v[c];
-            (self.x_r[c] - p).length_squared() > rr * rr && (self.x_v[c] - p).length_squared() > rv * rv
-        })
-    }
-
-    /// Distance from `p` to the nearer of the two sources, per channel.
-    #[inline]
-    pub fn nearest(&self, p: Vec3) -> [f32; 3] {
-        std::array::from_fn(|c| {
-            (self.x_r[c] - p).length_squared().min((self.x_v[c] - p).length_squared()).sqrt()
-        })
-    }
-
-    /// One-point form factor `A R_d(p)` for an emitter of area `area` at `p`.
-    #[inline]
-    pub fn point_sample(&self, d: &DipoleF32, p: Vec3, area: f32) -> [f32; 3] {
-        std::array::from_fn(|c| {
-            let s_r = (self.x_r[c] - p).length();
-            let s_v = (self.x_v[c] - p).length();
-            let sig = d.sigma_tr[c];
-            let tr = d.z_r[c] * (1.0 + sig * s_r) * (-sig * s_r).exp() / (s_r * s_r * s_r);
-            let tv = d.z_v[c] * (1.0 + sig * s_v) * (-sig * s_v).exp() / (s_v * s_v * s_v);
-            area * d.k[c] * (tr + tv)
-        })
     }
 }
 
