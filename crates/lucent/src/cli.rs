@@ -54,6 +54,35 @@ pub enum Method {
     Htsm,
 }
 
+/// The mesh hierarchy of `lucent render --hierarchy`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HierarchyChoice {
+    /// Face clustering over the input mesh (Mertens §5.1.1).
+    #[default]
+    FaceCluster,
+    /// The input shrink-wrapped by an icosahedron subdivided this many times (§5.1.2).
+    ShrinkWrap(u32),
+}
+
+/// Parses `face-cluster` or `shrink-wrap:LEVELS` (LEVELS in `0..=MAX_LEVELS`).
+pub fn parse_hierarchy(s: &str) -> Result<HierarchyChoice, String> {
+    use lucent_core::hierarchy::shrink_wrap::MAX_LEVELS;
+    if s == "face-cluster" {
+        return Ok(HierarchyChoice::FaceCluster);
+    }
+    let Some(levels) = s.strip_prefix("shrink-wrap:") else {
+        return Err(format!(
+            "expected `face-cluster` or `shrink-wrap:LEVELS` (LEVELS 0..={MAX_LEVELS}), got `{s}`"
+        ));
+    };
+    match levels.parse::<u32>() {
+        Ok(l) if l <= MAX_LEVELS => Ok(HierarchyChoice::ShrinkWrap(l)),
+        _ => Err(format!(
+            "shrink-wrap LEVELS must be a whole number from 0 to {MAX_LEVELS} (20 x 4^LEVELS triangles), got `{levels}`"
+        )),
+    }
+}
+
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:\n  \
     lucent render --mesh bunny.obj --material marble --scale 0.1 --light dir:1,-1,1 --out m.png\n  \
@@ -117,6 +146,12 @@ pub struct RenderArgs {
     /// Solver.
     #[arg(long, value_enum, default_value_t = Method::Hierarchical)]
     pub method: Method,
+    /// Mesh hierarchy of the hierarchical solve (Mertens §5.1): `face-cluster` (§5.1.1, over the
+    /// input mesh) or `shrink-wrap:LEVELS` (§5.1.2: the input, which must be closed and genus 0,
+    /// is resampled by an icosahedron subdivided LEVELS times, 20 x 4^LEVELS triangles, LEVELS
+    /// 0..=9; that wrapped mesh is what is solved and rendered).
+    #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
+    pub hierarchy: HierarchyChoice,
     /// Mode of the hierarchical solve (Mertens §5.5). Default on-the-fly for one image,
     /// incremental for an animation (links made once, updated per frame).
     #[arg(long, value_enum)]

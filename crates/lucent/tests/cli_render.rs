@@ -308,3 +308,58 @@ fn environment_flag_lights_the_object() {
     let run = lucent(&["render", "--env", "no-such-map.exr", "--out", never.to_str().unwrap()], &[]);
     assert_clean_failure(&run, "no-such-map.exr", &never);
 }
+
+#[test]
+fn shrink_wrap_hierarchy_renders_the_wrapped_mesh() {
+    let dir = scratch("shrink_wrap");
+    let out = dir.join("wrapped.png");
+    let run = lucent(
+        &[
+            "render",
+            "--hierarchy",
+            "shrink-wrap:3",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(run.status.success(), "stderr: {:?}", stderr_lines(&run));
+    let summary = String::from_utf8_lossy(&run.stdout);
+    // 20 x 4^3 triangles are solved and rendered, and the note says how far they are from the input.
+    assert!(summary.contains("to 1280 triangles"), "{summary}");
+    assert!(summary.contains("max distance to the input"), "{summary}");
+    assert!(summary.contains(": 1280 triangles"), "{summary}");
+    let img = image::open(&out).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (160, 120));
+    assert!(object_luminance(&img) > 0.0);
+
+    // A bad value is a usage error (clap, exit 2) naming the expected forms.
+    for bad in ["shrink-wrap:x", "shrink-wrap:12", "octree"] {
+        let run = lucent(&["render", "--hierarchy", bad, "--out", out.to_str().unwrap()], &[]);
+        assert_eq!(run.status.code(), Some(2), "{bad}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains("--hierarchy") && err.contains(bad), "{bad}: {err}");
+    }
+
+    // An open mesh cannot be wrapped: one clean error, no image.
+    let open = dir.join("open.obj");
+    std::fs::write(&open, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n").unwrap();
+    let never = dir.join("never.png");
+    let run = lucent(
+        &[
+            "render",
+            "--mesh",
+            open.to_str().unwrap(),
+            "--hierarchy",
+            "shrink-wrap:2",
+            "--out",
+            never.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_clean_failure(&run, "not closed", &never);
+}

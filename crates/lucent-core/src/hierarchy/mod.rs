@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
 pub mod face_cluster;
+pub mod shrink_wrap;
 pub mod subdivision;
 
 /// Marks "no cluster" (the root's parent, unused child slots).

@@ -15,8 +15,9 @@
 //! The result is the fine mesh and the quad-tree hierarchy over it whose clusters are the
 //! triangles of every level; a cluster's polygon is its coarse triangle (three fine-mesh
 //! vertices: "every cluster is represented by exactly one triangle", §5.1.3). The base faces
-//! are grouped four by four (in order) up to a single root. Shrink-wrapping (§5.1.2) is not
-//! implemented.
+//! are grouped four by four (in order) up to a single root. Shrink-wrapping arbitrary closed
+//! meshes onto the same 4-to-1 connectivity (§5.1.2's second method) is in
+//! [`super::shrink_wrap`].
 
 use super::{Hierarchy, RawTree};
 use crate::mesh::Mesh;
@@ -45,11 +46,26 @@ pub struct Subdivided {
 
 /// Subdivides `base` `levels` times with the modified butterfly scheme.
 pub fn butterfly(base: &Mesh, levels: u32) -> Result<Subdivided, SubdivisionError> {
-    if base.triangles.is_empty() {
+    split_4_to_1(base.positions.clone(), &base.triangles, levels, edge_point, |_, _| {})
+}
+
+/// The 4-to-1 split shared by [`butterfly`] and shrink-wrapping: subdivides the closed mesh
+/// `(positions, base)` `levels` times, placing each new edge vertex with
+/// `new_vertex(positions, ring_map, a, b)` and calling `after_level(positions, faces)` once the
+/// faces of each finer level exist (a scheme that moves vertices does it there). The hierarchy
+/// (one cluster per triangle of every level, base faces grouped four by four up to one root)
+/// is built from the final positions, so every caller gets the same tree for the same base.
+pub(crate) fn split_4_to_1(
+    mut positions: Vec<Vec3>,
+    base: &[[u32; 3]],
+    levels: u32,
+    mut new_vertex: impl FnMut(&[Vec3], &HashMap<(u32, u32), u32>, u32, u32) -> Vec3,
+    mut after_level: impl FnMut(&mut Vec<Vec3>, &[[u32; 3]]),
+) -> Result<Subdivided, SubdivisionError> {
+    if base.is_empty() {
         return Err(SubdivisionError::Empty);
     }
-    let mut positions = base.positions.clone();
-    let mut faces: Vec<[u32; 3]> = base.triangles.clone();
+    let mut faces: Vec<[u32; 3]> = base.to_vec();
     // Raw tree nodes: one per face of every level.
     let mut children: Vec<Vec<u32>> = vec![Vec::new(); faces.len()];
     let mut polygon: Vec<Vec<u32>> = faces.iter().map(|f| f.to_vec()).collect();
@@ -64,7 +80,7 @@ pub fn butterfly(base: &Mesh, levels: u32) -> Result<Subdivided, SubdivisionErro
             let mut mid = |x: u32, y: u32| -> u32 {
                 let key = (x.min(y), x.max(y));
                 *edge_vertex.entry(key).or_insert_with(|| {
-                    let p = edge_point(&positions, &next_of, x, y);
+                    let p = new_vertex(&positions, &next_of, x, y);
                     positions.push(p);
                     positions.len() as u32 - 1
                 })
@@ -82,6 +98,7 @@ pub fn butterfly(base: &Mesh, levels: u32) -> Result<Subdivided, SubdivisionErro
         }
         faces = new_faces;
         level_nodes = new_nodes;
+        after_level(&mut positions, &faces);
     }
     let mut face = vec![u32::MAX; children.len()];
     for (f, &node) in level_nodes.iter().enumerate() {

@@ -57,7 +57,10 @@ impl<'a> FrameSolver<'a> {
             bail!("--method htsm has no per-face solve");
         }
         let hierarchical = (method == Method::Hierarchical).then(|| {
-            let h = lucent_core::hierarchy::face_cluster::build(&scene.mesh);
+            let h = match &scene.hierarchy {
+                Some(h) => h.clone(),
+                None => lucent_core::hierarchy::face_cluster::build(&scene.mesh),
+            };
             let mut s = HierarchicalSolver::new(scene.mesh.clone(), h, scene.dipole, Oracle::default());
             s.ff_opts = FormFactorOptions::default();
             s

@@ -16,7 +16,7 @@ pub mod setup;
 
 pub use setup::{Scene, load_scene};
 
-use crate::cli::{Method, RenderArgs, SolveMode, ToneCurve};
+use crate::cli::{HierarchyChoice, Method, RenderArgs, SolveMode, ToneCurve};
 use anyhow::{Context, Result, bail};
 use frame::{FrameSolver, GpuFrame};
 use lucent_gpu::GpuContext;
@@ -27,7 +27,7 @@ use std::time::Instant;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
-    let scene = load_scene(args)?;
+    let scene = shrink_wrap_scene(load_scene(args)?, args)?;
     if let Some(frames) = args.frames {
         if args.method == Method::Htsm {
             bail!("--frames works with --method hierarchical or exact, not htsm");
@@ -56,6 +56,35 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// With `--hierarchy shrink-wrap:L`, replaces the scene's mesh by its shrink-wrapped resampling
+/// (Mertens §5.1.2) and keeps that mesh's subdivision hierarchy for the solver.
+fn shrink_wrap_scene(mut scene: Scene, args: &RenderArgs) -> Result<Scene> {
+    use lucent_core::hierarchy::shrink_wrap::{ShrinkWrapOptions, shrink_wrap};
+    let HierarchyChoice::ShrinkWrap(levels) = args.hierarchy else {
+        return Ok(scene);
+    };
+    if args.method == Method::Htsm {
+        bail!("--hierarchy shrink-wrap works with --method hierarchical or exact, not htsm");
+    }
+    let t = Instant::now();
+    let w = shrink_wrap(&scene.mesh, levels, &ShrinkWrapOptions::default())
+        .with_context(|| format!("--hierarchy shrink-wrap:{levels}: cannot shrink-wrap {}", scene.source))?;
+    let extent = scene.mesh.extent().max(f32::MIN_POSITIVE);
+    println!(
+        "lucent: shrink-wrapped {} ({} triangles) to {} triangles in {:.0} ms; max distance to the input {:.4} mesh units \
+         ({:.2} % of its size)",
+        scene.source,
+        scene.mesh.triangles.len(),
+        w.subdivided.mesh.triangles.len(),
+        t.elapsed().as_secs_f64() * 1e3,
+        w.hausdorff(),
+        100.0 * w.hausdorff() / extent
+    );
+    scene.mesh = w.subdivided.mesh;
+    scene.hierarchy = Some(w.subdivided.hierarchy);
+    Ok(scene)
 }
 
 /// Wall-clock times of the stages, for the summary line.

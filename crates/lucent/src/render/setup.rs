@@ -40,6 +40,9 @@ pub struct Scene {
     pub camera: OrbitCamera,
     /// Exposure multiplier before tone mapping (> 0).
     pub exposure: f32,
+    /// A hierarchy built with `mesh` (`--hierarchy shrink-wrap:L`); `None`: the solver builds
+    /// the face-cluster hierarchy of `mesh`.
+    pub hierarchy: Option<lucent_core::hierarchy::Hierarchy>,
 }
 
 impl Scene {
@@ -165,6 +168,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         deform,
         camera,
         exposure,
+        hierarchy: None,
     })
 }
 
