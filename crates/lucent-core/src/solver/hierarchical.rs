@@ -47,10 +47,11 @@ pub struct LinkSet {
     /// Links whose coefficient is stale (left over when an incremental update ran out of
     /// budget); recomputed first by the next update.
     pub dirty: Vec<bool>,
-    /// Order-independent hash of each receiver's candidate emitters (per cluster), which
-    /// tells an incremental update whether a receiver subtree sees the same candidates as
-    /// before.
-    cand_hash: Vec<u64>,
+    /// `cand_start[r]..cand_start[r + 1]` index `cands`: the candidate emitters handed to
+    /// receiver `r` by its ancestors (disjoint clusters). An incremental update keeps the
+    /// links that came from a candidate that is still handed down and did not move.
+    cand_start: Vec<u32>,
+    cands: Vec<u32>,
 }
 
 impl LinkSet {
@@ -68,6 +69,12 @@ impl LinkSet {
     #[inline]
     pub fn emitter_of(&self, j: usize) -> usize {
         (self.emitter[j] & !FF_BIT) as usize
+    }
+
+    /// The candidate emitters receiver `r` was handed.
+    #[inline]
+    fn cands_of(&self, r: usize) -> &[u32] {
+        &self.cands[self.cand_start[r] as usize..self.cand_start[r + 1] as usize]
     }
 
     /// Evaluation kind of link `j`.
@@ -297,19 +304,17 @@ struct LinkChunk {
     emitter: Vec<u32>,
     ff: Vec<[f32; 3]>,
     dirty: Vec<bool>,
-    /// `(receiver, candidate hash)` of the receivers visited.
-    hashes: Vec<(u32, u64)>,
+    /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
+    /// candidates.
+    cand_count: Vec<(u32, u32)>,
+    cands: Vec<u32>,
 }
 
-/// Order-independent hash of a candidate list.
-fn cand_hash(cands: &[u32]) -> u64 {
-    cands.iter().fold(0u64, |acc, &e| {
-        // splitmix64 of each emitter, summed.
-        let mut z = (e as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        acc.wrapping_add(z ^ (z >> 31))
-    })
+/// Whether cluster `e` lies in one of the preorder ranges `ranges` (a cluster's subtree is
+/// `e..subtree_end`).
+#[inline]
+fn in_ranges(ranges: &[(u32, u32)], e: u32) -> bool {
+    ranges.iter().any(|&(a, z)| a <= e && e < z)
 }
 
 impl LinkChunk {
@@ -322,6 +327,15 @@ impl LinkChunk {
         });
         self.ff.push(f);
         self.dirty.push(dirty);
+    }
+
+    /// Copies link `j` of `old` (receiver `r`) unchanged.
+    #[inline]
+    fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
+        self.recv.push(r as u32);
+        self.emitter.push(old.emitter[j]);
+        self.ff.push(old.ff[j]);
+        self.dirty.push(old.dirty[j]);
     }
 }
 
@@ -469,19 +483,24 @@ impl HierarchicalSolver {
     fn relink(&mut self, reuse: Option<&Reuse>) -> SolveStats {
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
-        let mut set =
-            LinkSet { recv_start: vec![0; h.len() + 1], cand_hash: vec![0; h.len()], ..Default::default() };
+        let mut set = LinkSet {
+            recv_start: vec![0; h.len() + 1],
+            cand_start: vec![0; h.len() + 1],
+            ..Default::default()
+        };
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::default()];
-            self.link_rec(&mut ctx, 0, &[0], &mut chunks, reuse);
+            self.link_rec(&mut ctx, 0, &[0], &[], &mut chunks, reuse);
             stats.form_factors = ctx.form_factors;
             stats.point_samples = ctx.point_samples;
             let total: usize = chunks.iter().map(|c| c.recv.len()).sum();
             set.emitter.reserve_exact(total);
             set.ff.reserve_exact(total);
             set.dirty.reserve_exact(total);
+            set.cands.reserve_exact(chunks.iter().map(|c| c.cands.len()).sum());
             let mut counts = vec![0u32; h.len()];
+            let mut cand_counts = vec![0u32; h.len()];
             for c in &chunks {
                 for &r in &c.recv {
                     counts[r as usize] += 1;
@@ -489,12 +508,14 @@ impl HierarchicalSolver {
                 set.emitter.extend_from_slice(&c.emitter);
                 set.ff.extend_from_slice(&c.ff);
                 set.dirty.extend_from_slice(&c.dirty);
-                for &(r, hash) in &c.hashes {
-                    set.cand_hash[r as usize] = hash;
+                for &(r, k) in &c.cand_count {
+                    cand_counts[r as usize] = k;
                 }
+                set.cands.extend_from_slice(&c.cands);
             }
-            for (i, &c) in counts.iter().enumerate() {
-                set.recv_start[i + 1] = set.recv_start[i] + c;
+            for i in 0..h.len() {
+                set.recv_start[i + 1] = set.recv_start[i] + counts[i];
+                set.cand_start[i + 1] = set.cand_start[i] + cand_counts[i];
             }
         }
         stats.links = set.len();
@@ -502,48 +523,86 @@ impl HierarchicalSolver {
         stats
     }
 
+    /// Links receiver `r` and its subtree, given the candidate emitters `cands` its ancestors
+    /// deferred to it. With `reuse`, `kept` are the preorder ranges of the candidates an
+    /// ancestor kept (see below): old links of this subtree whose emitter lies in them are
+    /// taken over verbatim.
+    ///
+    /// Each candidate's fate depends only on the pair (receiver, candidate) and the clusters
+    /// below them, and the candidates of a receiver are disjoint clusters, so the links of a
+    /// subtree are the union over its candidates of what each one refines into. In a subtree
+    /// where nothing moved and nothing is stale, a candidate that did not move and was a
+    /// candidate here before therefore refines exactly as before: its range is *kept*, and
+    /// only the other (*fresh*) candidates are traversed again.
     fn link_rec(
         &self,
         ctx: &mut Ctx,
         r: usize,
         cands: &[u32],
+        kept: &[(u32, u32)],
         chunks: &mut Vec<LinkChunk>,
         reuse: Option<&Reuse>,
     ) {
         let h = &self.hierarchy;
         let n = h.nodes[r];
-        let hash = cand_hash(cands);
-        if let Some(u) = reuse
-            && !u.changed[r]
-            && !u.stale[r]
-            && u.old.cand_hash[r] == hash
-            && cands.iter().all(|&e| !u.changed[e as usize])
-        {
-            // Same candidates, and nothing this subtree's decisions read has changed: same
-            // links, same values.
-            let chunk = chunks.last_mut().expect("a chunk");
-            let old = u.old;
-            for q in r..n.subtree_end as usize {
-                let k = (old.recv_start[q + 1] - old.recv_start[q]) as usize;
-                chunk.recv.extend(std::iter::repeat_n(q as u32, k));
-                chunk.hashes.push((q as u32, old.cand_hash[q]));
+        let range = |e: u32| (e, h.nodes[e as usize].subtree_end);
+        let mut fresh = Vec::new();
+        let mut kept_here = kept.to_vec();
+        let chunk = chunks.last_mut().expect("a chunk");
+        match reuse {
+            Some(u) if !u.changed[r] && !u.stale[r] => {
+                let old_cands = u.old.cands_of(r);
+                for &e in cands {
+                    if !u.changed[e as usize] && old_cands.contains(&e) {
+                        kept_here.push(range(e));
+                    } else {
+                        fresh.push(e);
+                    }
+                }
+                let old = u.old;
+                if fresh.is_empty() && old_cands.iter().all(|&c| in_ranges(&kept_here, c)) {
+                    // Everything here refines as before: the subtree's links wholesale.
+                    for q in r..n.subtree_end as usize {
+                        let (a, z) = (old.recv_start[q] as usize, old.recv_start[q + 1] as usize);
+                        chunk.recv.extend(std::iter::repeat_n(q as u32, z - a));
+                        let oc = old.cands_of(q);
+                        chunk.cand_count.push((q as u32, oc.len() as u32));
+                        chunk.cands.extend_from_slice(oc);
+                    }
+                    let (a, z) =
+                        (old.recv_start[r] as usize, old.recv_start[n.subtree_end as usize] as usize);
+                    chunk.emitter.extend_from_slice(&old.emitter[a..z]);
+                    chunk.ff.extend_from_slice(&old.ff[a..z]);
+                    chunk.dirty.extend_from_slice(&old.dirty[a..z]);
+                    return;
+                }
+                // This receiver's candidates: the ones handed down now, plus those that the
+                // kept ranges of ancestors handed down before (and would again).
+                let start = chunk.cands.len();
+                chunk.cands.extend_from_slice(cands);
+                chunk.cands.extend(old_cands.iter().filter(|&&c| in_ranges(kept, c)));
+                chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
+                for j in old.recv_start[r] as usize..old.recv_start[r + 1] as usize {
+                    if in_ranges(&kept_here, old.emitter_of(j) as u32) {
+                        chunk.push_old(old, r, j);
+                    }
+                }
             }
-            let (a, z) = (old.recv_start[r] as usize, old.recv_start[n.subtree_end as usize] as usize);
-            chunk.emitter.extend_from_slice(&old.emitter[a..z]);
-            chunk.ff.extend_from_slice(&old.ff[a..z]);
-            chunk.dirty.extend(std::iter::repeat_n(false, z - a));
-            return;
+            _ => {
+                // Something below moved (or is stale): every candidate is decided again (an
+                // ancestor cannot have kept a range, as it would be unmoved and clean too).
+                debug_assert!(kept.is_empty());
+                fresh.extend_from_slice(cands);
+                chunk.cand_count.push((r as u32, cands.len() as u32));
+                chunk.cands.extend_from_slice(cands);
+            }
         }
         let mut defer = Vec::new();
-        {
-            let chunk = chunks.last_mut().expect("a chunk");
-            chunk.hashes.push((r as u32, hash));
-            match reuse {
-                None => ctx.receive(&self.oracle, r, cands, &mut defer, |e, kind, f| {
-                    chunk.push(r, e, kind, f, false);
-                }),
-                Some(u) => ctx.receive_reusing(&self.oracle, r, cands, &mut defer, u, chunk),
-            }
+        match reuse {
+            None => ctx.receive(&self.oracle, r, &fresh, &mut defer, |e, kind, f| {
+                chunk.push(r, e, kind, f, false);
+            }),
+            Some(u) => ctx.receive_reusing(&self.oracle, r, &fresh, &mut defer, u, chunk),
         }
         if n.is_leaf() {
             return;
@@ -555,7 +614,7 @@ impl HierarchicalSolver {
                 .map(|&c| {
                     let mut sub = Ctx::new(self);
                     let mut sub_chunks = vec![LinkChunk::default()];
-                    self.link_rec(&mut sub, c as usize, &defer, &mut sub_chunks, reuse);
+                    self.link_rec(&mut sub, c as usize, &defer, &kept_here, &mut sub_chunks, reuse);
                     (sub, sub_chunks)
                 })
                 .collect();
@@ -566,7 +625,7 @@ impl HierarchicalSolver {
             chunks.push(LinkChunk::default());
         } else {
             for &c in n.children() {
-                self.link_rec(ctx, c as usize, &defer, chunks, reuse);
+                self.link_rec(ctx, c as usize, &defer, &kept_here, chunks, reuse);
             }
         }
     }
