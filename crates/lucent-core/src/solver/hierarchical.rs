@@ -71,6 +71,35 @@ impl LinkSet {
         (self.emitter[j] & !FF_BIT) as usize
     }
 
+    /// Copies the chunks' links and candidates, in order, into the flat arrays (in parallel,
+    /// each chunk into its own slice).
+    fn gather_chunks(&mut self, chunks: &[LinkChunk]) {
+        let links: usize = chunks.iter().map(|c| c.emitter.len()).sum();
+        let cands: usize = chunks.iter().map(|c| c.cands.len()).sum();
+        self.emitter.resize(links, 0);
+        self.ff.resize(links, [0.0; 3]);
+        self.dirty.resize(links, false);
+        self.cands.resize(cands, 0);
+        let (mut e, mut f, mut d, mut k) =
+            (&mut self.emitter[..], &mut self.ff[..], &mut self.dirty[..], &mut self.cands[..]);
+        let mut parts = Vec::with_capacity(chunks.len());
+        for c in chunks {
+            let (n, m) = (c.emitter.len(), c.cands.len());
+            let (e0, e1) = std::mem::take(&mut e).split_at_mut(n);
+            let (f0, f1) = std::mem::take(&mut f).split_at_mut(n);
+            let (d0, d1) = std::mem::take(&mut d).split_at_mut(n);
+            let (k0, k1) = std::mem::take(&mut k).split_at_mut(m);
+            parts.push((c, e0, f0, d0, k0));
+            (e, f, d, k) = (e1, f1, d1, k1);
+        }
+        parts.into_par_iter().for_each(|(c, e, f, d, k)| {
+            e.copy_from_slice(&c.emitter);
+            f.copy_from_slice(&c.ff);
+            d.copy_from_slice(&c.dirty);
+            k.copy_from_slice(&c.cands);
+        });
+    }
+
     /// The candidate emitters receiver `r` was handed.
     #[inline]
     fn cands_of(&self, r: usize) -> &[u32] {
@@ -133,6 +162,35 @@ pub struct HierarchicalSolver {
     /// comparison of Mertens table 5. Default false.
     pub near_point_sampling: bool,
     links: Option<LinkSet>,
+    /// The link set an incremental update replaced, kept for its buffers.
+    spare: Option<LinkSet>,
+    /// Chunk buffers of the last relink, for the same reason.
+    chunk_pool: ChunkPool,
+}
+
+/// Emptied [`LinkChunk`]s for reuse; a clone starts empty.
+#[derive(Debug, Default)]
+struct ChunkPool(std::sync::Mutex<Vec<LinkChunk>>);
+
+impl Clone for ChunkPool {
+    fn clone(&self) -> Self {
+        ChunkPool::default()
+    }
+}
+
+impl ChunkPool {
+    fn take(&self) -> LinkChunk {
+        self.0.lock().ok().and_then(|mut v| v.pop()).unwrap_or_default()
+    }
+
+    fn put(&self, chunks: Vec<LinkChunk>) {
+        if let Ok(mut v) = self.0.lock() {
+            v.extend(chunks.into_iter().map(|mut c| {
+                c.clear();
+                c
+            }));
+        }
+    }
 }
 
 /// Per-task state of a traversal.
@@ -266,8 +324,7 @@ impl Ctx<'_> {
         while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
             let unchanged = !reuse.changed[r] && !reuse.changed[e];
-            let old = reuse.old_link(r, e);
-            if unchanged && let Some((kind, f, false)) = old {
+            if unchanged && let Some((kind, f, false)) = reuse.old_link(r, e) {
                 chunk.push(r, e, kind, f, false);
                 continue;
             }
@@ -277,7 +334,7 @@ impl Ctx<'_> {
                     let over =
                         kind == LinkKind::FormFactor && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
                     if over {
-                        let f = match old {
+                        let f = match reuse.old_link(r, e) {
                             Some((LinkKind::FormFactor, f, _)) => f,
                             _ => {
                                 self.point_samples += 1;
@@ -298,9 +355,10 @@ impl Ctx<'_> {
 }
 
 /// Links found in one subtree, in receiver preorder.
-#[derive(Default)]
+#[derive(Debug, Default)]
 struct LinkChunk {
-    recv: Vec<u32>,
+    /// `(receiver, link count)` of the receivers with links, in preorder.
+    link_count: Vec<(u32, u32)>,
     emitter: Vec<u32>,
     ff: Vec<[f32; 3]>,
     dirty: Vec<bool>,
@@ -310,17 +368,18 @@ struct LinkChunk {
     cands: Vec<u32>,
 }
 
-/// Whether cluster `e` lies in one of the preorder ranges `ranges` (a cluster's subtree is
-/// `e..subtree_end`).
+/// The index of the range of `ranges` (sorted, disjoint preorder ranges `start..end`; a
+/// cluster's subtree is `e..subtree_end`) that holds cluster `e`, if any.
 #[inline]
-fn in_ranges(ranges: &[(u32, u32)], e: u32) -> bool {
-    ranges.iter().any(|&(a, z)| a <= e && e < z)
+fn find_range(ranges: &[(u32, u32)], e: u32) -> Option<usize> {
+    let i = ranges.partition_point(|&(a, _)| a <= e);
+    (i > 0 && e < ranges[i - 1].1).then(|| i - 1)
 }
 
 impl LinkChunk {
     #[inline]
     fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: [f32; 3], dirty: bool) {
-        self.recv.push(r as u32);
+        self.count_link(r);
         self.emitter.push(match kind {
             LinkKind::FormFactor => e as u32 | FF_BIT,
             LinkKind::PointSample => e as u32,
@@ -329,10 +388,46 @@ impl LinkChunk {
         self.dirty.push(dirty);
     }
 
+    #[inline]
+    fn count_link(&mut self, r: usize) {
+        match self.link_count.last_mut() {
+            Some((q, k)) if *q == r as u32 => *k += 1,
+            _ => self.link_count.push((r as u32, 1)),
+        }
+    }
+
+    /// Empties the chunk, keeping its buffers.
+    fn clear(&mut self) {
+        self.link_count.clear();
+        self.emitter.clear();
+        self.ff.clear();
+        self.dirty.clear();
+        self.cand_count.clear();
+        self.cands.clear();
+    }
+
+    /// An empty chunk from `pool` with room for about as many links and candidates as `old`
+    /// had in the subtree of `r`, so that relinking does not grow it step by step.
+    fn sized_for(pool: &ChunkPool, old: Option<&LinkSet>, h: &Hierarchy, r: usize) -> Self {
+        let mut c = pool.take();
+        if let Some(old) = old {
+            let end = h.nodes[r].subtree_end as usize;
+            let links = (old.recv_start[end] - old.recv_start[r]) as usize;
+            let cands = (old.cand_start[end] - old.cand_start[r]) as usize;
+            c.link_count.reserve(end - r);
+            c.emitter.reserve(links);
+            c.ff.reserve(links);
+            c.dirty.reserve(links);
+            c.cand_count.reserve(end - r);
+            c.cands.reserve(cands);
+        }
+        c
+    }
+
     /// Copies link `j` of `old` (receiver `r`) unchanged.
     #[inline]
     fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
-        self.recv.push(r as u32);
+        self.count_link(r);
         self.emitter.push(old.emitter[j]);
         self.ff.push(old.ff[j]);
         self.dirty.push(old.dirty[j]);
@@ -377,6 +472,8 @@ impl HierarchicalSolver {
             ff_opts: FormFactorOptions::default(),
             near_point_sampling: false,
             links: None,
+            spare: None,
+            chunk_pool: ChunkPool::default(),
         }
     }
 
@@ -483,40 +580,38 @@ impl HierarchicalSolver {
     fn relink(&mut self, reuse: Option<&Reuse>) -> SolveStats {
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
-        let mut set = LinkSet {
-            recv_start: vec![0; h.len() + 1],
-            cand_start: vec![0; h.len() + 1],
-            ..Default::default()
-        };
+        // Last update's buffers, already paged in: large fresh allocations are mapped anew by
+        // the allocator and fault on first touch, which cost as much as the copy.
+        let mut set = self.spare.take().unwrap_or_default();
+        set.recv_start.clear();
+        set.recv_start.resize(h.len() + 1, 0);
+        set.cand_start.clear();
+        set.cand_start.resize(h.len() + 1, 0);
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
-            let mut chunks = vec![LinkChunk::default()];
+            let mut chunks = vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, 0)];
             self.link_rec(&mut ctx, 0, &[0], &[], &mut chunks, reuse);
             stats.form_factors = ctx.form_factors;
             stats.point_samples = ctx.point_samples;
-            let total: usize = chunks.iter().map(|c| c.recv.len()).sum();
-            set.emitter.reserve_exact(total);
-            set.ff.reserve_exact(total);
-            set.dirty.reserve_exact(total);
-            set.cands.reserve_exact(chunks.iter().map(|c| c.cands.len()).sum());
-            let mut counts = vec![0u32; h.len()];
-            let mut cand_counts = vec![0u32; h.len()];
             for c in &chunks {
-                for &r in &c.recv {
-                    counts[r as usize] += 1;
+                for &(r, k) in &c.link_count {
+                    set.recv_start[r as usize + 1] = k;
                 }
-                set.emitter.extend_from_slice(&c.emitter);
-                set.ff.extend_from_slice(&c.ff);
-                set.dirty.extend_from_slice(&c.dirty);
                 for &(r, k) in &c.cand_count {
-                    cand_counts[r as usize] = k;
+                    set.cand_start[r as usize + 1] = k;
                 }
-                set.cands.extend_from_slice(&c.cands);
             }
             for i in 0..h.len() {
-                set.recv_start[i + 1] = set.recv_start[i] + counts[i];
-                set.cand_start[i + 1] = set.cand_start[i] + cand_counts[i];
+                set.recv_start[i + 1] += set.recv_start[i];
+                set.cand_start[i + 1] += set.cand_start[i];
             }
+            set.gather_chunks(&chunks);
+            self.chunk_pool.put(chunks);
+        } else {
+            set.emitter.clear();
+            set.ff.clear();
+            set.dirty.clear();
+            set.cands.clear();
         }
         stats.links = set.len();
         self.links = Some(set);
@@ -547,24 +642,40 @@ impl HierarchicalSolver {
         let n = h.nodes[r];
         let range = |e: u32| (e, h.nodes[e as usize].subtree_end);
         let mut fresh = Vec::new();
-        let mut kept_here = kept.to_vec();
+        let mut kept_here = Vec::new();
         let chunk = chunks.last_mut().expect("a chunk");
         match reuse {
             Some(u) if !u.changed[r] && !u.stale[r] => {
+                // Stored candidate lists are sorted.
                 let old_cands = u.old.cands_of(r);
+                // Of the ancestors' kept ranges only those holding an old candidate of `r`
+                // matter below (the old candidates of the subtree lie inside those of `r`),
+                // which keeps the list as short as `r`'s candidates.
+                let mut last = None;
+                for &c in old_cands {
+                    if let Some(i) = find_range(kept, c)
+                        && last != Some(i)
+                    {
+                        kept_here.push(kept[i]);
+                        last = Some(i);
+                    }
+                }
                 for &e in cands {
-                    if !u.changed[e as usize] && old_cands.contains(&e) {
+                    if !u.changed[e as usize] && old_cands.binary_search(&e).is_ok() {
                         kept_here.push(range(e));
                     } else {
                         fresh.push(e);
                     }
                 }
+                kept_here.sort_unstable();
                 let old = u.old;
-                if fresh.is_empty() && old_cands.iter().all(|&c| in_ranges(&kept_here, c)) {
+                if fresh.is_empty() && old_cands.iter().all(|&c| find_range(&kept_here, c).is_some()) {
                     // Everything here refines as before: the subtree's links wholesale.
                     for q in r..n.subtree_end as usize {
                         let (a, z) = (old.recv_start[q] as usize, old.recv_start[q + 1] as usize);
-                        chunk.recv.extend(std::iter::repeat_n(q as u32, z - a));
+                        if z > a {
+                            chunk.link_count.push((q as u32, (z - a) as u32));
+                        }
                         let oc = old.cands_of(q);
                         chunk.cand_count.push((q as u32, oc.len() as u32));
                         chunk.cands.extend_from_slice(oc);
@@ -580,10 +691,11 @@ impl HierarchicalSolver {
                 // kept ranges of ancestors handed down before (and would again).
                 let start = chunk.cands.len();
                 chunk.cands.extend_from_slice(cands);
-                chunk.cands.extend(old_cands.iter().filter(|&&c| in_ranges(kept, c)));
+                chunk.cands.extend(old_cands.iter().filter(|&&c| find_range(kept, c).is_some()));
+                chunk.cands[start..].sort_unstable();
                 chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
                 for j in old.recv_start[r] as usize..old.recv_start[r + 1] as usize {
-                    if in_ranges(&kept_here, old.emitter_of(j) as u32) {
+                    if find_range(&kept_here, old.emitter_of(j) as u32).is_some() {
                         chunk.push_old(old, r, j);
                     }
                 }
@@ -593,8 +705,10 @@ impl HierarchicalSolver {
                 // ancestor cannot have kept a range, as it would be unmoved and clean too).
                 debug_assert!(kept.is_empty());
                 fresh.extend_from_slice(cands);
-                chunk.cand_count.push((r as u32, cands.len() as u32));
+                let start = chunk.cands.len();
                 chunk.cands.extend_from_slice(cands);
+                chunk.cands[start..].sort_unstable();
+                chunk.cand_count.push((r as u32, cands.len() as u32));
             }
         }
         let mut defer = Vec::new();
@@ -613,7 +727,8 @@ impl HierarchicalSolver {
                 .par_iter()
                 .map(|&c| {
                     let mut sub = Ctx::new(self);
-                    let mut sub_chunks = vec![LinkChunk::default()];
+                    let mut sub_chunks =
+                        vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, c as usize)];
                     self.link_rec(&mut sub, c as usize, &defer, &kept_here, &mut sub_chunks, reuse);
                     (sub, sub_chunks)
                 })
@@ -622,7 +737,7 @@ impl HierarchicalSolver {
                 ctx.absorb(&s);
                 chunks.extend(c);
             }
-            chunks.push(LinkChunk::default());
+            chunks.push(self.chunk_pool.take());
         } else {
             for &c in n.children() {
                 self.link_rec(ctx, c as usize, &defer, &kept_here, chunks, reuse);
@@ -752,6 +867,7 @@ impl HierarchicalSolver {
         let remaining = AtomicI64::new(budget.map(|b| b as i64).unwrap_or(i64::MAX));
         let reuse = Reuse { old: &old, changed: &changed, stale: &stale, remaining: &remaining };
         let mut stats = self.relink(Some(&reuse));
+        self.spare = Some(old);
         stats.link_ms = ms(t0.elapsed());
         stats.total_ms = stats.link_ms;
         stats
