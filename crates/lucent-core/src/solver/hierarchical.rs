@@ -168,9 +168,10 @@ pub struct HierarchicalSolver {
     chunk_pool: ChunkPool,
 }
 
-/// Emptied [`LinkChunk`]s for reuse; a clone starts empty.
+/// Emptied [`LinkChunk`]s for reuse, by the key of the part of the traversal that filled
+/// them (so that each gets back a buffer of about its size); a clone starts empty.
 #[derive(Debug, Default)]
-struct ChunkPool(std::sync::Mutex<Vec<LinkChunk>>);
+struct ChunkPool(std::sync::Mutex<std::collections::HashMap<u32, LinkChunk>>);
 
 impl Clone for ChunkPool {
     fn clone(&self) -> Self {
@@ -179,16 +180,28 @@ impl Clone for ChunkPool {
 }
 
 impl ChunkPool {
-    fn take(&self) -> LinkChunk {
-        self.0.lock().ok().and_then(|mut v| v.pop()).unwrap_or_default()
+    /// Key of the chunk that holds the subtree of cluster `r`.
+    fn subtree(r: usize) -> u32 {
+        r as u32
+    }
+
+    /// Key of the chunk that continues after the parallel subtrees below cluster `r`.
+    fn after(r: usize) -> u32 {
+        r as u32 | 1 << 31
+    }
+
+    fn take(&self, key: u32) -> LinkChunk {
+        let mut c = self.0.lock().ok().and_then(|mut m| m.remove(&key)).unwrap_or_default();
+        c.key = key;
+        c
     }
 
     fn put(&self, chunks: Vec<LinkChunk>) {
-        if let Ok(mut v) = self.0.lock() {
-            v.extend(chunks.into_iter().map(|mut c| {
+        if let Ok(mut m) = self.0.lock() {
+            for mut c in chunks {
                 c.clear();
-                c
-            }));
+                m.insert(c.key, c);
+            }
         }
     }
 }
@@ -357,6 +370,8 @@ impl Ctx<'_> {
 /// Links found in one subtree, in receiver preorder.
 #[derive(Debug, Default)]
 struct LinkChunk {
+    /// Its key in the [`ChunkPool`].
+    key: u32,
     /// `(receiver, link count)` of the receivers with links, in preorder.
     link_count: Vec<(u32, u32)>,
     emitter: Vec<u32>,
@@ -409,7 +424,7 @@ impl LinkChunk {
     /// An empty chunk from `pool` with room for about as many links and candidates as `old`
     /// had in the subtree of `r`, so that relinking does not grow it step by step.
     fn sized_for(pool: &ChunkPool, old: Option<&LinkSet>, h: &Hierarchy, r: usize) -> Self {
-        let mut c = pool.take();
+        let mut c = pool.take(ChunkPool::subtree(r));
         if let Some(old) = old {
             let end = h.nodes[r].subtree_end as usize;
             let links = (old.recv_start[end] - old.recv_start[r]) as usize;
@@ -737,7 +752,7 @@ impl HierarchicalSolver {
                 ctx.absorb(&s);
                 chunks.extend(c);
             }
-            chunks.push(self.chunk_pool.take());
+            chunks.push(self.chunk_pool.take(ChunkPool::after(r)));
         } else {
             for &c in n.children() {
                 self.link_rec(ctx, c as usize, &defer, &kept_here, chunks, reuse);
