@@ -1,7 +1,10 @@
 //! Butterfly subdivision hierarchy (Mertens §5.1.2): interpolation, exact 4-to-1 covering and
 //! the closed-manifold requirement.
 
+mod hierarchy_util;
+
 use glam::Vec3;
+use hierarchy_util::check_quad_tree;
 use lucent_core::hierarchy::subdivision::{SubdivisionError, butterfly, octahedron};
 use lucent_core::mesh::Mesh;
 
@@ -14,37 +17,9 @@ fn interpolates_and_children_cover_parents() {
     for (i, p) in base.positions.iter().enumerate() {
         assert_eq!(s.mesh.positions[i], *p);
     }
-    let h = &s.hierarchy;
-    let mut checked = 0;
-    for (i, n) in h.nodes.iter().enumerate() {
-        let poly = &h.polygon_vertices[h.polygon_start[i] as usize..h.polygon_start[i + 1] as usize];
-        if n.child_count != 4 || poly.len() != 3 {
-            continue;
-        }
-        // The four children are the corner triangles and the middle one: their corners are the
-        // parent's corners plus three shared edge vertices, and the parent's corners each
-        // appear in exactly one child.
-        let kids: Vec<&[u32]> = n
-            .children()
-            .iter()
-            .map(|&c| {
-                let c = c as usize;
-                &h.polygon_vertices[h.polygon_start[c] as usize..h.polygon_start[c + 1] as usize]
-            })
-            .collect();
-        for &corner in poly {
-            assert_eq!(kids.iter().filter(|k| k.contains(&corner)).count(), 1);
-        }
-        let mut all: Vec<u32> = kids.iter().flat_map(|k| k.iter().copied()).collect();
-        all.sort_unstable();
-        all.dedup();
-        assert_eq!(all.len(), 6);
-        // Areas add up.
-        let a: f32 = n.children().iter().map(|&c| h.geom[c as usize].area).sum();
-        assert!((a - h.geom[i].area).abs() <= 1e-4 * a);
-        checked += 1;
-    }
-    assert_eq!(checked, 8 + 32 + 128);
+    // Each parent is covered exactly by its corner triangles and the middle one, and the
+    // areas add up.
+    assert_eq!(check_quad_tree(&s.hierarchy), 8 + 32 + 128);
     // The limit surface of an octahedron is smooth: each level moves new vertices less.
     let s4 = butterfly(&base, 4).unwrap();
     for (i, p) in s.mesh.positions.iter().enumerate() {

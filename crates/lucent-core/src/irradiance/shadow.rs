@@ -19,6 +19,7 @@ use super::lights::Incident;
 use crate::mesh::Mesh;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Bins per axis for the SAH sweep.
 const BINS: usize = 12;
@@ -179,36 +180,67 @@ impl Bvh {
     /// Whether any triangle (either side) is hit by the ray `origin + t dir` for
     /// `t_min < t < t_max` (`dir` need not be unit; `t` is in units of its length).
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
+        let any_hit = |range: Range<usize>, lo: f32| {
+            self.tris[range].iter().any(|t| ray_triangle(origin, dir, t, lo, t_max))
+        };
+        match self.ray_leaves(origin, dir, t_min, t_max, |range, lo| any_hit(range, *lo)) {
+            RayWalk::Stopped => true,
+            RayWalk::Done => false,
+            RayWalk::TooDeep => any_hit(0..self.tris.len(), t_min),
+        }
+    }
+
+    /// Depth-first walk over the leaves whose boxes the ray `origin + t dir` enters for
+    /// `lo < t < t_max`, calling `leaf(triangle slots, &mut lo)` for each; `leaf` may raise `lo`
+    /// (a farthest-hit search) and stops the walk by returning true. A tree deeper than the
+    /// fixed stack (only for pathological inputs) ends the walk with [`RayWalk::TooDeep`], and
+    /// the caller answers by brute force rather than overflow.
+    fn ray_leaves(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        mut leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
+    ) -> RayWalk {
         if self.nodes.is_empty() {
-            return false;
+            return RayWalk::Done;
         }
         let inv = dir.recip();
+        let mut lo = t_min;
         let mut stack = [0u32; 64];
         let mut top = 1usize;
         while top > 0 {
             top -= 1;
             let index = stack[top];
             let node = &self.nodes[index as usize];
-            if !ray_box(origin, inv, node.min, node.max, t_min, t_max) {
+            if !ray_box(origin, inv, node.min, node.max, lo, t_max) {
                 continue;
             }
             if node.is_leaf() {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                if self.tris[range].iter().any(|t| ray_triangle(origin, dir, t, t_min, t_max)) {
-                    return true;
+                if leaf(node.first as usize..(node.first + node.count) as usize, &mut lo) {
+                    return RayWalk::Stopped;
                 }
             } else if top + 2 <= stack.len() {
                 stack[top] = node.first;
                 stack[top + 1] = index + 1;
                 top += 2;
             } else {
-                // Deeper than 64 levels (only for pathological inputs): answer by brute force
-                // rather than overflow.
-                return self.tris.iter().any(|t| ray_triangle(origin, dir, t, t_min, t_max));
+                return RayWalk::TooDeep;
             }
         }
-        false
+        RayWalk::Done
     }
+}
+
+/// How [`Bvh::ray_leaves`] ended.
+enum RayWalk {
+    /// The leaf callback asked to stop.
+    Stopped,
+    /// Every leaf the ray enters was visited.
+    Done,
+    /// The tree is deeper than the traversal stack.
+    TooDeep,
 }
 
 impl Bvh {
@@ -266,42 +298,19 @@ impl Bvh {
     /// The farthest intersection of the ray `origin + t dir` with the mesh (either side) for
     /// `t_min < t < t_max`: `(t, mesh face)`, or `None` if it hits nothing.
     pub fn farthest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, u32)> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let inv = dir.recip();
         let mut best: Option<(f32, u32)> = None;
-        let mut stack = [0u32; 64];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let index = stack[top];
-            let node = &self.nodes[index as usize];
-            let lo = best.map_or(t_min, |b| b.0);
-            if !ray_box(origin, inv, node.min, node.max, lo, t_max) {
-                continue;
-            }
-            if node.is_leaf() {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for (slot, t) in range.clone().zip(&self.tris[range]) {
-                    let lo = best.map_or(t_min, |b| b.0);
-                    if let Some(th) = ray_triangle_t(origin, dir, t, lo, t_max) {
-                        best = Some((th, self.faces[slot]));
-                    }
+        let mut farthest = |range: Range<usize>, lo: &mut f32| {
+            for (slot, t) in range.clone().zip(&self.tris[range]) {
+                if let Some(th) = ray_triangle_t(origin, dir, t, *lo, t_max) {
+                    best = Some((th, self.faces[slot]));
+                    *lo = th;
                 }
-            } else if top + 2 <= stack.len() {
-                stack[top] = node.first;
-                stack[top + 1] = index + 1;
-                top += 2;
-            } else {
-                for (slot, t) in self.tris.iter().enumerate() {
-                    let lo = best.map_or(t_min, |b| b.0);
-                    if let Some(th) = ray_triangle_t(origin, dir, t, lo, t_max) {
-                        best = Some((th, self.faces[slot]));
-                    }
-                }
-                break;
             }
+            false
+        };
+        if let RayWalk::TooDeep = self.ray_leaves(origin, dir, t_min, t_max, &mut farthest) {
+            let mut lo = t_min;
+            farthest(0..self.tris.len(), &mut lo);
         }
         best
     }
@@ -311,33 +320,17 @@ impl Bvh {
     /// How many triangles (either side) the ray `origin + t dir` hits for `t_min < t < t_max`
     /// (an inside/outside test for a closed mesh: odd inside).
     pub fn hit_count(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> usize {
-        if self.nodes.is_empty() {
-            return 0;
-        }
-        let inv = dir.recip();
+        let hits = |range: Range<usize>| {
+            self.tris[range].iter().filter(|t| ray_triangle(origin, dir, t, t_min, t_max)).count()
+        };
         let mut count = 0;
-        let mut stack = [0u32; 64];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let index = stack[top];
-            let node = &self.nodes[index as usize];
-            if !ray_box(origin, inv, node.min, node.max, t_min, t_max) {
-                continue;
-            }
-            if node.is_leaf() {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                count +=
-                    self.tris[range].iter().filter(|t| ray_triangle(origin, dir, t, t_min, t_max)).count();
-            } else if top + 2 <= stack.len() {
-                stack[top] = node.first;
-                stack[top + 1] = index + 1;
-                top += 2;
-            } else {
-                return self.tris.iter().filter(|t| ray_triangle(origin, dir, t, t_min, t_max)).count();
-            }
+        match self.ray_leaves(origin, dir, t_min, t_max, |range, _| {
+            count += hits(range);
+            false
+        }) {
+            RayWalk::TooDeep => hits(0..self.tris.len()),
+            _ => count,
         }
-        count
     }
 }
 
