@@ -120,6 +120,9 @@ pub struct SolveStats {
     pub links: usize,
     /// Semi-analytic form factor evaluations in this call.
     pub form_factors: usize,
+    /// Near (form factor) links evaluated by the seven-point cubature instead, where `R_d` is
+    /// smooth over the emitter face (see [`crate::formfactor::cubature`]).
+    pub cubatures: usize,
     /// One-point evaluations in this call.
     pub point_samples: usize,
     /// Time spent refining / relinking (and evaluating link coefficients), ms.
@@ -213,7 +216,6 @@ struct Ctx<'a> {
     /// estimate when the decision that opened their parent made it.
     stack: Vec<(u32, Option<[f32; 3]>)>,
     inv_rtot: [f32; 3],
-    form_factors: usize,
     point_samples: usize,
 }
 
@@ -230,7 +232,6 @@ impl<'a> Ctx<'a> {
                 let r = s.dipole.total_diffuse_reflectance();
                 [(1.0 / r[0].max(r[1]).max(r[2]).max(1e-12)) as f32; 3]
             },
-            form_factors: 0,
             point_samples: 0,
         }
     }
@@ -254,15 +255,22 @@ impl<'a> Ctx<'a> {
         if let (LinkKind::PointSample, Some(s)) = (kind, recv_scale) {
             f = std::array::from_fn(|c| f[c] * s[c]);
         }
-        match kind {
-            LinkKind::FormFactor => self.form_factors += 1,
-            LinkKind::PointSample => self.point_samples += 1,
+        if kind == LinkKind::PointSample {
+            self.point_samples += 1;
         }
         f
     }
 
+    /// Copies the evaluation counts into `stats`.
+    fn fill(&self, stats: &mut SolveStats) {
+        stats.form_factors = self.ev.form_factors;
+        stats.cubatures = self.ev.cubatures;
+        stats.point_samples = self.point_samples;
+    }
+
     fn absorb(&mut self, o: &Ctx) {
-        self.form_factors += o.form_factors;
+        self.ev.form_factors += o.ev.form_factors;
+        self.ev.cubatures += o.ev.cubatures;
         self.point_samples += o.point_samples;
     }
 
@@ -344,8 +352,9 @@ impl Ctx<'_> {
             samples.f_mid = f_mid;
             match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
                 Decision::Link(kind) => {
-                    let over =
-                        kind == LinkKind::FormFactor && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
+                    let over = kind == LinkKind::FormFactor
+                        && self.ev.is_analytic(&src, e)
+                        && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
                     if over {
                         let f = match reuse.old_link(r, e) {
                             Some((LinkKind::FormFactor, f, _)) => f,
@@ -540,9 +549,8 @@ impl HierarchicalSolver {
             face_b[f as usize] = leaf_b[pos];
         }
         let t3 = Instant::now();
-        stats.links = ctx.form_factors + ctx.point_samples;
-        stats.form_factors = ctx.form_factors;
-        stats.point_samples = ctx.point_samples;
+        ctx.fill(&mut stats);
+        stats.links = stats.form_factors + stats.cubatures + stats.point_samples;
         stats.pull_ms = ms(t1 - t0);
         stats.link_ms = ms(t2 - t1);
         stats.push_ms = ms(t3 - t2);
@@ -606,8 +614,7 @@ impl HierarchicalSolver {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, 0)];
             self.link_rec(&mut ctx, 0, &[0], &[], &mut chunks, reuse);
-            stats.form_factors = ctx.form_factors;
-            stats.point_samples = ctx.point_samples;
+            ctx.fill(&mut stats);
             for c in &chunks {
                 for &(r, k) in &c.link_count {
                     set.recv_start[r as usize + 1] = k;

@@ -107,7 +107,9 @@ impl Default for Oracle {
 pub enum LinkKind {
     /// One sample, `A_E R_d(m_E)` (far emitters).
     PointSample,
-    /// The semi-analytic form factor over the emitter's (projected) polygon (near emitters).
+    /// The semi-analytic form factor over the emitter's (projected) polygon (near emitters);
+    /// where `R_d` is smooth over an emitter face, its seven-point cubature short cut (in
+    /// `f32`, see [`crate::formfactor::cubature`]), which is more accurate there and cheaper.
     FormFactor,
 }
 
@@ -390,6 +392,10 @@ pub(crate) struct Evaluator<'a> {
     pub opts: FormFactorOptions,
     /// Near links by uniform point sampling instead of the form factor (Mertens table 5).
     pub near_point_sampling: bool,
+    /// Semi-analytic form factor evaluations so far.
+    pub form_factors: usize,
+    /// Form factor links evaluated by the `f32` cubature instead, so far.
+    pub cubatures: usize,
     scratch: Vec<DVec3>,
 }
 
@@ -401,8 +407,31 @@ impl<'a> Evaluator<'a> {
             d32: DipoleF32::new(dipole),
             opts,
             near_point_sampling: false,
+            form_factors: 0,
+            cubatures: 0,
             scratch: Vec::with_capacity(16),
         }
+    }
+
+    /// The corners of face `e` when `R_d` from `src` is smooth over it (`k ρ` within
+    /// [`FormFactorOptions::cubature_max_k_rho`]), so that the `f32` cubature stands in for
+    /// the form factor, which would take the same short cut in `f64`.
+    #[inline]
+    fn smooth_face(&self, src: &ReceiverSources, e: usize) -> Option<[Vec3; 3]> {
+        let eg = &self.h.geom[e];
+        let poly = self.h.polygon(e);
+        (self.h.nodes[e].is_leaf()
+            && !self.near_point_sampling
+            && poly.len() == 3
+            && src.k_rho(&self.d32, eg.midpoint, eg.radius) <= self.opts.cubature_max_k_rho as f32)
+            .then(|| [poly[0], poly[1], poly[2]])
+    }
+
+    /// Whether a form factor link `e -> r` costs a full semi-analytic evaluation (the
+    /// incremental budget counts only those).
+    #[inline]
+    pub fn is_analytic(&self, src: &ReceiverSources, e: usize) -> bool {
+        self.smooth_face(src, e).is_none()
     }
 
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
@@ -413,6 +442,11 @@ impl<'a> Evaluator<'a> {
             LinkKind::PointSample => src.point_sample(&self.d32, eg.midpoint, eg.area),
             LinkKind::FormFactor => {
                 let rg = &self.h.geom[r];
+                if let Some(tri) = self.smooth_face(src, e) {
+                    self.cubatures += 1;
+                    return src.triangle_cubature(&self.d32, &tri, eg.area);
+                }
+                self.form_factors += 1;
                 self.scratch.clear();
                 self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
                 if self.near_point_sampling {

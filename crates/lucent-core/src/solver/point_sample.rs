@@ -11,6 +11,7 @@
 
 use crate::bssrdf::Dipole;
 use crate::fastexp::exp_neg;
+use crate::formfactor::cubature;
 use glam::Vec3;
 
 /// Lanes of one batch: four points × three colour channels (lane `4 k + c` unused for `c = 3`
@@ -142,6 +143,34 @@ impl ReceiverSources {
     }
 }
 
+impl ReceiverSources {
+    /// `∫_T R_d` over triangle `tri` (area `area`) by Radon's degree-5 rule
+    /// ([`crate::formfactor::cubature`]): seven dipole points in two batches. The form
+    /// factor's own short cut in `f32`, for where [`ReceiverSources::k_rho`] is small.
+    #[inline]
+    pub fn triangle_cubature(&self, d: &DipoleF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
+        let [a, b, c] = tri.map(|p| p.as_dvec3());
+        let mut pts = [Vec3::ZERO; 8];
+        let mut wts = [0.0f32; 8];
+        for (k, (p, w)) in cubature::radon7(a, b, c).into_iter().enumerate() {
+            pts[k] = p.as_vec3();
+            wts[k] = w as f32 * area;
+        }
+        let lo = self.point_samples(d, &[pts[0], pts[1], pts[2], pts[3]], &[wts[0], wts[1], wts[2], wts[3]]);
+        let hi = self.point_samples(d, &[pts[4], pts[5], pts[6], pts[7]], &[wts[4], wts[5], wts[6], 0.0]);
+        std::array::from_fn(|ch| lo.iter().chain(&hi).map(|f| f[ch]).sum())
+    }
+
+    /// `k ρ` of an emitter with midpoint `mid` and radius `radius`: the largest over channels
+    /// of `(σ_tr + 3/s) ρ`, `s` the distance from `mid` to the nearer source (see
+    /// [`cubature::MAX_K_RHO`]).
+    #[inline]
+    pub fn k_rho(&self, d: &DipoleF32, mid: Vec3, radius: f32) -> f32 {
+        let s = self.nearest(mid);
+        (0..3).map(|c| (d.sigma_tr[c] + 3.0 / s[c]) * radius).fold(0.0, f32::max)
+    }
+}
+
 /// One emitter of area `area` at `p` seen from four receivers' sources:
 /// `[src[j].point_sample(d, p, area); 4]`, batched.
 #[inline]
@@ -195,5 +224,24 @@ mod tests {
         }
         let from = point_samples_from(&[src; 4], &d, p[0], area[0]);
         assert_eq!(from[2], got[0]);
+    }
+
+    #[test]
+    fn triangle_cubature_matches_the_f64_rule() {
+        let m = Material::by_name("marble").unwrap();
+        let dip = Dipole::for_model_scale(&m, 1.0, 0.01);
+        let d = DipoleF32::new(&dip);
+        let (x_o, n_o) = (Vec3::new(0.01, 0.02, 0.0), Vec3::new(0.1, -0.2, 1.0).normalize());
+        let src = ReceiverSources::new(&d, x_o, n_o);
+        let tri = [Vec3::new(0.0, 0.0, 0.001), Vec3::new(0.02, 0.005, 0.0), Vec3::new(0.004, 0.03, -0.002)];
+        let t64 = tri.map(|p| p.as_dvec3());
+        let normal = (t64[1] - t64[0]).cross(t64[2] - t64[0]);
+        let area = 0.5 * normal.length();
+        let want = cubature::polygon_integral(&t64, normal.normalize(), x_o.as_dvec3(), n_o.as_dvec3(), &dip);
+        let got = src.triangle_cubature(&d, &tri, area as f32);
+        for c in 0..3 {
+            assert!((got[c] as f64 / want[c] - 1.0).abs() < 1e-5, "{c}: {} vs {}", got[c], want[c]);
+        }
+        assert!(src.k_rho(&d, (tri[0] + tri[1] + tri[2]) / 3.0, 0.02) > 0.0);
     }
 }
