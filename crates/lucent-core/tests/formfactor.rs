@@ -345,7 +345,8 @@ fn tighter_segments_converge_and_calls_are_deterministic() {
     let mut last_err = f64::INFINITY;
     let mut last_segments = 0;
     for ratio in [0.8, 0.4, 0.2] {
-        let opts = FormFactorOptions { max_segment_ratio: ratio, max_segment_sigma: ratio };
+        let opts =
+            FormFactorOptions { max_segment_ratio: ratio, max_segment_sigma: ratio, cubature_max_k_rho: 0.0 };
         let (f, segments) = form_factor_counted(&tri, DVec3::ZERO, DVec3::Z, &dipole, &opts);
         let err = (0..3).map(|c| rel(f[c], reference[c])).fold(0.0, f64::max);
         assert!(err < last_err && segments > last_segments, "{ratio}: {err} {segments}");
@@ -354,4 +355,87 @@ fn tighter_segments_converge_and_calls_are_deterministic() {
         assert_eq!(again, (f, segments));
     }
     assert!(last_err < 1e-5, "{last_err}");
+}
+
+/// A small face far from the receiver (marble, model 3 mm across): the sources' foot points lie
+/// far outside it, so the edge integrals cancel to the small area term and their quadrature
+/// error is amplified. The form factor takes its cubature short cut there and matches a
+/// converged adaptive cubature; the edge integrals alone, with the default segments, do not.
+#[test]
+fn smooth_far_triangle_matches_converged_form_factor() {
+    let dipole = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), 1.0, 0.003);
+    let tri = [
+        DVec3::new(0.000_396_75, -0.001_088_79, 0.001_244),
+        DVec3::new(0.003_985_15, -0.000_944_25, 0.001_461_52),
+        DVec3::new(0.004_022_77, -0.005_712_34, 0.001_052_82),
+    ];
+    let n_o = DVec3::new(-0.067_235_68, -0.069_894_74, 0.995_285_9).normalize();
+    let reference = adaptive_cubature(&tri, DVec3::ZERO, n_o, &dipole, 1e-10);
+    let f = ff(&tri, DVec3::ZERO, n_o, &dipole);
+    let edges_only = FormFactorOptions { cubature_max_k_rho: 0.0, ..FormFactorOptions::default() };
+    let g = form_factor(&tri, DVec3::ZERO, n_o, &dipole, &edges_only);
+    let worst_edges = (0..3).map(|c| rel(g[c], reference[c])).fold(0.0, f64::max);
+    for c in 0..3 {
+        assert!(rel(f[c], reference[c]) < 1e-4, "c={c}: {} vs {}", f[c], reference[c]);
+    }
+    assert!(worst_edges > 0.01, "edge integrals alone: {worst_edges}");
+}
+
+/// Random faces around a receiver, at every scale where the short cut applies: the form
+/// factor (cubature or edge integrals, as it chooses) within 1e-3 of the edge integrals with
+/// segments 25 times finer (converged to 1e-6, see `tighter_segments_converge...`).
+#[test]
+fn cubature_short_cut_agrees_with_converged_edge_integrals() {
+    let mut rng = Pcg64Mcg::seed_from_u64(5);
+    let fine = FormFactorOptions {
+        max_segment_ratio: 0.02,
+        cubature_max_k_rho: 0.0,
+        ..FormFactorOptions::default()
+    };
+    let mut shortcut = 0;
+    for name in ["marble", "skimmilk", "ketchup"] {
+        let m = Material::by_name(name).unwrap();
+        for scale in [0.003, 0.01, 0.03, 0.1] {
+            let dipole = Dipole::for_model_scale(&m, 1.0, scale);
+            let r_tot = dipole.total_diffuse_reflectance();
+            for _ in 0..300 {
+                let n_o =
+                    DVec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), 2.0).normalize();
+                let size = 0.2 * rng.random_range(0.0f64..1.0).powi(3) + 1e-4;
+                let centre = DVec3::new(
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-0.3..0.3),
+                ) * size
+                    * rng.random_range(0.0..1.0);
+                let tri: [DVec3; 3] = std::array::from_fn(|_| {
+                    centre
+                        + DVec3::new(
+                            rng.random_range(-0.5..0.5),
+                            rng.random_range(-0.5..0.5),
+                            rng.random_range(-0.1..0.1),
+                        ) * size
+                });
+                let (c, _) = polygon_centroid_area(&tri);
+                let radius = tri.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
+                let k_rho = lucent_core::formfactor::cubature::k_rho(&dipole, DVec3::ZERO, n_o, c, radius);
+                if k_rho <= lucent_core::formfactor::cubature::MAX_K_RHO {
+                    shortcut += 1;
+                }
+                let f = ff(&tri, DVec3::ZERO, n_o, &dipole);
+                let want = form_factor(&tri, DVec3::ZERO, n_o, &dipole, &fine);
+                for ch in 0..3 {
+                    // Transport below 1e-6 of a whole plane's does not matter to any solve.
+                    let tol = 1e-3 * want[ch] + 1e-6 * r_tot[ch];
+                    assert!(
+                        (f[ch] - want[ch]).abs() <= tol,
+                        "{name} {scale} k_rho {k_rho:.2} c={ch}: {} vs {}",
+                        f[ch],
+                        want[ch]
+                    );
+                }
+            }
+        }
+    }
+    assert!(shortcut > 500, "only {shortcut} configurations took the short cut");
 }
