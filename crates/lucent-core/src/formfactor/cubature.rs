@@ -18,7 +18,7 @@ use glam::DVec3;
 pub const RADON7_CENTROID_WEIGHT: f64 = 0.225;
 pub const RADON7_ORBITS: [(f64, f64); 2] = [
     (0.101_286_507_323_456_34, 0.125_939_180_544_827_15),
-    (0.470_142_064_105_115_1, 0.132_394_152_788_506_18),
+    (0.470_142_064_105_115_1, 0.132_394_152_788_506_2),
 ];
 
 /// Largest `k ρ` at which the rule replaces the edge integrals, with `ρ` the polygon's
