@@ -274,30 +274,28 @@ impl<'a> Ctx<'a> {
         self.point_samples += o.point_samples;
     }
 
-    /// Processes the candidates of receiver `r` (see the module documentation): calls
-    /// `on_link(e, kind, F)` for every accepted link and fills `defer` with the candidates for
-    /// `r`'s children.
+    /// Processes the candidates of receiver `r` (see the module documentation): hands every
+    /// accepted link to `sink` and fills `defer` with the candidates for `r`'s children.
     fn receive(
         &mut self,
         oracle: &Oracle,
         r: usize,
         cands: &[u32],
         defer: &mut Vec<u32>,
-        mut on_link: impl FnMut(usize, LinkKind, [f32; 3]),
+        sink: &mut impl LinkSink,
     ) {
         let h = self.ev.h;
         let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
-        let src = view.src;
         self.start(cands);
         let mut samples = Samples::default();
         while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
+            if sink.kept(r, e) {
+                continue;
+            }
             samples.f_mid = f_mid;
             match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
-                Decision::Link(kind) => {
-                    let f = self.coefficient(&src, r, e, kind, samples.estimate, samples.recv_scale);
-                    on_link(e, kind, f);
-                }
+                Decision::Link(kind) => sink.link(self, &view.src, r, e, kind, &samples),
                 Decision::SplitReceiver => defer.push(e as u32),
                 Decision::SplitEmitter => self.open_emitter(e, &samples),
             }
@@ -321,58 +319,92 @@ impl<'a> Ctx<'a> {
     }
 }
 
-impl Ctx<'_> {
-    /// [`Ctx::receive`] for an incremental relink: a pair whose clusters both kept their
-    /// geometry and that was linked before (clean) is linked again with its old coefficient
-    /// without asking the oracle (its verdict depends only on the two clusters and their
-    /// children); form factor evaluations draw on `reuse.remaining`, and once it is spent a
-    /// link keeps its old coefficient of the same kind (or gets a one-point estimate) and is
-    /// marked dirty.
-    fn receive_reusing(
+/// What [`Ctx::receive`] does with links: on the fly and when linking from scratch, evaluate
+/// every accepted link; in an incremental relink, also keep old ones.
+trait LinkSink {
+    /// Whether the pair `e -> r` is settled without asking the oracle.
+    fn kept(&mut self, _r: usize, _e: usize) -> bool {
+        false
+    }
+
+    /// Takes the link `e -> r` the oracle accepted, with the estimates `decide` left.
+    fn link(
         &mut self,
-        oracle: &Oracle,
+        ctx: &mut Ctx,
+        src: &ReceiverSources,
         r: usize,
-        cands: &[u32],
-        defer: &mut Vec<u32>,
-        reuse: &Reuse,
-        chunk: &mut LinkChunk,
+        e: usize,
+        kind: LinkKind,
+        samples: &Samples,
+    );
+}
+
+/// Evaluates each accepted link and passes `(e, kind, F)` on.
+struct Evaluate<F>(F);
+
+impl<F: FnMut(usize, LinkKind, [f32; 3])> LinkSink for Evaluate<F> {
+    #[inline]
+    fn link(
+        &mut self,
+        ctx: &mut Ctx,
+        src: &ReceiverSources,
+        r: usize,
+        e: usize,
+        kind: LinkKind,
+        samples: &Samples,
     ) {
-        let h = self.ev.h;
-        let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
-        let src = view.src;
-        self.start(cands);
-        let mut samples = Samples::default();
-        while let Some((e, f_mid)) = self.stack.pop() {
-            let e = e as usize;
-            let unchanged = !reuse.changed[r] && !reuse.changed[e];
-            if unchanged && let Some((kind, f, false)) = reuse.old_link(r, e) {
-                chunk.push(r, e, kind, f, false);
-                continue;
-            }
-            samples.f_mid = f_mid;
-            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
-                Decision::Link(kind) => {
-                    let over = kind == LinkKind::FormFactor
-                        && self.ev.is_analytic(&src, e)
-                        && reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
-                    if over {
-                        let f = match reuse.old_link(r, e) {
-                            Some((LinkKind::FormFactor, f, _)) => f,
-                            _ => {
-                                self.point_samples += 1;
-                                self.ev.eval(&src, r, e, LinkKind::PointSample)
-                            }
-                        };
-                        chunk.push(r, e, kind, f, true);
-                        continue;
-                    }
-                    let f = self.coefficient(&src, r, e, kind, samples.estimate, samples.recv_scale);
-                    chunk.push(r, e, kind, f, false);
-                }
-                Decision::SplitReceiver => defer.push(e as u32),
-                Decision::SplitEmitter => self.open_emitter(e, &samples),
-            }
+        let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
+        (self.0)(e, kind, f);
+    }
+}
+
+/// An incremental relink's links, into `chunk`: a pair whose clusters both kept their
+/// geometry and that was linked before (clean) is linked again with its old coefficient
+/// without asking the oracle (its verdict depends only on the two clusters and their
+/// children); form factor evaluations draw on `reuse.remaining`, and once it is spent a link
+/// keeps its old coefficient of the same kind (or gets a one-point estimate) and is marked
+/// dirty.
+struct Reusing<'a, 'b> {
+    reuse: &'a Reuse<'a>,
+    chunk: &'b mut LinkChunk,
+}
+
+impl LinkSink for Reusing<'_, '_> {
+    #[inline]
+    fn kept(&mut self, r: usize, e: usize) -> bool {
+        let unchanged = !self.reuse.changed[r] && !self.reuse.changed[e];
+        if unchanged && let Some((kind, f, false)) = self.reuse.old_link(r, e) {
+            self.chunk.push(r, e, kind, f, false);
+            return true;
         }
+        false
+    }
+
+    fn link(
+        &mut self,
+        ctx: &mut Ctx,
+        src: &ReceiverSources,
+        r: usize,
+        e: usize,
+        kind: LinkKind,
+        samples: &Samples,
+    ) {
+        let over = kind == LinkKind::FormFactor
+            && ctx.ev.is_analytic(src, e)
+            && self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
+        if over {
+            let f = match self.reuse.old_link(r, e) {
+                Some((LinkKind::FormFactor, f, _)) => f,
+                _ => {
+                    ctx.point_samples += 1;
+                    ctx.ev.eval(src, r, e, LinkKind::PointSample)
+                }
+            };
+            self.chunk.push(r, e, kind, f, true);
+            return;
+        }
+        let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
+        self.chunk.push(r, e, kind, f, false);
     }
 }
 
@@ -561,9 +593,15 @@ impl HierarchicalSolver {
     fn otf_rec(&self, ctx: &mut Ctx, r: usize, cands: &[u32], b_acc: Rgb, e_node: &[Rgb], out: &mut [Rgb]) {
         let mut defer = Vec::new();
         let mut b = b_acc;
-        ctx.receive(&self.oracle, r, cands, &mut defer, |e, _, f| {
-            b += e_node[e] * Rgb::from(f);
-        });
+        ctx.receive(
+            &self.oracle,
+            r,
+            cands,
+            &mut defer,
+            &mut Evaluate(|e, _, f| {
+                b += e_node[e] * Rgb::from(f);
+            }),
+        );
         let n = self.hierarchy.nodes[r];
         if n.is_leaf() {
             out[0] = b;
@@ -735,10 +773,14 @@ impl HierarchicalSolver {
         }
         let mut defer = Vec::new();
         match reuse {
-            None => ctx.receive(&self.oracle, r, &fresh, &mut defer, |e, kind, f| {
-                chunk.push(r, e, kind, f, false);
-            }),
-            Some(u) => ctx.receive_reusing(&self.oracle, r, &fresh, &mut defer, u, chunk),
+            None => ctx.receive(
+                &self.oracle,
+                r,
+                &fresh,
+                &mut defer,
+                &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, f, false)),
+            ),
+            Some(reuse) => ctx.receive(&self.oracle, r, &fresh, &mut defer, &mut Reusing { reuse, chunk }),
         }
         if n.is_leaf() {
             return;
