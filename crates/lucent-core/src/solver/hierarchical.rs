@@ -20,6 +20,7 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
+use super::link_coef::LinkCoef;
 use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
 use crate::Rgb;
@@ -27,6 +28,7 @@ use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES};
 use crate::mesh::Mesh;
+use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Instant;
@@ -42,8 +44,9 @@ pub struct LinkSet {
     /// Emitter cluster of each link; the top bit marks a form factor link
     /// (see [`LinkSet::emitter_of`]).
     pub emitter: Vec<u32>,
-    /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless).
-    pub ff: Vec<[f32; 3]>,
+    /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless), packed to 16
+    /// bits per channel (relative error at most 2.4e-4, see [`LinkCoef`]).
+    pub coef: Vec<LinkCoef>,
     /// Links whose coefficient is stale (left over when an incremental update ran out of
     /// budget); recomputed first by the next update.
     pub dirty: Vec<bool>,
@@ -77,11 +80,11 @@ impl LinkSet {
         let links: usize = chunks.iter().map(|c| c.emitter.len()).sum();
         let cands: usize = chunks.iter().map(|c| c.cands.len()).sum();
         self.emitter.resize(links, 0);
-        self.ff.resize(links, [0.0; 3]);
+        self.coef.resize(links, LinkCoef::default());
         self.dirty.resize(links, false);
         self.cands.resize(cands, 0);
         let (mut e, mut f, mut d, mut k) =
-            (&mut self.emitter[..], &mut self.ff[..], &mut self.dirty[..], &mut self.cands[..]);
+            (&mut self.emitter[..], &mut self.coef[..], &mut self.dirty[..], &mut self.cands[..]);
         let mut parts = Vec::with_capacity(chunks.len());
         for c in chunks {
             let (n, m) = (c.emitter.len(), c.cands.len());
@@ -94,7 +97,7 @@ impl LinkSet {
         }
         parts.into_par_iter().for_each(|(c, e, f, d, k)| {
             e.copy_from_slice(&c.emitter);
-            f.copy_from_slice(&c.ff);
+            f.copy_from_slice(&c.coef);
             d.copy_from_slice(&c.dirty);
             k.copy_from_slice(&c.cands);
         });
@@ -374,7 +377,7 @@ impl LinkSink for Reusing<'_, '_> {
     fn kept(&mut self, r: usize, e: usize) -> bool {
         let unchanged = !self.reuse.changed[r] && !self.reuse.changed[e];
         if unchanged && let Some((kind, f, false)) = self.reuse.old_link(r, e) {
-            self.chunk.push(r, e, kind, f, false);
+            self.chunk.push_packed(r, e, kind, f, false);
             return true;
         }
         false
@@ -397,10 +400,10 @@ impl LinkSink for Reusing<'_, '_> {
                 Some((LinkKind::FormFactor, f, _)) => f,
                 _ => {
                     ctx.point_samples += 1;
-                    ctx.ev.eval(src, r, e, LinkKind::PointSample)
+                    LinkCoef::pack(ctx.ev.eval(src, r, e, LinkKind::PointSample))
                 }
             };
-            self.chunk.push(r, e, kind, f, true);
+            self.chunk.push_packed(r, e, kind, f, true);
             return;
         }
         let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
@@ -416,7 +419,7 @@ struct LinkChunk {
     /// `(receiver, link count)` of the receivers with links, in preorder.
     link_count: Vec<(u32, u32)>,
     emitter: Vec<u32>,
-    ff: Vec<[f32; 3]>,
+    coef: Vec<LinkCoef>,
     dirty: Vec<bool>,
     /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
     /// candidates.
@@ -435,12 +438,17 @@ fn find_range(ranges: &[(u32, u32)], e: u32) -> Option<usize> {
 impl LinkChunk {
     #[inline]
     fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: [f32; 3], dirty: bool) {
+        self.push_packed(r, e, kind, LinkCoef::pack(f), dirty);
+    }
+
+    #[inline]
+    fn push_packed(&mut self, r: usize, e: usize, kind: LinkKind, f: LinkCoef, dirty: bool) {
         self.count_link(r);
         self.emitter.push(match kind {
             LinkKind::FormFactor => e as u32 | FF_BIT,
             LinkKind::PointSample => e as u32,
         });
-        self.ff.push(f);
+        self.coef.push(f);
         self.dirty.push(dirty);
     }
 
@@ -456,7 +464,7 @@ impl LinkChunk {
     fn clear(&mut self) {
         self.link_count.clear();
         self.emitter.clear();
-        self.ff.clear();
+        self.coef.clear();
         self.dirty.clear();
         self.cand_count.clear();
         self.cands.clear();
@@ -472,7 +480,7 @@ impl LinkChunk {
             let cands = (old.cand_start[end] - old.cand_start[r]) as usize;
             c.link_count.reserve(end - r);
             c.emitter.reserve(links);
-            c.ff.reserve(links);
+            c.coef.reserve(links);
             c.dirty.reserve(links);
             c.cand_count.reserve(end - r);
             c.cands.reserve(cands);
@@ -485,7 +493,7 @@ impl LinkChunk {
     fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
         self.count_link(r);
         self.emitter.push(old.emitter[j]);
-        self.ff.push(old.ff[j]);
+        self.coef.push(old.coef[j]);
         self.dirty.push(old.dirty[j]);
     }
 }
@@ -505,11 +513,11 @@ struct Reuse<'a> {
 impl Reuse<'_> {
     /// The old, clean link `e -> r` of this kind, if any.
     #[inline]
-    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, [f32; 3], bool)> {
+    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, LinkCoef, bool)> {
         let o = self.old;
         (o.recv_start[r] as usize..o.recv_start[r + 1] as usize)
             .find(|&j| o.emitter_of(j) == e)
-            .map(|j| (o.kind_of(j), o.ff[j], o.dirty[j]))
+            .map(|j| (o.kind_of(j), o.coef[j], o.dirty[j]))
     }
 }
 
@@ -538,25 +546,14 @@ impl HierarchicalSolver {
         self.links.as_ref()
     }
 
-    /// Area-weighted average irradiance of every cluster (the *pull* of §3.2).
-    pub fn pull(&self, face_irradiance: &[Rgb]) -> Vec<Rgb> {
+    /// Area-weighted average irradiance of every cluster (the *pull* of §3.2), in parallel
+    /// over subtrees.
+    pub fn pull(&self, face_irradiance: &[Rgb]) -> Vec<Vec3A> {
         let h = &self.hierarchy;
         assert_eq!(face_irradiance.len(), h.leaf_count());
-        let mut e = vec![Rgb::ZERO; h.len()];
-        for i in (0..h.len()).rev() {
-            let n = &h.nodes[i];
-            if n.is_leaf() {
-                e[i] = face_irradiance[h.leaf_faces[n.leaf_start as usize] as usize];
-            } else {
-                let area = h.geom[i].area;
-                let mut s = Rgb::ZERO;
-                for &c in n.children() {
-                    let c = c as usize;
-                    s +=
-                        if area > 0.0 { e[c] * (h.geom[c].area / area) } else { e[c] / n.child_count as f32 };
-                }
-                e[i] = s;
-            }
+        let mut e = vec![Vec3A::ZERO; h.len()];
+        if !h.is_empty() {
+            pull_subtree(h, face_irradiance, 0, &mut e);
         }
         e
     }
@@ -574,7 +571,7 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         let mut leaf_b = vec![Rgb::ZERO; h.leaf_count()];
         let mut ctx = Ctx::new(self);
-        self.otf_rec(&mut ctx, 0, &[0], Rgb::ZERO, &e_node, &mut leaf_b);
+        self.otf_rec(&mut ctx, 0, &[0], Vec3A::ZERO, &e_node, &mut leaf_b);
         let t2 = Instant::now();
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
         for (pos, &f) in h.leaf_faces.iter().enumerate() {
@@ -590,7 +587,15 @@ impl HierarchicalSolver {
         Solution { face_b, stats }
     }
 
-    fn otf_rec(&self, ctx: &mut Ctx, r: usize, cands: &[u32], b_acc: Rgb, e_node: &[Rgb], out: &mut [Rgb]) {
+    fn otf_rec(
+        &self,
+        ctx: &mut Ctx,
+        r: usize,
+        cands: &[u32],
+        b_acc: Vec3A,
+        e_node: &[Vec3A],
+        out: &mut [Rgb],
+    ) {
         let mut defer = Vec::new();
         let mut b = b_acc;
         ctx.receive(
@@ -599,12 +604,12 @@ impl HierarchicalSolver {
             cands,
             &mut defer,
             &mut Evaluate(|e, _, f| {
-                b += e_node[e] * Rgb::from(f);
+                b += e_node[e] * Vec3A::from_array(f);
             }),
         );
         let n = self.hierarchy.nodes[r];
         if n.is_leaf() {
-            out[0] = b;
+            out[0] = b.into();
             return;
         }
         let parts = split_leaves(&self.hierarchy, r, out);
@@ -669,7 +674,7 @@ impl HierarchicalSolver {
             self.chunk_pool.put(chunks);
         } else {
             set.emitter.clear();
-            set.ff.clear();
+            set.coef.clear();
             set.dirty.clear();
             set.cands.clear();
         }
@@ -743,7 +748,7 @@ impl HierarchicalSolver {
                     let (a, z) =
                         (old.recv_start[r] as usize, old.recv_start[n.subtree_end as usize] as usize);
                     chunk.emitter.extend_from_slice(&old.emitter[a..z]);
-                    chunk.ff.extend_from_slice(&old.ff[a..z]);
+                    chunk.coef.extend_from_slice(&old.coef[a..z]);
                     chunk.dirty.extend_from_slice(&old.dirty[a..z]);
                     return;
                 }
@@ -825,20 +830,12 @@ impl HierarchicalSolver {
         let e_node = self.pull(face_irradiance);
         let t1 = Instant::now();
         const CHUNK: usize = 1024;
-        let mut b_node = vec![Rgb::ZERO; h.len()];
+        let mut b_node = vec![Vec3A::ZERO; h.len()];
         b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, chunk)| {
             for (k, b) in chunk.iter_mut().enumerate() {
                 let r = ci * CHUNK + k;
                 let (a, z) = (links.recv_start[r] as usize, links.recv_start[r + 1] as usize);
-                let mut s = [0.0f32; 3];
-                for j in a..z {
-                    let e = e_node[(links.emitter[j] & !FF_BIT) as usize];
-                    let f = links.ff[j];
-                    s[0] += e.x * f[0];
-                    s[1] += e.y * f[1];
-                    s[2] += e.z * f[2];
-                }
-                *b = Rgb::from(s);
+                *b = gather(&e_node, &links.emitter[a..z], &links.coef[a..z]);
             }
         });
         let t2 = Instant::now();
@@ -857,21 +854,14 @@ impl HierarchicalSolver {
         }
     }
 
-    /// Push: accumulates every cluster's gathered `B` down to its leaves (preorder: parents
-    /// first) and returns `B` per original face.
-    fn push(&self, b_node: &mut [Rgb]) -> Vec<Rgb> {
+    /// Push: accumulates every cluster's gathered `B` down to its leaves (in parallel over
+    /// subtrees) and returns `B` per original face.
+    fn push(&self, b_node: &mut [Vec3A]) -> Vec<Rgb> {
         let h = &self.hierarchy;
-        let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
-        for i in 1..h.len() {
-            let p = h.nodes[i].parent as usize;
-            b_node[i] += b_node[p];
+        if !h.is_empty() {
+            push_subtree(h, 0, Vec3A::ZERO, b_node);
         }
-        for (i, n) in h.nodes.iter().enumerate() {
-            if n.is_leaf() {
-                face_b[h.leaf_faces[n.leaf_start as usize] as usize] = b_node[i];
-            }
-        }
-        face_b
+        h.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
     }
 
     /// Incremental mode (§5.5): moves the mesh to `positions` (same topology), refits the
@@ -955,6 +945,84 @@ impl HierarchicalSolver {
             l.dirty.iter_mut().for_each(|d| *d = true);
         }
     }
+}
+
+/// `Σ_j E(e_j) F_j` over one receiver's stored links, the three channels in one SIMD lane
+/// set: render mode's inner loop.
+#[inline]
+fn gather(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
+    let mut s = Vec3A::ZERO;
+    for (&e, c) in emitter.iter().zip(coef) {
+        s += e_node[(e & !FF_BIT) as usize] * c.unpack_a();
+    }
+    s
+}
+
+/// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children
+/// before parents, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
+fn pull_subtree(h: &Hierarchy, face_irradiance: &[Rgb], r: usize, e: &mut [Vec3A]) {
+    let n = h.nodes[r];
+    if n.leaf_count() > PAR_LEAVES {
+        let (_, rest) = e.split_at_mut(1);
+        split_subtrees(h, r, rest).into_par_iter().for_each(|(c, s)| pull_subtree(h, face_irradiance, c, s));
+        e[0] = average_children(h, r, |c| e[c - r]);
+        return;
+    }
+    for i in (r..n.subtree_end as usize).rev() {
+        let m = &h.nodes[i];
+        e[i - r] = if m.is_leaf() {
+            face_irradiance[h.leaf_faces[m.leaf_start as usize] as usize].into()
+        } else {
+            average_children(h, i, |c| e[c - r])
+        };
+    }
+}
+
+/// The area-weighted average over cluster `i`'s children of `value(child)`.
+#[inline]
+fn average_children(h: &Hierarchy, i: usize, value: impl Fn(usize) -> Vec3A) -> Vec3A {
+    let n = &h.nodes[i];
+    let area = h.geom[i].area;
+    let mut s = Vec3A::ZERO;
+    for &c in n.children() {
+        let c = c as usize;
+        s += if area > 0.0 { value(c) * (h.geom[c].area / area) } else { value(c) / n.child_count as f32 };
+    }
+    s
+}
+
+/// The push below cluster `r` (subtree `b`, preorder), whose ancestors gathered `above`:
+/// parents before children, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
+fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
+    let n = h.nodes[r];
+    b[0] += above;
+    if n.leaf_count() > PAR_LEAVES {
+        let (own, rest) = b.split_at_mut(1);
+        let own = own[0];
+        split_subtrees(h, r, rest).into_par_iter().for_each(|(c, s)| push_subtree(h, c, own, s));
+        return;
+    }
+    for i in r + 1..n.subtree_end as usize {
+        let p = h.nodes[i].parent as usize;
+        b[i - r] += b[p - r];
+    }
+}
+
+/// Splits the preorder slice of cluster `r`'s descendants (`r + 1..subtree_end`) into its
+/// children's subtrees.
+fn split_subtrees<'a, T>(h: &Hierarchy, r: usize, rest: &'a mut [T]) -> Vec<(usize, &'a mut [T])> {
+    let mut kids: Vec<u32> = h.nodes[r].children().to_vec();
+    // Preorder lays the children's subtrees out by index, not necessarily in child order.
+    kids.sort_unstable();
+    let mut rest = rest;
+    let mut parts = Vec::with_capacity(4);
+    for c in kids {
+        let len = (h.nodes[c as usize].subtree_end - c) as usize;
+        let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
+        parts.push((c as usize, a));
+        rest = b;
+    }
+    parts
 }
 
 /// Splits a receiver's leaf-ordered output slice among its children.

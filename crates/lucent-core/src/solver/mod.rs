@@ -3,11 +3,14 @@
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
 //!   §5.5) in on-the-fly, render and incremental modes.
+//! * [`link_coef`]: stored link coefficients, 16 bits per channel (render mode's memory
+//!   traffic).
 //! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
 pub mod exact;
 pub mod hierarchical;
+pub mod link_coef;
 pub mod oracle;
 pub mod point_sample;
 
