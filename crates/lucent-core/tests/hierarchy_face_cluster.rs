@@ -194,3 +194,36 @@ fn refit_matches_rebuild() {
         }
     }
 }
+
+/// A local move refits only the clusters it touches (the incremental solver's refit) and gives
+/// exactly the geometry and boundary polygons of a full refit.
+#[test]
+fn local_refit_equals_full_refit() {
+    let mesh = torus(30, 16);
+    let mut local = face_cluster::build(&mesh);
+    let mut moved = mesh.clone();
+    for p in moved.positions.iter_mut().filter(|p| p.x > 0.9 && p.z.abs() < 0.4) {
+        *p += Vec3::new(0.05, 0.1 * p.z, -0.02);
+    }
+    let moved_vertex: Vec<bool> = mesh.positions.iter().zip(&moved.positions).map(|(a, b)| a != b).collect();
+    assert!(moved_vertex.iter().filter(|&&m| m).count() > 10);
+    let mut changed = vec![false; local.len()];
+    for i in (0..local.len()).rev() {
+        let n = local.nodes[i];
+        if n.is_leaf() {
+            let t = moved.triangles[local.leaf_faces[n.leaf_start as usize] as usize];
+            changed[i] |= t.iter().any(|&v| moved_vertex[v as usize]);
+        }
+        if n.parent != NO_NODE {
+            changed[n.parent as usize] |= changed[i];
+        }
+    }
+    assert!(changed.iter().filter(|&&c| !c).count() > local.len() / 2, "the move is local");
+    let mut full = local.clone();
+    full.refit(&moved);
+    local.refit_changed(&moved, &changed);
+    assert_eq!(local.geom, full.geom);
+    for i in 0..local.len() {
+        assert_eq!(local.polygon(i), full.polygon(i), "cluster {i}");
+    }
+}

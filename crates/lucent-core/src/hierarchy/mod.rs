@@ -266,19 +266,34 @@ impl Hierarchy {
     /// positions, bottom-up and in parallel. The mesh must have the topology the hierarchy was
     /// built on (only positions may change).
     pub fn refit(&mut self, mesh: &Mesh) {
+        self.refit_where(mesh, None);
+    }
+
+    /// [`Hierarchy::refit`] of only the clusters flagged in `changed` (indexed by cluster):
+    /// those with a face that has a moved vertex, and their ancestors. The others keep their
+    /// geometry, which is then still exact: a cluster's geometry and boundary polygon depend
+    /// only on its own faces' vertices.
+    pub fn refit_changed(&mut self, mesh: &Mesh, changed: &[bool]) {
+        assert_eq!(changed.len(), self.nodes.len(), "refit: one flag per cluster");
+        self.refit_where(mesh, Some(changed));
+    }
+
+    fn refit_where(&mut self, mesh: &Mesh, changed: Option<&[bool]>) {
         assert_eq!(mesh.positions.len(), self.vertex_count, "refit: vertex count changed");
         if self.nodes.is_empty() {
             return;
         }
         let nodes = &self.nodes;
         let leaf_faces = &self.leaf_faces;
-        refit_subtree(nodes, leaf_faces, mesh, 0, &mut self.geom);
+        let is_changed = |i: usize| changed.is_none_or(|c| c[i]);
+        refit_subtree(nodes, leaf_faces, mesh, 0, &mut self.geom, changed);
         // Project polygon vertices onto their cluster's plane.
         let geom = &self.geom;
         self.polygon_points
             .par_iter_mut()
             .zip(self.polygon_vertices.par_iter())
             .zip(self.polygon_owner.par_iter())
+            .filter(|(_, o)| is_changed(**o as usize))
             .for_each(|((p, &v), &o)| {
                 let g = &geom[o as usize];
                 let x = mesh.positions[v as usize];
@@ -286,16 +301,10 @@ impl Hierarchy {
             });
         let starts = &self.polygon_start;
         let points = &self.polygon_points;
-        let areas: Vec<f32> = (0..nodes.len())
-            .into_par_iter()
-            .map(|i| {
-                let pts = &points[starts[i] as usize..starts[i + 1] as usize];
-                polygon_area(pts, geom[i].normal)
-            })
-            .collect();
-        for (g, a) in self.geom.iter_mut().zip(areas) {
-            g.polygon_area = a;
-        }
+        self.geom.par_iter_mut().enumerate().filter(|(i, _)| is_changed(*i)).for_each(|(i, g)| {
+            let pts = &points[starts[i] as usize..starts[i + 1] as usize];
+            g.polygon_area = polygon_area(pts, g.normal);
+        });
     }
 }
 
@@ -330,7 +339,18 @@ fn leaf_geom(mesh: &Mesh, face: usize) -> ClusterGeom {
 }
 
 /// Refits the subtree rooted at `i`, whose geometry is the slice `g` (`g[0]` is cluster `i`).
-fn refit_subtree(nodes: &[Node], leaf_faces: &[u32], mesh: &Mesh, i: usize, g: &mut [ClusterGeom]) {
+/// With `changed`, unflagged subtrees are skipped.
+fn refit_subtree(
+    nodes: &[Node],
+    leaf_faces: &[u32],
+    mesh: &Mesh,
+    i: usize,
+    g: &mut [ClusterGeom],
+    changed: Option<&[bool]>,
+) {
+    if changed.is_some_and(|c| !c[i]) {
+        return;
+    }
     let n = nodes[i];
     let (head, mut rest) = g.split_first_mut().expect("non-empty subtree");
     if n.is_leaf() {
@@ -345,10 +365,10 @@ fn refit_subtree(nodes: &[Node], leaf_faces: &[u32], mesh: &Mesh, i: usize, g: &
         rest = b;
     }
     if n.leaf_count() > PAR_LEAVES {
-        parts.par_iter_mut().for_each(|(c, s)| refit_subtree(nodes, leaf_faces, mesh, *c, s));
+        parts.par_iter_mut().for_each(|(c, s)| refit_subtree(nodes, leaf_faces, mesh, *c, s, changed));
     } else {
         for (c, s) in parts.iter_mut() {
-            refit_subtree(nodes, leaf_faces, mesh, *c, s);
+            refit_subtree(nodes, leaf_faces, mesh, *c, s, changed);
         }
     }
     let mut area = 0.0f32;

@@ -74,32 +74,39 @@ impl LinkSet {
         (self.emitter[j] & !FF_BIT) as usize
     }
 
-    /// Copies the chunks' links and candidates, in order, into the flat arrays (in parallel,
-    /// each chunk into its own slice).
-    fn gather_chunks(&mut self, chunks: &[LinkChunk]) {
-        let links: usize = chunks.iter().map(|c| c.emitter.len()).sum();
-        let cands: usize = chunks.iter().map(|c| c.cands.len()).sum();
+    /// Copies the chunks' pieces (their own links and candidates, or ranges of the previous
+    /// set `old`), in order, into the flat arrays, in parallel, each piece into its own slice.
+    fn gather_chunks(&mut self, chunks: &[LinkChunk], old: Option<&LinkSet>) {
+        let pieces = || chunks.iter().flat_map(|c| c.pieces.iter().map(move |p| (c, p)));
+        let links: usize = pieces().map(|(_, p)| p.links.len()).sum();
+        let cands: usize = pieces().map(|(_, p)| p.cands.len()).sum();
         self.emitter.resize(links, 0);
         self.coef.resize(links, LinkCoef::default());
         self.dirty.resize(links, false);
         self.cands.resize(cands, 0);
         let (mut e, mut f, mut d, mut k) =
             (&mut self.emitter[..], &mut self.coef[..], &mut self.dirty[..], &mut self.cands[..]);
-        let mut parts = Vec::with_capacity(chunks.len());
-        for c in chunks {
-            let (n, m) = (c.emitter.len(), c.cands.len());
+        let mut parts = Vec::new();
+        for (c, p) in pieces() {
+            let (n, m) = (p.links.len(), p.cands.len());
             let (e0, e1) = std::mem::take(&mut e).split_at_mut(n);
             let (f0, f1) = std::mem::take(&mut f).split_at_mut(n);
             let (d0, d1) = std::mem::take(&mut d).split_at_mut(n);
             let (k0, k1) = std::mem::take(&mut k).split_at_mut(m);
-            parts.push((c, e0, f0, d0, k0));
+            parts.push((c, p, e0, f0, d0, k0));
             (e, f, d, k) = (e1, f1, d1, k1);
         }
-        parts.into_par_iter().for_each(|(c, e, f, d, k)| {
-            e.copy_from_slice(&c.emitter);
-            f.copy_from_slice(&c.coef);
-            d.copy_from_slice(&c.dirty);
-            k.copy_from_slice(&c.cands);
+        parts.into_par_iter().for_each(|(c, p, e, f, d, k)| {
+            let (src_e, src_f, src_d, src_k) = if p.old {
+                let o = old.expect("old pieces come from an incremental relink");
+                (&o.emitter, &o.coef, &o.dirty, &o.cands)
+            } else {
+                (&c.emitter, &c.coef, &c.dirty, &c.cands)
+            };
+            e.copy_from_slice(&src_e[p.links.clone()]);
+            f.copy_from_slice(&src_f[p.links.clone()]);
+            d.copy_from_slice(&src_d[p.links.clone()]);
+            k.copy_from_slice(&src_k[p.cands.clone()]);
         });
     }
 
@@ -425,6 +432,20 @@ struct LinkChunk {
     /// candidates.
     cand_count: Vec<(u32, u32)>,
     cands: Vec<u32>,
+    /// The chunk's links and candidates in order: runs of its own arrays, and ranges of the
+    /// previous link set taken over wholesale (copied once, straight into the new set).
+    pieces: Vec<Piece>,
+    /// Own links and candidates up to here are in `pieces`.
+    own_closed: (usize, usize),
+}
+
+/// A run of links and candidates of a [`LinkChunk`].
+#[derive(Clone, Debug)]
+struct Piece {
+    /// Whether the ranges index the previous link set (else the chunk's own arrays).
+    old: bool,
+    links: std::ops::Range<usize>,
+    cands: std::ops::Range<usize>,
 }
 
 /// The index of the range of `ranges` (sorted, disjoint preorder ranges `start..end`; a
@@ -460,8 +481,26 @@ impl LinkChunk {
         }
     }
 
+    /// Closes the run of own links and candidates since the last piece.
+    fn close_own(&mut self) {
+        let (l0, c0) = self.own_closed;
+        let (l1, c1) = (self.emitter.len(), self.cands.len());
+        if l1 > l0 || c1 > c0 {
+            self.pieces.push(Piece { old: false, links: l0..l1, cands: c0..c1 });
+        }
+        self.own_closed = (l1, c1);
+    }
+
+    /// Appends links and candidates of the previous link set, by range.
+    fn take_old(&mut self, links: std::ops::Range<usize>, cands: std::ops::Range<usize>) {
+        self.close_own();
+        self.pieces.push(Piece { old: true, links, cands });
+    }
+
     /// Empties the chunk, keeping its buffers.
     fn clear(&mut self) {
+        self.pieces.clear();
+        self.own_closed = (0, 0);
         self.link_count.clear();
         self.emitter.clear();
         self.coef.clear();
@@ -670,7 +709,8 @@ impl HierarchicalSolver {
                 set.recv_start[i + 1] += set.recv_start[i];
                 set.cand_start[i + 1] += set.cand_start[i];
             }
-            set.gather_chunks(&chunks);
+            chunks.iter_mut().for_each(LinkChunk::close_own);
+            set.gather_chunks(&chunks, reuse.map(|u| u.old));
             self.chunk_pool.put(chunks);
         } else {
             set.emitter.clear();
@@ -741,15 +781,13 @@ impl HierarchicalSolver {
                         if z > a {
                             chunk.link_count.push((q as u32, (z - a) as u32));
                         }
-                        let oc = old.cands_of(q);
-                        chunk.cand_count.push((q as u32, oc.len() as u32));
-                        chunk.cands.extend_from_slice(oc);
+                        chunk.cand_count.push((q as u32, old.cand_start[q + 1] - old.cand_start[q]));
                     }
-                    let (a, z) =
-                        (old.recv_start[r] as usize, old.recv_start[n.subtree_end as usize] as usize);
-                    chunk.emitter.extend_from_slice(&old.emitter[a..z]);
-                    chunk.coef.extend_from_slice(&old.coef[a..z]);
-                    chunk.dirty.extend_from_slice(&old.dirty[a..z]);
+                    let end = n.subtree_end as usize;
+                    chunk.take_old(
+                        old.recv_start[r] as usize..old.recv_start[end] as usize,
+                        old.cand_start[r] as usize..old.cand_start[end] as usize,
+                    );
                     return;
                 }
                 // This receiver's candidates: the ones handed down now, plus those that the
@@ -887,11 +925,8 @@ impl HierarchicalSolver {
         let moved_vertex: Vec<bool> =
             self.mesh.positions.iter().zip(positions).map(|(a, b)| a != b).collect();
         let any_moved = moved_vertex.iter().any(|&m| m);
-        if any_moved {
-            self.mesh.positions.copy_from_slice(positions);
-            self.hierarchy.refit(&self.mesh);
-        }
         let old = self.links.take().expect("links stored");
+        let any_dirty = old.dirty.par_iter().any(|&d| d);
         let h = &self.hierarchy;
         let mut changed = vec![false; h.len()];
         let mut stale = vec![false; h.len()];
@@ -901,13 +936,19 @@ impl HierarchicalSolver {
                 let t = self.mesh.triangles[h.leaf_faces[n.leaf_start as usize] as usize];
                 changed[i] |= t.iter().any(|&v| moved_vertex[v as usize]);
             }
-            let (a, z) = (old.recv_start[i] as usize, old.recv_start[i + 1] as usize);
-            stale[i] |= old.dirty[a..z].iter().any(|&d| d);
+            if any_dirty {
+                let (a, z) = (old.recv_start[i] as usize, old.recv_start[i + 1] as usize);
+                stale[i] |= old.dirty[a..z].iter().any(|&d| d);
+            }
             if n.parent != crate::hierarchy::NO_NODE {
                 let p = n.parent as usize;
                 changed[p] |= changed[i];
                 stale[p] |= stale[i];
             }
+        }
+        if any_moved {
+            self.mesh.positions.copy_from_slice(positions);
+            self.hierarchy.refit_changed(&self.mesh, &changed);
         }
         if !changed[0] && !stale[0] {
             self.links = Some(old);
