@@ -12,6 +12,7 @@ mod viewer;
 use clap::Parser;
 
 fn main() {
+    quiet_mesa_without_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = cli::Cli::parse();
     let result = match cli.command.unwrap_or_default() {
@@ -23,5 +24,29 @@ fn main() {
         // One line, with the chain of causes, and a non-zero exit: never a panic.
         eprintln!("lucent: error: {err:#}");
         std::process::exit(1);
+    }
+}
+
+/// Mesa's software Vulkan driver prints "error: XDG_RUNTIME_DIR is invalid or not set" on a
+/// headless machine (a server, CI, a container), where rendering to a file works all the same.
+/// Where the variable is unset, point it at a private directory so a first run does not look
+/// broken.
+fn quiet_mesa_without_runtime_dir() {
+    #[cfg(unix)]
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none_or(|v| v.is_empty()) {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+        let dir = std::env::temp_dir().join("lucent-runtime");
+        let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        // Only a directory of ours with owner-only access (what Mesa checks for).
+        let ours = std::fs::metadata(&dir).is_ok_and(|m| {
+            m.is_dir()
+                && m.permissions().mode() & 0o077 == 0
+                && std::fs::File::open("/proc/self")
+                    .is_ok_and(|f| f.metadata().is_ok_and(|s| s.uid() == m.uid()))
+        });
+        if ours {
+            // SAFETY: first thing in `main`, before any thread is spawned.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
     }
 }
