@@ -338,6 +338,25 @@ fn leaf_geom(mesh: &Mesh, face: usize) -> ClusterGeom {
     }
 }
 
+/// Splits the preorder slice of cluster `r`'s descendants (`r + 1..subtree_end`) into its
+/// children's subtrees, as `(child, slice)`: preorder numbers the children in order, each
+/// subtree contiguous.
+pub(crate) fn split_subtrees<'a, T>(
+    nodes: &[Node],
+    r: usize,
+    rest: &'a mut [T],
+) -> Vec<(usize, &'a mut [T])> {
+    let mut rest = rest;
+    let mut parts = Vec::with_capacity(4);
+    for &c in nodes[r].children() {
+        let len = (nodes[c as usize].subtree_end - c) as usize;
+        let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
+        parts.push((c as usize, a));
+        rest = b;
+    }
+    parts
+}
+
 /// Refits the subtree rooted at `i`, whose geometry is the slice `g` (`g[0]` is cluster `i`).
 /// With `changed`, unflagged subtrees are skipped.
 fn refit_subtree(
@@ -352,18 +371,12 @@ fn refit_subtree(
         return;
     }
     let n = nodes[i];
-    let (head, mut rest) = g.split_first_mut().expect("non-empty subtree");
+    let (head, rest) = g.split_first_mut().expect("non-empty subtree");
     if n.is_leaf() {
         *head = leaf_geom(mesh, leaf_faces[n.leaf_start as usize] as usize);
         return;
     }
-    let mut parts: Vec<(usize, &mut [ClusterGeom])> = Vec::with_capacity(4);
-    for &c in n.children() {
-        let len = (nodes[c as usize].subtree_end - c) as usize;
-        let (a, b) = rest.split_at_mut(len);
-        parts.push((c as usize, a));
-        rest = b;
-    }
+    let mut parts = split_subtrees(nodes, i, rest);
     if n.leaf_count() > PAR_LEAVES {
         parts.par_iter_mut().for_each(|(c, s)| refit_subtree(nodes, leaf_faces, mesh, *c, s, changed));
     } else {

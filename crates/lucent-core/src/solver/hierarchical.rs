@@ -26,7 +26,7 @@ use super::point_sample::ReceiverSources;
 use crate::Rgb;
 use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
-use crate::hierarchy::{Hierarchy, PAR_LEAVES};
+use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_subtrees};
 use crate::mesh::Mesh;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -45,7 +45,7 @@ pub struct LinkSet {
     /// (see [`LinkSet::emitter_of`]).
     pub emitter: Vec<u32>,
     /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless), packed to 16
-    /// bits per channel (relative error at most 2.4e-4, see [`LinkCoef`]).
+    /// bits per channel (relative error at most 4.9e-4, see [`LinkCoef`]).
     pub coef: Vec<LinkCoef>,
     /// Links whose coefficient is stale (left over when an incremental update ran out of
     /// budget); recomputed first by the next update.
@@ -1005,7 +1005,9 @@ fn pull_subtree(h: &Hierarchy, face_irradiance: &[Rgb], r: usize, e: &mut [Vec3A
     let n = h.nodes[r];
     if n.leaf_count() > PAR_LEAVES {
         let (_, rest) = e.split_at_mut(1);
-        split_subtrees(h, r, rest).into_par_iter().for_each(|(c, s)| pull_subtree(h, face_irradiance, c, s));
+        split_subtrees(&h.nodes, r, rest)
+            .into_par_iter()
+            .for_each(|(c, s)| pull_subtree(h, face_irradiance, c, s));
         e[0] = average_children(h, r, |c| e[c - r]);
         return;
     }
@@ -1040,30 +1042,13 @@ fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
     if n.leaf_count() > PAR_LEAVES {
         let (own, rest) = b.split_at_mut(1);
         let own = own[0];
-        split_subtrees(h, r, rest).into_par_iter().for_each(|(c, s)| push_subtree(h, c, own, s));
+        split_subtrees(&h.nodes, r, rest).into_par_iter().for_each(|(c, s)| push_subtree(h, c, own, s));
         return;
     }
     for i in r + 1..n.subtree_end as usize {
         let p = h.nodes[i].parent as usize;
         b[i - r] += b[p - r];
     }
-}
-
-/// Splits the preorder slice of cluster `r`'s descendants (`r + 1..subtree_end`) into its
-/// children's subtrees.
-fn split_subtrees<'a, T>(h: &Hierarchy, r: usize, rest: &'a mut [T]) -> Vec<(usize, &'a mut [T])> {
-    let mut kids: Vec<u32> = h.nodes[r].children().to_vec();
-    // Preorder lays the children's subtrees out by index, not necessarily in child order.
-    kids.sort_unstable();
-    let mut rest = rest;
-    let mut parts = Vec::with_capacity(4);
-    for c in kids {
-        let len = (h.nodes[c as usize].subtree_end - c) as usize;
-        let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
-        parts.push((c as usize, a));
-        rest = b;
-    }
-    parts
 }
 
 /// Splits a receiver's leaf-ordered output slice among its children.
