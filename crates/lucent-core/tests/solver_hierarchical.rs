@@ -87,9 +87,10 @@ fn render_mode_equals_on_the_fly() {
     let render = s.solve_render(&e);
     assert_eq!(link_stats.links, otf.stats.links);
     assert_eq!(link_stats.form_factors, otf.stats.form_factors);
-    // Stored coefficients are rounded to 16 bits, at most `MAX_REL_ERROR` relative each; the
-    // terms of `B` are non-negative, so every face's `B` errs by at most as much (plus f32
-    // summation noise in a different order).
+    // Stored coefficients are rounded to 16 bits, at most `MAX_REL_ERROR` relative each (or
+    // `MAX_ABS_ERROR` ≈ 2e-12 times the receiver's largest); the terms of `B` are
+    // non-negative, so every face's `B` errs by at most as much (plus f32 summation noise in a
+    // different order).
     let bound = lucent_core::solver::link_coef::MAX_REL_ERROR + 1e-5;
     for (f, (a, b)) in otf.face_b.iter().zip(&render.face_b).enumerate() {
         for c in 0..3 {

@@ -6,7 +6,7 @@
 //!   subtrees.
 //! * **render** ([`HierarchicalSolver::link`] once, then
 //!   [`HierarchicalSolver::solve_render`] per frame): the links are stored flat, sorted by
-//!   receiver (CSR: `recv_start`, `emitter`, `ff`), and a frame is only *pull* (area-weighted
+//!   receiver (CSR: `recv_start`, `emitter`, `coef`), and a frame is only *pull* (area-weighted
 //!   irradiance up the tree), *gather* (`Σ E_e F_re` per receiver) and *push* (a receiver's `B`
 //!   added to all its leaves).
 //! * **incremental** ([`HierarchicalSolver::update_incremental`]): after a geometry or material
@@ -20,7 +20,7 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
-use super::link_coef::LinkCoef;
+use super::link_coef::{self, FF_BIT, LinkCoef};
 use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
 use crate::Rgb;
@@ -33,9 +33,6 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Instant;
 
-/// Flag in [`LinkSet::emitter`] marking a link evaluated with the form factor.
-const FF_BIT: u32 = 1 << 31;
-
 /// Stored links, sorted by receiver (CSR over clusters in preorder).
 #[derive(Clone, Debug, Default)]
 pub struct LinkSet {
@@ -45,8 +42,12 @@ pub struct LinkSet {
     /// (see [`LinkSet::emitter_of`]).
     pub emitter: Vec<u32>,
     /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless), packed to 16
-    /// bits per channel (relative error at most 4.9e-4, see [`LinkCoef`]).
+    /// bits per channel relative to its receiver's `recv_scale` (relative error at most
+    /// 4.9e-4, see [`LinkCoef`]): link `j` of receiver `r` is `coef[j].unpack(recv_scale[r])`.
     pub coef: Vec<LinkCoef>,
+    /// Each receiver's coefficient scale, a power of two (length: clusters; see
+    /// [`link_coef::receiver_scale`]).
+    pub recv_scale: Vec<f32>,
     /// Links whose coefficient is stale (left over when an incremental update ran out of
     /// budget); recomputed first by the next update.
     pub dirty: Vec<bool>,
@@ -66,6 +67,12 @@ impl LinkSet {
     /// Whether there are no links.
     pub fn is_empty(&self) -> bool {
         self.emitter.is_empty()
+    }
+
+    /// Transport coefficient of link `j`, whose receiver is `r`.
+    #[inline]
+    pub fn coef_of(&self, r: usize, j: usize) -> Vec3A {
+        self.coef[j].unpack(self.recv_scale[r])
     }
 
     /// Emitter cluster of link `j`.
@@ -179,6 +186,9 @@ pub struct HierarchicalSolver {
     spare: Option<LinkSet>,
     /// Chunk buffers of the last relink, for the same reason.
     chunk_pool: ChunkPool,
+    /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
+    /// same reason (each is 4 MB at 131K triangles).
+    frame: [Vec<Vec3A>; 2],
 }
 
 /// Emptied [`LinkChunk`]s for reuse, by the key of the part of the traversal that filled
@@ -384,7 +394,7 @@ impl LinkSink for Reusing<'_, '_> {
     fn kept(&mut self, r: usize, e: usize) -> bool {
         let unchanged = !self.reuse.changed[r] && !self.reuse.changed[e];
         if unchanged && let Some((kind, f, false)) = self.reuse.old_link(r, e) {
-            self.chunk.push_packed(r, e, kind, f, false);
+            self.chunk.push(r, e, kind, f, false);
             return true;
         }
         false
@@ -407,14 +417,14 @@ impl LinkSink for Reusing<'_, '_> {
                 Some((LinkKind::FormFactor, f, _)) => f,
                 _ => {
                     ctx.point_samples += 1;
-                    LinkCoef::pack(ctx.ev.eval(src, r, e, LinkKind::PointSample))
+                    Vec3A::from_array(ctx.ev.eval(src, r, e, LinkKind::PointSample))
                 }
             };
-            self.chunk.push_packed(r, e, kind, f, true);
+            self.chunk.push(r, e, kind, f, true);
             return;
         }
         let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
-        self.chunk.push(r, e, kind, f, false);
+        self.chunk.push(r, e, kind, Vec3A::from_array(f), false);
     }
 }
 
@@ -423,10 +433,13 @@ impl LinkSink for Reusing<'_, '_> {
 struct LinkChunk {
     /// Its key in the [`ChunkPool`].
     key: u32,
-    /// `(receiver, link count)` of the receivers with links, in preorder.
-    link_count: Vec<(u32, u32)>,
+    /// The receivers with links, in preorder.
+    receivers: Vec<ReceiverLinks>,
     emitter: Vec<u32>,
     coef: Vec<LinkCoef>,
+    /// The coefficients of the receiver being linked, packed by
+    /// [`LinkChunk::close_receiver`] once its scale is known.
+    staged: Vec<Vec3A>,
     dirty: Vec<bool>,
     /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
     /// candidates.
@@ -437,6 +450,15 @@ struct LinkChunk {
     pieces: Vec<Piece>,
     /// Own links and candidates up to here are in `pieces`.
     own_closed: (usize, usize),
+}
+
+/// A receiver's links in a [`LinkChunk`].
+#[derive(Clone, Copy, Debug)]
+struct ReceiverLinks {
+    r: u32,
+    links: u32,
+    /// The receiver's coefficient scale ([`LinkSet::recv_scale`]).
+    scale: f32,
 }
 
 /// A run of links and candidates of a [`LinkChunk`].
@@ -457,28 +479,36 @@ fn find_range(ranges: &[(u32, u32)], e: u32) -> Option<usize> {
 }
 
 impl LinkChunk {
+    /// Adds the link `e -> r` to the receiver being linked (`r`, until
+    /// [`LinkChunk::close_receiver`]).
     #[inline]
-    fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: [f32; 3], dirty: bool) {
-        self.push_packed(r, e, kind, LinkCoef::pack(f), dirty);
-    }
-
-    #[inline]
-    fn push_packed(&mut self, r: usize, e: usize, kind: LinkKind, f: LinkCoef, dirty: bool) {
+    fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: Vec3A, dirty: bool) {
         self.count_link(r);
         self.emitter.push(match kind {
             LinkKind::FormFactor => e as u32 | FF_BIT,
             LinkKind::PointSample => e as u32,
         });
-        self.coef.push(f);
+        self.staged.push(f);
         self.dirty.push(dirty);
     }
 
     #[inline]
     fn count_link(&mut self, r: usize) {
-        match self.link_count.last_mut() {
-            Some((q, k)) if *q == r as u32 => *k += 1,
-            _ => self.link_count.push((r as u32, 1)),
+        match self.receivers.last_mut() {
+            Some(q) if q.r == r as u32 => q.links += 1,
+            _ => self.receivers.push(ReceiverLinks { r: r as u32, links: 1, scale: 1.0 }),
         }
+    }
+
+    /// Packs the staged coefficients of the receiver being linked, under its scale.
+    fn close_receiver(&mut self) {
+        if self.staged.is_empty() {
+            return;
+        }
+        let max = self.staged.iter().fold(0.0f32, |m, f| m.max(f.max_element()));
+        let scale = link_coef::receiver_scale(max);
+        self.receivers.last_mut().expect("staged links have a receiver").scale = scale;
+        self.coef.extend(self.staged.drain(..).map(|f| LinkCoef::pack(f, scale)));
     }
 
     /// Closes the run of own links and candidates since the last piece.
@@ -501,9 +531,10 @@ impl LinkChunk {
     fn clear(&mut self) {
         self.pieces.clear();
         self.own_closed = (0, 0);
-        self.link_count.clear();
+        self.receivers.clear();
         self.emitter.clear();
         self.coef.clear();
+        self.staged.clear();
         self.dirty.clear();
         self.cand_count.clear();
         self.cands.clear();
@@ -517,7 +548,7 @@ impl LinkChunk {
             let end = h.nodes[r].subtree_end as usize;
             let links = (old.recv_start[end] - old.recv_start[r]) as usize;
             let cands = (old.cand_start[end] - old.cand_start[r]) as usize;
-            c.link_count.reserve(end - r);
+            c.receivers.reserve(end - r);
             c.emitter.reserve(links);
             c.coef.reserve(links);
             c.dirty.reserve(links);
@@ -527,12 +558,13 @@ impl LinkChunk {
         c
     }
 
-    /// Copies link `j` of `old` (receiver `r`) unchanged.
+    /// Copies link `j` of `old` (receiver `r`) unchanged (re-packing its coefficient under
+    /// the receiver's new scale is lossless unless it grew past `2^28` times the old one).
     #[inline]
     fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
         self.count_link(r);
         self.emitter.push(old.emitter[j]);
-        self.coef.push(old.coef[j]);
+        self.staged.push(old.coef_of(r, j));
         self.dirty.push(old.dirty[j]);
     }
 }
@@ -552,11 +584,11 @@ struct Reuse<'a> {
 impl Reuse<'_> {
     /// The old, clean link `e -> r` of this kind, if any.
     #[inline]
-    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, LinkCoef, bool)> {
+    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, Vec3A, bool)> {
         let o = self.old;
         (o.recv_start[r] as usize..o.recv_start[r + 1] as usize)
             .find(|&j| o.emitter_of(j) == e)
-            .map(|j| (o.kind_of(j), o.coef[j], o.dirty[j]))
+            .map(|j| (o.kind_of(j), o.coef_of(r, j), o.dirty[j]))
     }
 }
 
@@ -577,6 +609,7 @@ impl HierarchicalSolver {
             links: None,
             spare: None,
             chunk_pool: ChunkPool::default(),
+            frame: Default::default(),
         }
     }
 
@@ -588,13 +621,18 @@ impl HierarchicalSolver {
     /// Area-weighted average irradiance of every cluster (the *pull* of §3.2), in parallel
     /// over subtrees.
     pub fn pull(&self, face_irradiance: &[Rgb]) -> Vec<Vec3A> {
+        let mut e = vec![Vec3A::ZERO; self.hierarchy.len()];
+        self.pull_into(face_irradiance, &mut e);
+        e
+    }
+
+    /// [`HierarchicalSolver::pull`] into `e` (one entry per cluster).
+    fn pull_into(&self, face_irradiance: &[Rgb], e: &mut [Vec3A]) {
         let h = &self.hierarchy;
         assert_eq!(face_irradiance.len(), h.leaf_count());
-        let mut e = vec![Vec3A::ZERO; h.len()];
         if !h.is_empty() {
-            pull_subtree(h, face_irradiance, 0, &mut e);
+            pull_subtree(h, face_irradiance, 0, e);
         }
-        e
     }
 
     /// On-the-fly mode: refine from the root's self-link and gather in one parallel traversal,
@@ -692,14 +730,17 @@ impl HierarchicalSolver {
         set.recv_start.resize(h.len() + 1, 0);
         set.cand_start.clear();
         set.cand_start.resize(h.len() + 1, 0);
+        set.recv_scale.clear();
+        set.recv_scale.resize(h.len(), 1.0);
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, 0)];
             self.link_rec(&mut ctx, 0, &[0], &[], &mut chunks, reuse);
             ctx.fill(&mut stats);
             for c in &chunks {
-                for &(r, k) in &c.link_count {
-                    set.recv_start[r as usize + 1] = k;
+                for q in &c.receivers {
+                    set.recv_start[q.r as usize + 1] = q.links;
+                    set.recv_scale[q.r as usize] = q.scale;
                 }
                 for &(r, k) in &c.cand_count {
                     set.cand_start[r as usize + 1] = k;
@@ -779,7 +820,8 @@ impl HierarchicalSolver {
                     for q in r..n.subtree_end as usize {
                         let (a, z) = (old.recv_start[q] as usize, old.recv_start[q + 1] as usize);
                         if z > a {
-                            chunk.link_count.push((q as u32, (z - a) as u32));
+                            let scale = old.recv_scale[q];
+                            chunk.receivers.push(ReceiverLinks { r: q as u32, links: (z - a) as u32, scale });
                         }
                         chunk.cand_count.push((q as u32, old.cand_start[q + 1] - old.cand_start[q]));
                     }
@@ -821,10 +863,11 @@ impl HierarchicalSolver {
                 r,
                 &fresh,
                 &mut defer,
-                &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, f, false)),
+                &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, Vec3A::from_array(f), false)),
             ),
             Some(reuse) => ctx.receive(&self.oracle, r, &fresh, &mut defer, &mut Reusing { reuse, chunk }),
         }
+        chunk.close_receiver();
         if n.is_leaf() {
             return;
         }
@@ -861,28 +904,28 @@ impl HierarchicalSolver {
     }
 
     /// Render mode over the stored links (which must exist).
-    fn render_stored(&self, face_irradiance: &[Rgb]) -> Solution {
+    fn render_stored(&mut self, face_irradiance: &[Rgb]) -> Solution {
         let t0 = Instant::now();
-        let h = &self.hierarchy;
-        let links = self.links.as_ref().expect("links stored");
-        let e_node = self.pull(face_irradiance);
+        let [mut e_node, mut b_node] = std::mem::take(&mut self.frame);
+        e_node.resize(self.hierarchy.len(), Vec3A::ZERO);
+        b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
+        self.pull_into(face_irradiance, &mut e_node);
         let t1 = Instant::now();
+        let links = self.links.as_ref().expect("links stored");
         const CHUNK: usize = 1024;
-        let mut b_node = vec![Vec3A::ZERO; h.len()];
-        b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, chunk)| {
-            for (k, b) in chunk.iter_mut().enumerate() {
-                let r = ci * CHUNK + k;
-                let (a, z) = (links.recv_start[r] as usize, links.recv_start[r + 1] as usize);
-                *b = gather(&e_node, &links.emitter[a..z], &links.coef[a..z]);
-            }
+        let (start, scale) = (&links.recv_start, &links.recv_scale);
+        b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
+            link_coef::gather(&e_node, start, &links.emitter, &links.coef, scale, ci * CHUNK, b);
         });
         let t2 = Instant::now();
         let face_b = self.push(&mut b_node);
         let t3 = Instant::now();
+        let links = links.len();
+        self.frame = [e_node, b_node];
         Solution {
             face_b,
             stats: SolveStats {
-                links: links.len(),
+                links,
                 pull_ms: ms(t1 - t0),
                 gather_ms: ms(t2 - t1),
                 push_ms: ms(t3 - t2),
@@ -986,17 +1029,6 @@ impl HierarchicalSolver {
             l.dirty.iter_mut().for_each(|d| *d = true);
         }
     }
-}
-
-/// `Σ_j E(e_j) F_j` over one receiver's stored links, the three channels in one SIMD lane
-/// set: render mode's inner loop.
-#[inline]
-fn gather(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
-    let mut s = Vec3A::ZERO;
-    for (&e, c) in emitter.iter().zip(coef) {
-        s += e_node[(e & !FF_BIT) as usize] * c.unpack_a();
-    }
-    s
 }
 
 /// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children

@@ -1,96 +1,210 @@
-//! Stored transport coefficients, 16 bits per channel.
+//! Stored links' transport coefficients, 16 bits per channel, and render mode's gather over
+//! them.
 //!
-//! Render mode (Mertens et al. 2003, §5.5) is a gather over millions of stored links, every
-//! frame. The sum `Σ E_e F_re` has non-negative terms, so a relative rounding error per link
-//! bounds the same relative error of `B`: [`LinkCoef`] keeps 10 mantissa bits (relative error
-//! at most `2^-11` ≈ 4.9e-4, twenty times below the solver's 1% accuracy target) and a 6-bit
-//! exponent covering `[2^-39, 2^24)`. The range is wide on purpose: `F` usually stays below
-//! `R_d_total` < 1, but where a receiver's dipole source lies just under an emitter on the far
-//! side of a thin part, the (exact) form factor reaches into the thousands.
+//! Render mode (Mertens et al. 2003, §5.5) is a gather `Σ E_e F_re` over millions of stored
+//! links, every frame. A coefficient is kept as IEEE binary16 per channel ([`LinkCoef`]),
+//! relative to a power-of-two scale per receiver ([`receiver_scale`]) that puts the
+//! receiver's largest coefficient in `[2^14, 2^15)`. The scale is what makes half floats
+//! usable: `F` usually stays below `R_d_total` < 1, but where a receiver's dipole source lies
+//! just under an emitter on the far side of a thin part, the (exact) form factor reaches into
+//! the thousands, and far links fall to `1e-20`; half floats alone span only 40 octaves.
 //!
-//! Decoding is a shift and a multiply (it puts the 16 bits into the low exponent and high
-//! mantissa bits of an `f32` and rescales), for all three channels at once in one SSE2
-//! register ([`LinkCoef::unpack_a`]): the gather is bound by instructions per link, and this
-//! takes a third off render mode at 131K triangles against three scalar `f32` (IEEE half
-//! floats would need `f16c`, which is not in the x86-64 baseline, and have too little range).
+//! Error: coefficients at least `2^-28` times the receiver's largest keep 10 mantissa bits
+//! (relative error at most [`MAX_REL_ERROR`] = `2^-11` ≈ 4.9e-4, twenty times below the
+//! solver's 1% accuracy target); smaller ones are subnormal half floats with an absolute error
+//! of at most `2^-39` times the largest. The terms of the sum are non-negative, so the same
+//! bounds hold for `B`.
+//!
+//! With one running sum the gather is bound by the latency of the add; it keeps two. Where
+//! the CPU has `f16c` and `fma` (x86-64 since 2013; detected at run time, as neither is in the
+//! x86-64 baseline) a link is one conversion and one fused multiply-add; elsewhere the halves
+//! are decoded with integer shifts (exact, as the hardware conversion). At 131K triangles
+//! (11.3M links, 136 MB) the gather takes about 8 ms on the CI machine, twice the time it takes
+//! to merely stream the link arrays; 256-bit registers (two links per operation) gained
+//! nothing there.
 
 use glam::Vec3A;
 
-/// Bits below the packed value in the `f32` it decodes to.
+/// Flag in a link's emitter word marking a link evaluated with the form factor; the other
+/// bits are the emitter cluster.
+pub(crate) const FF_BIT: u32 = 1 << 31;
+
+/// Half-float bits below the `f32` mantissa's top 10 bits.
 const SHIFT: u32 = 13;
 
-/// Exponent offset (in `f32` exponent-field units) between an `f32` and its packed form.
-const EXP_OFFSET: u32 = 87 << 23;
+/// `2^112`: rescales an `f32` whose bits are a half float's shifted up by [`SHIFT`] (exponent
+/// bias 127 instead of 15) to the half float's value, subnormals included.
+const HALF_RESCALE: f32 = f32::from_bits((127 + 112) << 23);
 
-/// `2^87`: rescales the decoded `f32`, whose exponent field holds the 6-bit exponent `e`
-/// (`2^(e - 127)`), to `2^(e - 40)`.
-const SCALE: f32 = f32::from_bits(EXP_OFFSET + (127 << 23));
+/// Smallest normal half float, `2^-14`.
+const HALF_MIN_NORMAL: f32 = 1.0 / 16384.0;
 
-/// Smallest non-zero packed value, `2^-39`.
-pub const MIN_POSITIVE: f32 = f32::from_bits(EXP_OFFSET + (1 << 23));
+/// Largest finite half float.
+const HALF_MAX: f32 = 65504.0;
 
-/// Largest packed value, just below `2^24`.
-pub const MAX: f32 = f32::from_bits(EXP_OFFSET + (0xffff << SHIFT));
-
-/// Largest relative rounding error of a packed value in `[MIN_POSITIVE, MAX]`.
+/// Largest relative rounding error of a coefficient at least `2^-28` times its receiver's
+/// largest.
 pub const MAX_REL_ERROR: f32 = 1.0 / 2048.0;
 
-/// A link's transport coefficient per channel (unitless, `F(E, x_R)` of Mertens eq. 6) in
-/// 16 bits each (see the module documentation); the fourth lane is 0, so that eight aligned
-/// bytes load into one register.
+/// Largest absolute rounding error of any coefficient, relative to its receiver's largest.
+pub const MAX_ABS_ERROR: f32 = 1.0 / (1u64 << 39) as f32;
+
+/// The scale of a receiver whose largest coefficient (over links and channels) is `max`: the
+/// power of two that maps `max` into `[2^14, 2^15)`, or 1 where `max` is 0 (or not finite).
+pub fn receiver_scale(max: f32) -> f32 {
+    if !(max.is_finite() && max >= f32::MIN_POSITIVE) {
+        return 1.0;
+    }
+    // `max` is normal: its exponent field is floor(log2(max)) + 127.
+    let field = ((max.to_bits() >> 23) as i32 - 14).max(1);
+    f32::from_bits((field as u32) << 23)
+}
+
+/// A link's transport coefficient per channel (unitless, `F(E, x_R)` of Mertens eq. 6) as
+/// IEEE half floats relative to its receiver's scale (see the module documentation); the
+/// fourth lane is 0, so that eight aligned bytes load into one register.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C, align(8))]
 pub struct LinkCoef([u16; 4]);
 
 impl LinkCoef {
-    /// Packs `f`, rounding to nearest; negative and NaN values (numerical noise of a form
-    /// factor that is 0) become 0, values above [`MAX`] saturate.
+    /// Packs `f` relative to `scale` (a power of two, from [`receiver_scale`]), rounding to
+    /// nearest; negative and NaN values (numerical noise of a form factor that is 0) become 0,
+    /// values above the half float range saturate.
     #[inline]
-    pub fn pack(f: [f32; 3]) -> Self {
-        LinkCoef([pack_one(f[0]), pack_one(f[1]), pack_one(f[2]), 0])
+    pub fn pack(f: Vec3A, scale: f32) -> Self {
+        let y = f / scale;
+        LinkCoef([half_bits(y.x), half_bits(y.y), half_bits(y.z), 0])
     }
 
-    /// The coefficient per channel.
+    /// The coefficient per channel, given its receiver's scale.
     #[inline]
-    pub fn unpack(self) -> [f32; 3] {
-        std::array::from_fn(|c| f32::from_bits((self.0[c] as u32) << SHIFT) * SCALE)
-    }
-
-    /// The coefficient per channel as a SIMD vector (its fourth lane 0).
-    #[inline]
-    pub fn unpack_a(self) -> Vec3A {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::*;
-            let bits = u64::from_le_bytes(bytemuck::cast(self.0));
-            // Zero-extend the four lanes to 32 bits, move them into the exponent field and
-            // rescale.
-            // SAFETY: these are SSE2 register operations (no memory access), and SSE2 is part
-            // of the x86-64 baseline.
-            let f = unsafe {
-                let x = _mm_unpacklo_epi16(_mm_cvtsi64_si128(bits as i64), _mm_setzero_si128());
-                _mm_mul_ps(_mm_castsi128_ps(_mm_slli_epi32::<{ SHIFT as i32 }>(x)), _mm_set1_ps(SCALE))
-            };
-            Vec3A::from(f)
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            Vec3A::from_array(self.unpack())
-        }
+    pub fn unpack(self, scale: f32) -> Vec3A {
+        let h = |c: usize| f32::from_bits((self.0[c] as u32) << SHIFT) * HALF_RESCALE;
+        Vec3A::new(h(0), h(1), h(2)) * scale
     }
 }
 
+/// The half float nearest `y` (`y` ≥ 0, below the largest half float), as bits.
 #[inline]
-fn pack_one(x: f32) -> u16 {
-    if x.is_nan() || x < MIN_POSITIVE * 0.5 {
-        return 0;
+fn half_bits(y: f32) -> u16 {
+    if y.is_nan() || y <= 0.0 {
+        0
+    } else if y >= HALF_MAX {
+        0x7bff
+    } else if y < HALF_MIN_NORMAL {
+        // Subnormal: multiples of 2^-24 (2^10 of them is the smallest normal's encoding).
+        (y * (1u32 << 24) as f32).round() as u16
+    } else {
+        // Rebias the exponent and round the mantissa to 10 bits (ties away from zero).
+        ((y.to_bits() - (112 << 23) + (1 << (SHIFT - 1))) >> SHIFT) as u16
     }
-    if x >= MAX {
-        return u16::MAX;
+}
+
+/// Render mode's gather: for the receivers `r0 .. r0 + out.len()`, `out[i] = Σ_j E(e_j) F_j`
+/// over receiver `r0 + i`'s links (`recv_start[r]..recv_start[r + 1]` of `emitter` and
+/// `coef`, scaled by `scale[r]`), with `e_node` the clusters' irradiance.
+pub(crate) fn gather(
+    e_node: &[Vec3A],
+    recv_start: &[u32],
+    emitter: &[u32],
+    coef: &[LinkCoef],
+    scale: &[f32],
+    r0: usize,
+    out: &mut [Vec3A],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("f16c") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has both features (checked above).
+        unsafe { f16c::gather(e_node, recv_start, emitter, coef, scale, r0, out) };
+        return;
     }
-    // Values in [MIN/2, MIN) round up to MIN: their bits fall below the offset.
-    let bits = x.max(MIN_POSITIVE).to_bits() - EXP_OFFSET;
-    ((bits + (1 << (SHIFT - 1))) >> SHIFT).min(u16::MAX as u32) as u16
+    for (i, b) in out.iter_mut().enumerate() {
+        let links = recv_start[r0 + i] as usize..recv_start[r0 + i + 1] as usize;
+        *b = gather_one(e_node, &emitter[links.clone()], &coef[links]) * scale[r0 + i];
+    }
+}
+
+/// One receiver's `Σ E F`, before its scale: halves decoded by shifts, two running sums.
+#[inline]
+fn gather_one(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
+    let term = |e: u32, c: LinkCoef| e_node[(e & !FF_BIT) as usize] * decode(c);
+    let (mut s0, mut s1) = (Vec3A::ZERO, Vec3A::ZERO);
+    for (e, c) in emitter.chunks_exact(2).zip(coef.chunks_exact(2)) {
+        s0 += term(e[0], c[0]);
+        s1 += term(e[1], c[1]);
+    }
+    if emitter.len() % 2 == 1 {
+        s0 += term(emitter[emitter.len() - 1], coef[coef.len() - 1]);
+    }
+    s0 + s1
+}
+
+/// The three half floats of `c` as one SIMD vector (fourth lane 0), exactly.
+#[inline]
+fn decode(c: LinkCoef) -> Vec3A {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let bits = u64::from_le_bytes(bytemuck::cast(c.0));
+        // SAFETY: SSE2 register operations (no memory access); SSE2 is in the x86-64 baseline.
+        let f = unsafe {
+            let x = _mm_unpacklo_epi16(_mm_cvtsi64_si128(bits as i64), _mm_setzero_si128());
+            let f = _mm_castsi128_ps(_mm_slli_epi32::<{ SHIFT as i32 }>(x));
+            _mm_mul_ps(f, _mm_set1_ps(HALF_RESCALE))
+        };
+        Vec3A::from(f)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        c.unpack(1.0)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod f16c {
+    use super::{FF_BIT, LinkCoef};
+    use glam::Vec3A;
+    use std::arch::x86_64::*;
+
+    /// [`super::gather`] with hardware half-float conversion and fused multiply-adds.
+    ///
+    /// # Safety
+    /// The CPU must support `f16c` and `fma`.
+    #[target_feature(enable = "f16c,fma")]
+    pub(super) unsafe fn gather(
+        e_node: &[Vec3A],
+        recv_start: &[u32],
+        emitter: &[u32],
+        coef: &[LinkCoef],
+        scale: &[f32],
+        r0: usize,
+        out: &mut [Vec3A],
+    ) {
+        for (i, b) in out.iter_mut().enumerate() {
+            let links = recv_start[r0 + i] as usize..recv_start[r0 + i + 1] as usize;
+            *b = gather_one(e_node, &emitter[links.clone()], &coef[links]) * scale[r0 + i];
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "f16c,fma")]
+    fn gather_one(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
+        let term = |e: u32, c: LinkCoef, s: __m128| {
+            let bits = u64::from_le_bytes(bytemuck::cast(c.0));
+            let f = _mm_cvtph_ps(_mm_cvtsi64_si128(bits as i64));
+            _mm_fmadd_ps(e_node[(e & !FF_BIT) as usize].into(), f, s)
+        };
+        let (mut s0, mut s1) = (_mm_setzero_ps(), _mm_setzero_ps());
+        for (e, c) in emitter.chunks_exact(2).zip(coef.chunks_exact(2)) {
+            s0 = term(e[0], c[0], s0);
+            s1 = term(e[1], c[1], s1);
+        }
+        if emitter.len() % 2 == 1 {
+            s0 = term(emitter[emitter.len() - 1], coef[coef.len() - 1], s0);
+        }
+        Vec3A::from(_mm_add_ps(s0, s1))
+    }
 }
 
 #[cfg(test)]
@@ -98,35 +212,92 @@ mod tests {
     use super::*;
 
     #[test]
-    fn round_trip_is_within_the_stated_relative_error() {
-        let mut x = MIN_POSITIVE;
-        while x < MAX {
-            for t in [1.0f32, 1.000_1, 1.3, 1.499_9, 1.5, 1.77, 1.999_9] {
-                let v = (x * t).min(MAX);
-                let p = LinkCoef::pack([v, 0.5 * v, 0.25 * v]);
-                assert_eq!(Vec3A::from_array(p.unpack()), p.unpack_a());
-                let got = p.unpack()[0];
-                assert!(((got - v) / v).abs() <= MAX_REL_ERROR, "{v:e} -> {got:e}");
+    fn round_trip_is_within_the_stated_error() {
+        for max in [1e-20f32, 3e-7, 0.37, 1.0, 5000.0, 3e7] {
+            let scale = receiver_scale(max);
+            let top = max / scale;
+            assert!((16384.0..32768.0).contains(&top), "{max:e}: {top}");
+            let mut x = max;
+            while x > max * 1e-14 {
+                for t in [1.0f32, 0.999_9, 0.77, 0.500_1, 0.5] {
+                    let v = x * t;
+                    let p = LinkCoef::pack(Vec3A::new(v, 0.5 * v, 0.25 * v), scale);
+                    let got = p.unpack(scale);
+                    assert_eq!(decode(p) * scale, got);
+                    let err = (got.x - v).abs();
+                    let bound =
+                        if v >= max / (1u32 << 28) as f32 { MAX_REL_ERROR * v } else { MAX_ABS_ERROR * max };
+                    assert!(err <= bound, "max {max:e}: {v:e} -> {:e}", got.x);
+                }
+                x *= 0.5;
             }
-            x *= 2.0;
         }
     }
 
     #[test]
     fn edge_values() {
-        assert_eq!(LinkCoef::pack([0.0, -1.0, f32::NAN]).unpack(), [0.0; 3]);
-        assert_eq!(LinkCoef::pack([MIN_POSITIVE * 0.4, 0.0, 0.0]).unpack()[0], 0.0);
-        assert_eq!(LinkCoef::pack([MIN_POSITIVE * 0.6, 0.0, 0.0]).unpack()[0], MIN_POSITIVE);
+        assert_eq!(LinkCoef::pack(Vec3A::new(0.0, -1.0, f32::NAN), 1.0).unpack(1.0), Vec3A::ZERO);
+        assert_eq!(receiver_scale(0.0), 1.0);
+        assert_eq!(receiver_scale(f32::INFINITY), 1.0);
+        // Saturates at the largest half float.
         assert_eq!(
-            LinkCoef::pack([MAX, 1e9, f32::INFINITY]).unpack(),
-            [LinkCoef::pack([MAX; 3]).unpack()[0]; 3]
+            LinkCoef::pack(Vec3A::new(1e9, f32::INFINITY, 65504.0), 1.0).unpack(1.0),
+            Vec3A::splat(65504.0)
         );
-        // Exactly representable values survive unchanged, so re-packing is lossless.
-        for v in [1.0f32, 0.5, 0.75, MIN_POSITIVE, 3.0 / 1024.0] {
-            let p = LinkCoef::pack([v; 3]);
-            assert_eq!(p.unpack(), [v; 3]);
-            assert_eq!(p.unpack_a(), Vec3A::splat(v));
-            assert_eq!(LinkCoef::pack(p.unpack()), p);
+        // Exactly representable values survive unchanged, so re-packing is lossless, also
+        // under another receiver's scale while they stay normal.
+        for v in [1.0f32, 0.5, 0.75, 3.0 / 1024.0, 1.0 / (1u32 << 24) as f32] {
+            let p = LinkCoef::pack(Vec3A::splat(v), 1.0);
+            assert_eq!(p.unpack(1.0), Vec3A::splat(v));
+            assert_eq!(decode(p), Vec3A::splat(v));
+            assert_eq!(LinkCoef::pack(p.unpack(1.0), 1.0), p);
+        }
+        let p = LinkCoef::pack(Vec3A::splat(0.75), 2.0);
+        assert_eq!(LinkCoef::pack(p.unpack(2.0), 0.25).unpack(0.25), Vec3A::splat(0.75));
+    }
+
+    /// Both gather kernels (where this CPU has the hardware one) against an `f64` sum.
+    #[test]
+    fn gather_matches_a_double_precision_sum() {
+        let e_node: Vec<Vec3A> =
+            (0..50).map(|i| Vec3A::new(1.0 + i as f32, 0.5, 2.0 / (1.0 + i as f32))).collect();
+        let mut recv_start = vec![0u32];
+        let (mut emitter, mut coef, mut scale, mut want) = (vec![], vec![], vec![], vec![]);
+        for r in 0..20usize {
+            let f: Vec<Vec3A> = (0..r).map(|j| Vec3A::new(0.3, 1e-3, 7.0) / (1.0 + (j * j) as f32)).collect();
+            let s = receiver_scale(f.iter().map(|v| v.max_element()).fold(0.0, f32::max));
+            let mut sum = [0f64; 3];
+            for (j, v) in f.iter().enumerate() {
+                let e = (7 * j + r) % e_node.len();
+                let c = LinkCoef::pack(*v, s);
+                let u = c.unpack(s);
+                for k in 0..3 {
+                    sum[k] += e_node[e][k] as f64 * u[k] as f64;
+                }
+                emitter.push(e as u32 | if j % 3 == 0 { FF_BIT } else { 0 });
+                coef.push(c);
+            }
+            recv_start.push(emitter.len() as u32);
+            scale.push(s);
+            want.push(sum);
+        }
+        let mut out = vec![Vec3A::ZERO; 20];
+        gather(&e_node, &recv_start, &emitter, &coef, &scale, 0, &mut out);
+        let mut out_sse2 = vec![Vec3A::ZERO; 20];
+        for (r, b) in out_sse2.iter_mut().enumerate() {
+            let l = recv_start[r] as usize..recv_start[r + 1] as usize;
+            *b = gather_one(&e_node, &emitter[l.clone()], &coef[l]) * scale[r];
+        }
+        for r in 0..20 {
+            for k in 0..3 {
+                for got in [out[r][k], out_sse2[r][k]] {
+                    assert!(
+                        (got as f64 - want[r][k]).abs() <= 1e-6 * want[r][k],
+                        "receiver {r}: {got} vs {}",
+                        want[r][k]
+                    );
+                }
+            }
         }
     }
 }

@@ -3,8 +3,8 @@
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
 //!   §5.5) in on-the-fly, render and incremental modes.
-//! * [`link_coef`]: stored link coefficients, 16 bits per channel (render mode's memory
-//!   traffic).
+//! * [`link_coef`]: stored link coefficients, 16 bits per channel, and render mode's gather
+//!   over them.
 //! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
