@@ -300,13 +300,14 @@ impl<'a> Ctx<'a> {
         &mut self,
         oracle: &Oracle,
         r: usize,
-        cands: &[u32],
-        defer: &mut Vec<u32>,
+        cands: impl IntoIterator<Item = (u32, Option<[f32; 3]>)>,
+        defer: &mut Deferred,
         sink: &mut impl LinkSink,
     ) {
         let h = self.ev.h;
         let view = ReceiverView::new(h, &self.ev.d32, self.inv_rtot, r);
-        self.start(cands);
+        self.stack.clear();
+        self.stack.extend(cands);
         let mut samples = Samples::default();
         while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
@@ -316,16 +317,13 @@ impl<'a> Ctx<'a> {
             samples.f_mid = f_mid;
             match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
                 Decision::Link(kind) => sink.link(self, &view.src, r, e, kind, &samples),
-                Decision::SplitReceiver => defer.push(e as u32),
+                Decision::SplitReceiver => {
+                    defer.emitters.push(e as u32);
+                    defer.at_children.push(samples.at_children);
+                }
                 Decision::SplitEmitter => self.open_emitter(e, &samples),
             }
         }
-    }
-
-    /// Starts a receiver's traversal with candidates `cands`.
-    fn start(&mut self, cands: &[u32]) {
-        self.stack.clear();
-        self.stack.extend(cands.iter().map(|&e| (e, None)));
     }
 
     /// Replaces emitter `e` on the stack by its children, with their estimates if `decide`
@@ -336,6 +334,38 @@ impl<'a> Ctx<'a> {
             Some(f) => self.stack.extend(kids.iter().zip(f).map(|(&k, f)| (k, Some(f)))),
             None => self.stack.extend(kids.iter().map(|&k| (k, None))),
         }
+    }
+}
+
+/// The candidates a receiver defers to its children, each with the one-point estimates at
+/// the children's midpoints when the receiver test made them (the children's oracle would
+/// make the same ones).
+#[derive(Debug, Default)]
+struct Deferred {
+    emitters: Vec<u32>,
+    at_children: Vec<Option<[[f32; 3]; 4]>>,
+}
+
+/// The candidates of a receiver: child `child`'s share of its parent's [`Deferred`].
+#[derive(Clone, Copy)]
+struct Cands<'a> {
+    emitters: &'a [u32],
+    at_children: &'a [Option<[[f32; 3]; 4]>],
+    child: usize,
+}
+
+impl<'a> Cands<'a> {
+    /// The root's: its self-link.
+    const ROOT: Cands<'static> = Cands { emitters: &[0], at_children: &[None], child: 0 };
+
+    fn of_child(d: &'a Deferred, child: usize) -> Self {
+        Cands { emitters: &d.emitters, at_children: &d.at_children, child }
+    }
+
+    /// Each candidate with its estimate at this receiver's midpoint, if known.
+    fn iter(self) -> impl Iterator<Item = (u32, Option<[f32; 3]>)> + 'a {
+        let k = self.child;
+        self.emitters.iter().zip(self.at_children).map(move |(&e, f)| (e, f.map(|f| f[k])))
     }
 }
 
@@ -648,7 +678,7 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         let mut leaf_b = vec![Rgb::ZERO; h.leaf_count()];
         let mut ctx = Ctx::new(self);
-        self.otf_rec(&mut ctx, 0, &[0], Vec3A::ZERO, &e_node, &mut leaf_b);
+        self.otf_rec(&mut ctx, 0, Cands::ROOT, Vec3A::ZERO, &e_node, &mut leaf_b);
         let t2 = Instant::now();
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
         for (pos, &f) in h.leaf_faces.iter().enumerate() {
@@ -668,17 +698,17 @@ impl HierarchicalSolver {
         &self,
         ctx: &mut Ctx,
         r: usize,
-        cands: &[u32],
+        cands: Cands,
         b_acc: Vec3A,
         e_node: &[Vec3A],
         out: &mut [Rgb],
     ) {
-        let mut defer = Vec::new();
+        let mut defer = Deferred::default();
         let mut b = b_acc;
         ctx.receive(
             &self.oracle,
             r,
-            cands,
+            cands.iter(),
             &mut defer,
             &mut Evaluate(|e, _, f| {
                 b += e_node[e] * Vec3A::from_array(f);
@@ -693,16 +723,17 @@ impl HierarchicalSolver {
         if n.leaf_count() > PAR_LEAVES {
             let subs: Vec<Ctx> = parts
                 .into_par_iter()
-                .map(|(c, o)| {
+                .enumerate()
+                .map(|(k, (c, o))| {
                     let mut sub = Ctx::new(self);
-                    self.otf_rec(&mut sub, c, &defer, b, e_node, o);
+                    self.otf_rec(&mut sub, c, Cands::of_child(&defer, k), b, e_node, o);
                     sub
                 })
                 .collect();
             subs.iter().for_each(|s| ctx.absorb(s));
         } else {
-            for (c, o) in parts {
-                self.otf_rec(ctx, c, &defer, b, e_node, o);
+            for (k, (c, o)) in parts.into_iter().enumerate() {
+                self.otf_rec(ctx, c, Cands::of_child(&defer, k), b, e_node, o);
             }
         }
     }
@@ -735,7 +766,7 @@ impl HierarchicalSolver {
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
             let mut chunks = vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, 0)];
-            self.link_rec(&mut ctx, 0, &[0], &[], &mut chunks, reuse);
+            self.link_rec(&mut ctx, 0, Cands::ROOT, &[], &mut chunks, reuse);
             ctx.fill(&mut stats);
             for c in &chunks {
                 for q in &c.receivers {
@@ -779,7 +810,7 @@ impl HierarchicalSolver {
         &self,
         ctx: &mut Ctx,
         r: usize,
-        cands: &[u32],
+        cands: Cands,
         kept: &[(u32, u32)],
         chunks: &mut Vec<LinkChunk>,
         reuse: Option<&Reuse>,
@@ -806,11 +837,11 @@ impl HierarchicalSolver {
                         last = Some(i);
                     }
                 }
-                for &e in cands {
+                for (e, f) in cands.iter() {
                     if !u.changed[e as usize] && old_cands.binary_search(&e).is_ok() {
                         kept_here.push(range(e));
                     } else {
-                        fresh.push(e);
+                        fresh.push((e, f));
                     }
                 }
                 kept_here.sort_unstable();
@@ -835,7 +866,7 @@ impl HierarchicalSolver {
                 // This receiver's candidates: the ones handed down now, plus those that the
                 // kept ranges of ancestors handed down before (and would again).
                 let start = chunk.cands.len();
-                chunk.cands.extend_from_slice(cands);
+                chunk.cands.extend_from_slice(cands.emitters);
                 chunk.cands.extend(old_cands.iter().filter(|&&c| find_range(kept, c).is_some()));
                 chunk.cands[start..].sort_unstable();
                 chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
@@ -849,23 +880,23 @@ impl HierarchicalSolver {
                 // Something below moved (or is stale): every candidate is decided again (an
                 // ancestor cannot have kept a range, as it would be unmoved and clean too).
                 debug_assert!(kept.is_empty());
-                fresh.extend_from_slice(cands);
+                fresh.extend(cands.iter());
                 let start = chunk.cands.len();
-                chunk.cands.extend_from_slice(cands);
+                chunk.cands.extend_from_slice(cands.emitters);
                 chunk.cands[start..].sort_unstable();
-                chunk.cand_count.push((r as u32, cands.len() as u32));
+                chunk.cand_count.push((r as u32, cands.emitters.len() as u32));
             }
         }
-        let mut defer = Vec::new();
+        let mut defer = Deferred::default();
         match reuse {
             None => ctx.receive(
                 &self.oracle,
                 r,
-                &fresh,
+                fresh,
                 &mut defer,
                 &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, Vec3A::from_array(f), false)),
             ),
-            Some(reuse) => ctx.receive(&self.oracle, r, &fresh, &mut defer, &mut Reusing { reuse, chunk }),
+            Some(reuse) => ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk }),
         }
         chunk.close_receiver();
         if n.is_leaf() {
@@ -875,11 +906,13 @@ impl HierarchicalSolver {
             let subs: Vec<(Ctx, Vec<LinkChunk>)> = n
                 .children()
                 .par_iter()
-                .map(|&c| {
+                .enumerate()
+                .map(|(k, &c)| {
                     let mut sub = Ctx::new(self);
                     let mut sub_chunks =
                         vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, c as usize)];
-                    self.link_rec(&mut sub, c as usize, &defer, &kept_here, &mut sub_chunks, reuse);
+                    let cands = Cands::of_child(&defer, k);
+                    self.link_rec(&mut sub, c as usize, cands, &kept_here, &mut sub_chunks, reuse);
                     (sub, sub_chunks)
                 })
                 .collect();
@@ -889,8 +922,8 @@ impl HierarchicalSolver {
             }
             chunks.push(self.chunk_pool.take(ChunkPool::after(r)));
         } else {
-            for &c in n.children() {
-                self.link_rec(ctx, c as usize, &defer, &kept_here, chunks, reuse);
+            for (k, &c) in n.children().iter().enumerate() {
+                self.link_rec(ctx, c as usize, Cands::of_child(&defer, k), &kept_here, chunks, reuse);
             }
         }
     }

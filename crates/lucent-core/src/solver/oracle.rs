@@ -129,9 +129,11 @@ pub enum Decision {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Samples {
     /// In: the estimate `A_E R_d` from the emitter to the receiver's midpoint, if known (left
-    /// by the decision that opened the emitter's parent). Consumed.
+    /// by the decision that opened the emitter's parent, or by the receiver test at the
+    /// receiver's parent). Consumed.
     pub f_mid: Option<[f32; 3]>,
-    /// Out, with a point-sample link: a better estimate of its coefficient than `f_mid`.
+    /// Out, with a point-sample link: its coefficient's estimate (`f_mid` for a face, a
+    /// better one for a cluster).
     pub estimate: Option<[f32; 3]>,
     /// Out, with a point-sample link at an inner receiver: the factor from the estimate at the
     /// receiver's midpoint to its average over the receiver.
@@ -139,6 +141,9 @@ pub(crate) struct Samples {
     /// Out, with [`Decision::SplitEmitter`]: the estimates from the emitter's children (in
     /// order), when the emitter test made them.
     pub children: Option<[[f32; 3]; 4]>,
+    /// Out, with [`Decision::SplitReceiver`]: the estimates from the emitter to the receiver's
+    /// children's midpoints (in order), when the receiver test made them.
+    pub at_children: Option<[[f32; 3]; 4]>,
 }
 
 /// Solid angle `A_E / d²` of cluster `e` seen from `x`, or infinity inside its bounding sphere.
@@ -203,10 +208,11 @@ impl Oracle {
         samples: &mut Samples,
     ) -> Decision {
         let known_f_mid = samples.f_mid.take();
-        let Samples { estimate, recv_scale, children, .. } = samples;
+        let Samples { estimate, recv_scale, children, at_children, .. } = samples;
         *estimate = None;
         *recv_scale = None;
         *children = None;
+        *at_children = None;
         let rn = &h.nodes[r];
         let en = &h.nodes[e];
         let rg = &h.geom[r];
@@ -243,6 +249,8 @@ impl Oracle {
                             // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
                             // face of circumradius r at distance d (a stand-in for Jensen &
                             // Buhler's sample count that, unlike a solid angle, sees σ_tr).
+                            // The link's coefficient is this very estimate.
+                            *estimate = Some(f);
                             let dist = view.src.nearest(eg.midpoint);
                             let err: [f32; 3] = std::array::from_fn(|c| {
                                 let k = d.sigma_tr[c] + 3.0 / dist[c];
@@ -326,6 +334,7 @@ impl Oracle {
                         let mut avg = [0.0f32; 3];
                         let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
                         let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
+                        *at_children = Some(f_children);
                         for (k, &c) in rn.children().iter().enumerate() {
                             let cg = &h.geom[c as usize];
                             if solid_angle(cg.midpoint, eg) == INSIDE {
@@ -360,6 +369,7 @@ impl Oracle {
             }
             if split {
                 if !en.is_leaf() && eg.area > rg.area && !far_test(estimate, children, f_mid) {
+                    *at_children = None;
                     return Decision::SplitEmitter;
                 }
                 *estimate = None;

@@ -222,8 +222,12 @@ mod tests {
                 );
             }
         }
+        // The oracle hands estimates from one form on as the other's: they must agree exactly.
         let from = point_samples_from(&[src; 4], &d, p[0], area[0]);
         assert_eq!(from[2], got[0]);
+        for j in 0..4 {
+            assert_eq!(src.point_sample(&d, p[j], area[j]), got[j]);
+        }
     }
 
     #[test]
