@@ -20,7 +20,7 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
-use super::link_coef::{self, FF_BIT, LinkCoef};
+use super::link_coef::{self, FF_BIT, LinkCoef, StoredLinks};
 use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
 use crate::Rgb;
@@ -946,9 +946,14 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         let links = self.links.as_ref().expect("links stored");
         const CHUNK: usize = 1024;
-        let (start, scale) = (&links.recv_start, &links.recv_scale);
+        let stored = StoredLinks {
+            recv_start: &links.recv_start,
+            emitter: &links.emitter,
+            coef: &links.coef,
+            scale: &links.recv_scale,
+        };
         b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
-            link_coef::gather(&e_node, start, &links.emitter, &links.coef, scale, ci * CHUNK, b);
+            link_coef::gather(&e_node, stored, ci * CHUNK, b);
         });
         let t2 = Instant::now();
         let face_b = self.push(&mut b_node);

@@ -101,27 +101,35 @@ fn half_bits(y: f32) -> u16 {
     }
 }
 
+/// The stored links as render mode reads them (the arrays of a `LinkSet`): receiver `r`'s
+/// links are `recv_start[r]..recv_start[r + 1]` of `emitter` and `coef`, under `scale[r]`.
+#[derive(Clone, Copy)]
+pub(crate) struct StoredLinks<'a> {
+    pub recv_start: &'a [u32],
+    pub emitter: &'a [u32],
+    pub coef: &'a [LinkCoef],
+    pub scale: &'a [f32],
+}
+
 /// Render mode's gather: for the receivers `r0 .. r0 + out.len()`, `out[i] = Σ_j E(e_j) F_j`
-/// over receiver `r0 + i`'s links (`recv_start[r]..recv_start[r + 1]` of `emitter` and
-/// `coef`, scaled by `scale[r]`), with `e_node` the clusters' irradiance.
-pub(crate) fn gather(
-    e_node: &[Vec3A],
-    recv_start: &[u32],
-    emitter: &[u32],
-    coef: &[LinkCoef],
-    scale: &[f32],
-    r0: usize,
-    out: &mut [Vec3A],
-) {
+/// over receiver `r0 + i`'s links, with `e_node` the clusters' irradiance.
+pub(crate) fn gather(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("f16c") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has both features (checked above).
-        unsafe { f16c::gather(e_node, recv_start, emitter, coef, scale, r0, out) };
+        unsafe { f16c::gather(e_node, links, r0, out) };
         return;
     }
+    each_receiver(links, r0, out, |e, c| gather_one(e_node, e, c));
+}
+
+/// `out[i]` = `sum` over receiver `r0 + i`'s emitters and coefficients, times its scale.
+#[inline(always)]
+fn each_receiver(l: StoredLinks, r0: usize, out: &mut [Vec3A], sum: impl Fn(&[u32], &[LinkCoef]) -> Vec3A) {
     for (i, b) in out.iter_mut().enumerate() {
-        let links = recv_start[r0 + i] as usize..recv_start[r0 + i + 1] as usize;
-        *b = gather_one(e_node, &emitter[links.clone()], &coef[links]) * scale[r0 + i];
+        let r = r0 + i;
+        let j = l.recv_start[r] as usize..l.recv_start[r + 1] as usize;
+        *b = sum(&l.emitter[j.clone()], &l.coef[j]) * l.scale[r];
     }
 }
 
@@ -163,7 +171,7 @@ fn decode(c: LinkCoef) -> Vec3A {
 
 #[cfg(target_arch = "x86_64")]
 mod f16c {
-    use super::{FF_BIT, LinkCoef};
+    use super::{FF_BIT, LinkCoef, StoredLinks};
     use glam::Vec3A;
     use std::arch::x86_64::*;
 
@@ -172,19 +180,8 @@ mod f16c {
     /// # Safety
     /// The CPU must support `f16c` and `fma`.
     #[target_feature(enable = "f16c,fma")]
-    pub(super) unsafe fn gather(
-        e_node: &[Vec3A],
-        recv_start: &[u32],
-        emitter: &[u32],
-        coef: &[LinkCoef],
-        scale: &[f32],
-        r0: usize,
-        out: &mut [Vec3A],
-    ) {
-        for (i, b) in out.iter_mut().enumerate() {
-            let links = recv_start[r0 + i] as usize..recv_start[r0 + i + 1] as usize;
-            *b = gather_one(e_node, &emitter[links.clone()], &coef[links]) * scale[r0 + i];
-        }
+    pub(super) unsafe fn gather(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
+        super::each_receiver(links, r0, out, |e, c| gather_one(e_node, e, c));
     }
 
     #[inline]
@@ -282,7 +279,8 @@ mod tests {
             want.push(sum);
         }
         let mut out = vec![Vec3A::ZERO; 20];
-        gather(&e_node, &recv_start, &emitter, &coef, &scale, 0, &mut out);
+        let links = StoredLinks { recv_start: &recv_start, emitter: &emitter, coef: &coef, scale: &scale };
+        gather(&e_node, links, 0, &mut out);
         let mut out_sse2 = vec![Vec3A::ZERO; 20];
         for (r, b) in out_sse2.iter_mut().enumerate() {
             let l = recv_start[r] as usize..recv_start[r + 1] as usize;
