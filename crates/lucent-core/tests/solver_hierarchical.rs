@@ -116,8 +116,8 @@ fn links_partition_every_receiver_emitter_pair() {
         let mut cover = vec![0u32; n];
         let mut r = leaf as u32;
         while r != u32::MAX {
-            for j in l.recv_start[r as usize] as usize..l.recv_start[r as usize + 1] as usize {
-                let e = &h.nodes[l.emitter_of(j)];
+            for link in l.links_of(r as usize) {
+                let e = &h.nodes[link.emitter];
                 (e.leaf_start..e.leaf_end).for_each(|p| cover[p as usize] += 1);
             }
             r = h.nodes[r as usize].parent;
@@ -207,7 +207,7 @@ fn incremental_matches_on_the_fly_after_deformation() {
     for _ in 0..total / 2000 + 1 {
         inc.update_incremental(&deformed, Some(2000));
     }
-    assert!(inc.links().unwrap().dirty.iter().all(|&x| !x));
+    assert!(!inc.links().unwrap().has_dirty());
     let got = inc.solve_render(&e).face_b;
     let err = rel_rmse(&moved.face_to_vertex(&want), &moved.face_to_vertex(&got));
     assert!(err <= 0.01, "budgeted incremental vs on-the-fly: {:.4}%", 100.0 * err);
@@ -319,7 +319,7 @@ fn bunny_local_incremental_update_equals_fresh_links() {
             inc.link();
             let first = inc.update_incremental(&bumped.positions, budget);
             let mut frames = 1;
-            while inc.links().unwrap().dirty.iter().any(|&x| x) {
+            while inc.links().unwrap().has_dirty() {
                 inc.update_incremental(&bumped.positions, budget);
                 frames += 1;
                 assert!(frames < 1000, "budgeted updates do not converge");

@@ -5,8 +5,8 @@
 //!   root's self-link and gather while traversing; nothing is stored. Parallel over receiver
 //!   subtrees.
 //! * **render** ([`HierarchicalSolver::link`] once, then
-//!   [`HierarchicalSolver::solve_render`] per frame): the links are stored flat, sorted by
-//!   receiver (CSR: `recv_start`, `emitter`, `coef`), and a frame is only *pull* (area-weighted
+//!   [`HierarchicalSolver::solve_render`] per frame): the links are stored flat, a run per
+//!   receiver ([`LinkSet`]), and a frame is only *pull* (area-weighted
 //!   irradiance up the tree), *gather* (`Σ E_e F_re` per receiver) and *push* (a receiver's `B`
 //!   added to all its leaves).
 //! * **incremental** ([`HierarchicalSolver::update_incremental`]): after a geometry or material
@@ -20,7 +20,8 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
-use super::link_coef::{self, FF_BIT, LinkCoef, StoredLinks};
+use super::link_coef;
+use super::link_set::{ChunkPool, LinkChunk, LinkSet};
 use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
 use crate::Rgb;
@@ -32,103 +33,6 @@ use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Instant;
-
-/// Stored links, sorted by receiver (CSR over clusters in preorder).
-#[derive(Clone, Debug, Default)]
-pub struct LinkSet {
-    /// `recv_start[r]..recv_start[r + 1]` are receiver `r`'s links (length: clusters + 1).
-    pub recv_start: Vec<u32>,
-    /// Emitter cluster of each link; the top bit marks a form factor link
-    /// (see [`LinkSet::emitter_of`]).
-    pub emitter: Vec<u32>,
-    /// Transport coefficient `F(E, x_R)` of each link, per channel (unitless), packed to 16
-    /// bits per channel relative to its receiver's `recv_scale` (relative error at most
-    /// 4.9e-4, see [`LinkCoef`]): link `j` of receiver `r` is `coef[j].unpack(recv_scale[r])`.
-    pub coef: Vec<LinkCoef>,
-    /// Each receiver's coefficient scale, a power of two (length: clusters; see
-    /// [`link_coef::receiver_scale`]).
-    pub recv_scale: Vec<f32>,
-    /// Links whose coefficient is stale (left over when an incremental update ran out of
-    /// budget); recomputed first by the next update.
-    pub dirty: Vec<bool>,
-    /// `cand_start[r]..cand_start[r + 1]` index `cands`: the candidate emitters handed to
-    /// receiver `r` by its ancestors (disjoint clusters). An incremental update keeps the
-    /// links that came from a candidate that is still handed down and did not move.
-    cand_start: Vec<u32>,
-    cands: Vec<u32>,
-}
-
-impl LinkSet {
-    /// Number of links.
-    pub fn len(&self) -> usize {
-        self.emitter.len()
-    }
-
-    /// Whether there are no links.
-    pub fn is_empty(&self) -> bool {
-        self.emitter.is_empty()
-    }
-
-    /// Transport coefficient of link `j`, whose receiver is `r`.
-    #[inline]
-    pub fn coef_of(&self, r: usize, j: usize) -> Vec3A {
-        self.coef[j].unpack(self.recv_scale[r])
-    }
-
-    /// Emitter cluster of link `j`.
-    #[inline]
-    pub fn emitter_of(&self, j: usize) -> usize {
-        (self.emitter[j] & !FF_BIT) as usize
-    }
-
-    /// Copies the chunks' pieces (their own links and candidates, or ranges of the previous
-    /// set `old`), in order, into the flat arrays, in parallel, each piece into its own slice.
-    fn gather_chunks(&mut self, chunks: &[LinkChunk], old: Option<&LinkSet>) {
-        let pieces = || chunks.iter().flat_map(|c| c.pieces.iter().map(move |p| (c, p)));
-        let links: usize = pieces().map(|(_, p)| p.links.len()).sum();
-        let cands: usize = pieces().map(|(_, p)| p.cands.len()).sum();
-        self.emitter.resize(links, 0);
-        self.coef.resize(links, LinkCoef::default());
-        self.dirty.resize(links, false);
-        self.cands.resize(cands, 0);
-        let (mut e, mut f, mut d, mut k) =
-            (&mut self.emitter[..], &mut self.coef[..], &mut self.dirty[..], &mut self.cands[..]);
-        let mut parts = Vec::new();
-        for (c, p) in pieces() {
-            let (n, m) = (p.links.len(), p.cands.len());
-            let (e0, e1) = std::mem::take(&mut e).split_at_mut(n);
-            let (f0, f1) = std::mem::take(&mut f).split_at_mut(n);
-            let (d0, d1) = std::mem::take(&mut d).split_at_mut(n);
-            let (k0, k1) = std::mem::take(&mut k).split_at_mut(m);
-            parts.push((c, p, e0, f0, d0, k0));
-            (e, f, d, k) = (e1, f1, d1, k1);
-        }
-        parts.into_par_iter().for_each(|(c, p, e, f, d, k)| {
-            let (src_e, src_f, src_d, src_k) = if p.old {
-                let o = old.expect("old pieces come from an incremental relink");
-                (&o.emitter, &o.coef, &o.dirty, &o.cands)
-            } else {
-                (&c.emitter, &c.coef, &c.dirty, &c.cands)
-            };
-            e.copy_from_slice(&src_e[p.links.clone()]);
-            f.copy_from_slice(&src_f[p.links.clone()]);
-            d.copy_from_slice(&src_d[p.links.clone()]);
-            k.copy_from_slice(&src_k[p.cands.clone()]);
-        });
-    }
-
-    /// The candidate emitters receiver `r` was handed.
-    #[inline]
-    fn cands_of(&self, r: usize) -> &[u32] {
-        &self.cands[self.cand_start[r] as usize..self.cand_start[r + 1] as usize]
-    }
-
-    /// Evaluation kind of link `j`.
-    #[inline]
-    pub fn kind_of(&self, j: usize) -> LinkKind {
-        if self.emitter[j] & FF_BIT != 0 { LinkKind::FormFactor } else { LinkKind::PointSample }
-    }
-}
 
 /// Counters and timings of one solve or update. Times in milliseconds (wall clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -189,44 +93,6 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     frame: [Vec<Vec3A>; 2],
-}
-
-/// Emptied [`LinkChunk`]s for reuse, by the key of the part of the traversal that filled
-/// them (so that each gets back a buffer of about its size); a clone starts empty.
-#[derive(Debug, Default)]
-struct ChunkPool(std::sync::Mutex<std::collections::HashMap<u32, LinkChunk>>);
-
-impl Clone for ChunkPool {
-    fn clone(&self) -> Self {
-        ChunkPool::default()
-    }
-}
-
-impl ChunkPool {
-    /// Key of the chunk that holds the subtree of cluster `r`.
-    fn subtree(r: usize) -> u32 {
-        r as u32
-    }
-
-    /// Key of the chunk that continues after the parallel subtrees below cluster `r`.
-    fn after(r: usize) -> u32 {
-        r as u32 | 1 << 31
-    }
-
-    fn take(&self, key: u32) -> LinkChunk {
-        let mut c = self.0.lock().ok().and_then(|mut m| m.remove(&key)).unwrap_or_default();
-        c.key = key;
-        c
-    }
-
-    fn put(&self, chunks: Vec<LinkChunk>) {
-        if let Ok(mut m) = self.0.lock() {
-            for mut c in chunks {
-                c.clear();
-                m.insert(c.key, c);
-            }
-        }
-    }
 }
 
 /// Per-task state of a traversal.
@@ -458,145 +324,12 @@ impl LinkSink for Reusing<'_, '_> {
     }
 }
 
-/// Links found in one subtree, in receiver preorder.
-#[derive(Debug, Default)]
-struct LinkChunk {
-    /// Its key in the [`ChunkPool`].
-    key: u32,
-    /// The receivers with links, in preorder.
-    receivers: Vec<ReceiverLinks>,
-    emitter: Vec<u32>,
-    coef: Vec<LinkCoef>,
-    /// The coefficients of the receiver being linked, packed by
-    /// [`LinkChunk::close_receiver`] once its scale is known.
-    staged: Vec<Vec3A>,
-    dirty: Vec<bool>,
-    /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
-    /// candidates.
-    cand_count: Vec<(u32, u32)>,
-    cands: Vec<u32>,
-    /// The chunk's links and candidates in order: runs of its own arrays, and ranges of the
-    /// previous link set taken over wholesale (copied once, straight into the new set).
-    pieces: Vec<Piece>,
-    /// Own links and candidates up to here are in `pieces`.
-    own_closed: (usize, usize),
-}
-
-/// A receiver's links in a [`LinkChunk`].
-#[derive(Clone, Copy, Debug)]
-struct ReceiverLinks {
-    r: u32,
-    links: u32,
-    /// The receiver's coefficient scale ([`LinkSet::recv_scale`]).
-    scale: f32,
-}
-
-/// A run of links and candidates of a [`LinkChunk`].
-#[derive(Clone, Debug)]
-struct Piece {
-    /// Whether the ranges index the previous link set (else the chunk's own arrays).
-    old: bool,
-    links: std::ops::Range<usize>,
-    cands: std::ops::Range<usize>,
-}
-
 /// The index of the range of `ranges` (sorted, disjoint preorder ranges `start..end`; a
 /// cluster's subtree is `e..subtree_end`) that holds cluster `e`, if any.
 #[inline]
 fn find_range(ranges: &[(u32, u32)], e: u32) -> Option<usize> {
     let i = ranges.partition_point(|&(a, _)| a <= e);
     (i > 0 && e < ranges[i - 1].1).then(|| i - 1)
-}
-
-impl LinkChunk {
-    /// Adds the link `e -> r` to the receiver being linked (`r`, until
-    /// [`LinkChunk::close_receiver`]).
-    #[inline]
-    fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: Vec3A, dirty: bool) {
-        self.count_link(r);
-        self.emitter.push(match kind {
-            LinkKind::FormFactor => e as u32 | FF_BIT,
-            LinkKind::PointSample => e as u32,
-        });
-        self.staged.push(f);
-        self.dirty.push(dirty);
-    }
-
-    #[inline]
-    fn count_link(&mut self, r: usize) {
-        match self.receivers.last_mut() {
-            Some(q) if q.r == r as u32 => q.links += 1,
-            _ => self.receivers.push(ReceiverLinks { r: r as u32, links: 1, scale: 1.0 }),
-        }
-    }
-
-    /// Packs the staged coefficients of the receiver being linked, under its scale.
-    fn close_receiver(&mut self) {
-        if self.staged.is_empty() {
-            return;
-        }
-        let max = self.staged.iter().fold(0.0f32, |m, f| m.max(f.max_element()));
-        let scale = link_coef::receiver_scale(max);
-        self.receivers.last_mut().expect("staged links have a receiver").scale = scale;
-        self.coef.extend(self.staged.drain(..).map(|f| LinkCoef::pack(f, scale)));
-    }
-
-    /// Closes the run of own links and candidates since the last piece.
-    fn close_own(&mut self) {
-        let (l0, c0) = self.own_closed;
-        let (l1, c1) = (self.emitter.len(), self.cands.len());
-        if l1 > l0 || c1 > c0 {
-            self.pieces.push(Piece { old: false, links: l0..l1, cands: c0..c1 });
-        }
-        self.own_closed = (l1, c1);
-    }
-
-    /// Appends links and candidates of the previous link set, by range.
-    fn take_old(&mut self, links: std::ops::Range<usize>, cands: std::ops::Range<usize>) {
-        self.close_own();
-        self.pieces.push(Piece { old: true, links, cands });
-    }
-
-    /// Empties the chunk, keeping its buffers.
-    fn clear(&mut self) {
-        self.pieces.clear();
-        self.own_closed = (0, 0);
-        self.receivers.clear();
-        self.emitter.clear();
-        self.coef.clear();
-        self.staged.clear();
-        self.dirty.clear();
-        self.cand_count.clear();
-        self.cands.clear();
-    }
-
-    /// An empty chunk from `pool` with room for about as many links and candidates as `old`
-    /// had in the subtree of `r`, so that relinking does not grow it step by step.
-    fn sized_for(pool: &ChunkPool, old: Option<&LinkSet>, h: &Hierarchy, r: usize) -> Self {
-        let mut c = pool.take(ChunkPool::subtree(r));
-        if let Some(old) = old {
-            let end = h.nodes[r].subtree_end as usize;
-            let links = (old.recv_start[end] - old.recv_start[r]) as usize;
-            let cands = (old.cand_start[end] - old.cand_start[r]) as usize;
-            c.receivers.reserve(end - r);
-            c.emitter.reserve(links);
-            c.coef.reserve(links);
-            c.dirty.reserve(links);
-            c.cand_count.reserve(end - r);
-            c.cands.reserve(cands);
-        }
-        c
-    }
-
-    /// Copies link `j` of `old` (receiver `r`) unchanged (re-packing its coefficient under
-    /// the receiver's new scale is lossless unless it grew past `2^28` times the old one).
-    #[inline]
-    fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
-        self.count_link(r);
-        self.emitter.push(old.emitter[j]);
-        self.staged.push(old.coef_of(r, j));
-        self.dirty.push(old.dirty[j]);
-    }
 }
 
 /// What an incremental relink may keep from the previous link set.
@@ -615,10 +348,9 @@ impl Reuse<'_> {
     /// The old, clean link `e -> r` of this kind, if any.
     #[inline]
     fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, Vec3A, bool)> {
-        let o = self.old;
-        (o.recv_start[r] as usize..o.recv_start[r + 1] as usize)
-            .find(|&j| o.emitter_of(j) == e)
-            .map(|j| (o.kind_of(j), o.coef_of(r, j), o.dirty[j]))
+        let (j, _) = self.old.emitters_of(r).find(|&(_, x)| x as usize == e)?;
+        let l = self.old.link_at(r, j);
+        Some((l.kind, l.coef, l.dirty))
     }
 }
 
@@ -754,42 +486,17 @@ impl HierarchicalSolver {
     fn relink(&mut self, reuse: Option<&Reuse>) -> SolveStats {
         let h = &self.hierarchy;
         let mut stats = SolveStats::default();
-        // Last update's buffers, already paged in: large fresh allocations are mapped anew by
-        // the allocator and fault on first touch, which cost as much as the copy.
-        let mut set = self.spare.take().unwrap_or_default();
-        set.recv_start.clear();
-        set.recv_start.resize(h.len() + 1, 0);
-        set.cand_start.clear();
-        set.cand_start.resize(h.len() + 1, 0);
-        set.recv_scale.clear();
-        set.recv_scale.resize(h.len(), 1.0);
+        let mut chunks = Vec::new();
         if !h.is_empty() {
             let mut ctx = Ctx::new(self);
-            let mut chunks = vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, 0)];
+            chunks.push(self.chunk_pool.take(ChunkPool::subtree(0)));
             self.link_rec(&mut ctx, 0, Cands::ROOT, &[], &mut chunks, reuse);
             ctx.fill(&mut stats);
-            for c in &chunks {
-                for q in &c.receivers {
-                    set.recv_start[q.r as usize + 1] = q.links;
-                    set.recv_scale[q.r as usize] = q.scale;
-                }
-                for &(r, k) in &c.cand_count {
-                    set.cand_start[r as usize + 1] = k;
-                }
-            }
-            for i in 0..h.len() {
-                set.recv_start[i + 1] += set.recv_start[i];
-                set.cand_start[i + 1] += set.cand_start[i];
-            }
-            chunks.iter_mut().for_each(LinkChunk::close_own);
-            set.gather_chunks(&chunks, reuse.map(|u| u.old));
-            self.chunk_pool.put(chunks);
-        } else {
-            set.emitter.clear();
-            set.coef.clear();
-            set.dirty.clear();
-            set.cands.clear();
         }
+        // The set the last update replaced lends its buffers, already paged in: large fresh
+        // allocations are mapped anew by the allocator and fault on first touch.
+        let set = LinkSet::build(&chunks, reuse.map(|u| u.old), self.spare.take(), h.len());
+        self.chunk_pool.put(chunks);
         stats.links = set.len();
         self.links = Some(set);
         stats
@@ -848,19 +555,7 @@ impl HierarchicalSolver {
                 let old = u.old;
                 if fresh.is_empty() && old_cands.iter().all(|&c| find_range(&kept_here, c).is_some()) {
                     // Everything here refines as before: the subtree's links wholesale.
-                    for q in r..n.subtree_end as usize {
-                        let (a, z) = (old.recv_start[q] as usize, old.recv_start[q + 1] as usize);
-                        if z > a {
-                            let scale = old.recv_scale[q];
-                            chunk.receivers.push(ReceiverLinks { r: q as u32, links: (z - a) as u32, scale });
-                        }
-                        chunk.cand_count.push((q as u32, old.cand_start[q + 1] - old.cand_start[q]));
-                    }
-                    let end = n.subtree_end as usize;
-                    chunk.take_old(
-                        old.recv_start[r] as usize..old.recv_start[end] as usize,
-                        old.cand_start[r] as usize..old.cand_start[end] as usize,
-                    );
+                    chunk.kept.push((r as u32, n.subtree_end));
                     return;
                 }
                 // This receiver's candidates: the ones handed down now, plus those that the
@@ -870,8 +565,8 @@ impl HierarchicalSolver {
                 chunk.cands.extend(old_cands.iter().filter(|&&c| find_range(kept, c).is_some()));
                 chunk.cands[start..].sort_unstable();
                 chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
-                for j in old.recv_start[r] as usize..old.recv_start[r + 1] as usize {
-                    if find_range(&kept_here, old.emitter_of(j) as u32).is_some() {
+                for (j, e) in old.emitters_of(r) {
+                    if find_range(&kept_here, e).is_some() {
                         chunk.push_old(old, r, j);
                     }
                 }
@@ -909,8 +604,7 @@ impl HierarchicalSolver {
                 .enumerate()
                 .map(|(k, &c)| {
                     let mut sub = Ctx::new(self);
-                    let mut sub_chunks =
-                        vec![LinkChunk::sized_for(&self.chunk_pool, reuse.map(|u| u.old), h, c as usize)];
+                    let mut sub_chunks = vec![self.chunk_pool.take(ChunkPool::subtree(c as usize))];
                     let cands = Cands::of_child(&defer, k);
                     self.link_rec(&mut sub, c as usize, cands, &kept_here, &mut sub_chunks, reuse);
                     (sub, sub_chunks)
@@ -946,12 +640,7 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         let links = self.links.as_ref().expect("links stored");
         const CHUNK: usize = 1024;
-        let stored = StoredLinks {
-            recv_start: &links.recv_start,
-            emitter: &links.emitter,
-            coef: &links.coef,
-            scale: &links.recv_scale,
-        };
+        let stored = links.view();
         b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
             link_coef::gather(&e_node, stored, ci * CHUNK, b);
         });
@@ -1007,7 +696,7 @@ impl HierarchicalSolver {
             self.mesh.positions.iter().zip(positions).map(|(a, b)| a != b).collect();
         let any_moved = moved_vertex.iter().any(|&m| m);
         let old = self.links.take().expect("links stored");
-        let any_dirty = old.dirty.par_iter().any(|&d| d);
+        let any_dirty = old.has_dirty();
         let h = &self.hierarchy;
         let mut changed = vec![false; h.len()];
         let mut stale = vec![false; h.len()];
@@ -1018,8 +707,7 @@ impl HierarchicalSolver {
                 changed[i] |= t.iter().any(|&v| moved_vertex[v as usize]);
             }
             if any_dirty {
-                let (a, z) = (old.recv_start[i] as usize, old.recv_start[i + 1] as usize);
-                stale[i] |= old.dirty[a..z].iter().any(|&d| d);
+                stale[i] |= old.is_stale(i);
             }
             if n.parent != crate::hierarchy::NO_NODE {
                 let p = n.parent as usize;
@@ -1043,7 +731,7 @@ impl HierarchicalSolver {
         let remaining = AtomicI64::new(budget.map(|b| b as i64).unwrap_or(i64::MAX));
         let reuse = Reuse { old: &old, changed: &changed, stale: &stale, remaining: &remaining };
         let mut stats = self.relink(Some(&reuse));
-        self.spare = Some(old);
+        self.spare = Some(old.into_spare());
         stats.link_ms = ms(t0.elapsed());
         stats.total_ms = stats.link_ms;
         stats
@@ -1063,8 +751,9 @@ impl HierarchicalSolver {
     /// links themselves stay).
     pub fn set_dipole(&mut self, dipole: Dipole) {
         self.dipole = dipole;
+        self.spare = None;
         if let Some(l) = self.links.as_mut() {
-            l.dirty.iter_mut().for_each(|d| *d = true);
+            l.mark_all_dirty();
         }
     }
 }

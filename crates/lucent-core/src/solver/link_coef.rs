@@ -23,6 +23,7 @@
 //! to merely stream the link arrays; 256-bit registers (two links per operation) gained
 //! nothing there.
 
+use super::link_set::StoredLinks;
 use glam::Vec3A;
 
 /// Flag in a link's emitter word marking a link evaluated with the form factor; the other
@@ -101,16 +102,6 @@ fn half_bits(y: f32) -> u16 {
     }
 }
 
-/// The stored links as render mode reads them (the arrays of a `LinkSet`): receiver `r`'s
-/// links are `recv_start[r]..recv_start[r + 1]` of `emitter` and `coef`, under `scale[r]`.
-#[derive(Clone, Copy)]
-pub(crate) struct StoredLinks<'a> {
-    pub recv_start: &'a [u32],
-    pub emitter: &'a [u32],
-    pub coef: &'a [LinkCoef],
-    pub scale: &'a [f32],
-}
-
 /// Render mode's gather: for the receivers `r0 .. r0 + out.len()`, `out[i] = Σ_j E(e_j) F_j`
 /// over receiver `r0 + i`'s links, with `e_node` the clusters' irradiance.
 pub(crate) fn gather(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
@@ -127,9 +118,8 @@ pub(crate) fn gather(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut 
 #[inline(always)]
 fn each_receiver(l: StoredLinks, r0: usize, out: &mut [Vec3A], sum: impl Fn(&[u32], &[LinkCoef]) -> Vec3A) {
     for (i, b) in out.iter_mut().enumerate() {
-        let r = r0 + i;
-        let j = l.recv_start[r] as usize..l.recv_start[r + 1] as usize;
-        *b = sum(&l.emitter[j.clone()], &l.coef[j]) * l.scale[r];
+        let (emitter, coef, scale) = l.of(r0 + i);
+        *b = sum(emitter, coef) * scale;
     }
 }
 
@@ -207,6 +197,7 @@ mod f16c {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::link_set::Span;
 
     #[test]
     fn round_trip_is_within_the_stated_error() {
@@ -258,7 +249,7 @@ mod tests {
     fn gather_matches_a_double_precision_sum() {
         let e_node: Vec<Vec3A> =
             (0..50).map(|i| Vec3A::new(1.0 + i as f32, 0.5, 2.0 / (1.0 + i as f32))).collect();
-        let mut recv_start = vec![0u32];
+        let mut spans = vec![];
         let (mut emitter, mut coef, mut scale, mut want) = (vec![], vec![], vec![], vec![]);
         for r in 0..20usize {
             let f: Vec<Vec3A> = (0..r).map(|j| Vec3A::new(0.3, 1e-3, 7.0) / (1.0 + (j * j) as f32)).collect();
@@ -274,17 +265,17 @@ mod tests {
                 emitter.push(e as u32 | if j % 3 == 0 { FF_BIT } else { 0 });
                 coef.push(c);
             }
-            recv_start.push(emitter.len() as u32);
+            spans.push(Span::base(emitter.len() - r, r));
             scale.push(s);
             want.push(sum);
         }
         let mut out = vec![Vec3A::ZERO; 20];
-        let links = StoredLinks { recv_start: &recv_start, emitter: &emitter, coef: &coef, scale: &scale };
+        let links = StoredLinks::single(&spans, &emitter, &coef, &scale);
         gather(&e_node, links, 0, &mut out);
         let mut out_sse2 = vec![Vec3A::ZERO; 20];
         for (r, b) in out_sse2.iter_mut().enumerate() {
-            let l = recv_start[r] as usize..recv_start[r + 1] as usize;
-            *b = gather_one(&e_node, &emitter[l.clone()], &coef[l]) * scale[r];
+            let (e, c, s) = links.of(r);
+            *b = gather_one(&e_node, e, c) * s;
         }
         for r in 0..20 {
             for k in 0..3 {

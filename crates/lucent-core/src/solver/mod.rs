@@ -5,14 +5,18 @@
 //!   §5.5) in on-the-fly, render and incremental modes.
 //! * [`link_coef`]: stored link coefficients, 16 bits per channel, and render mode's gather
 //!   over them.
+//! * [`link_set`]: the stored links, a run per receiver in a shared base or a per-update
+//!   delta, so that an incremental update writes only what changed (§5.5).
 //! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
 pub mod exact;
 pub mod hierarchical;
 pub mod link_coef;
+pub mod link_set;
 pub mod oracle;
 pub mod point_sample;
 
-pub use hierarchical::{HierarchicalSolver, LinkSet, Solution, SolveStats};
+pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
+pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};

@@ -305,8 +305,8 @@ fn cluster_colours(solver: &HierarchicalSolver, face: usize) -> Option<Vec<Rgb>>
     let mut colours = vec![Rgb::splat(0.08); mesh.triangles.len()];
     let mut r = *h.face_node.get(face)? as usize;
     loop {
-        for j in links.recv_start[r] as usize..links.recv_start[r + 1] as usize {
-            let e = &h.nodes[links.emitter_of(j)];
+        for link in links.links_of(r) {
+            let e = &h.nodes[link.emitter];
             let c = level_colour(e.level as usize);
             for leaf in e.leaf_start..e.leaf_end {
                 colours[h.leaf_faces[leaf as usize] as usize] = c;
