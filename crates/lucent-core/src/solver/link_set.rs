@@ -378,13 +378,13 @@ pub(crate) struct LinkChunk {
     /// Its key in the [`ChunkPool`].
     key: u32,
     /// The receivers with own links, in preorder.
-    pub receivers: Vec<ReceiverLinks>,
-    pub emitter: Vec<u32>,
-    pub coef: Vec<LinkCoef>,
+    receivers: Vec<ReceiverLinks>,
+    emitter: Vec<u32>,
+    coef: Vec<LinkCoef>,
     /// The coefficients of the receiver being linked, packed by
     /// [`LinkChunk::close_receiver`] once its scale is known.
     staged: Vec<Vec3A>,
-    pub dirty: Vec<bool>,
+    dirty: Vec<bool>,
     /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
     /// candidates.
     pub cand_count: Vec<(u32, u32)>,
