@@ -3,12 +3,12 @@
 //! ancestors handed it, which an incremental update needs to tell which links it may keep.
 //!
 //! An incremental update decides again only the links near what moved, a few percent of them
-//! for a local deformation; copying the rest into new arrays every frame cost as much as the
-//! gather (15 ms for 10.7M kept links at 131K triangles). So the links live in two stores: a
+//! for a local deformation; copying the rest into new arrays every frame took 15 ms for 10.7M
+//! kept links at 131K triangles, twice render mode's gather. So the links live in two stores: a
 //! *base*, shared from update to update, and a *delta* holding what changed since the base was
 //! built. Each receiver's [`Span`] says which store holds its run. An update writes a new delta
-//! and shares the base; the base is built anew when nothing in it is live any more (its links
-//! simply move over) or when more than half of it is dead (one copy, then shared again).
+//! and shares the base; the base is built anew when nothing in it is live any more (the delta
+//! becomes the base) or when more than half of it is dead (one copy, then shared again).
 
 use super::link_coef::{FF_BIT, LinkCoef, receiver_scale};
 use super::oracle::LinkKind;
