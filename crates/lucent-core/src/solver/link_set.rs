@@ -30,8 +30,13 @@ impl Span {
     const HAS_DIRTY: u32 = 1 << 31;
 
     fn delta(start: usize, len: usize, dirty: bool) -> Self {
+        Span { start: 0, len: len as u32 | if dirty { Self::HAS_DIRTY } else { 0 } }.moved(start, true)
+    }
+
+    /// The same run (length and dirty flag) at `start` of the delta, or of the base.
+    fn moved(self, start: usize, in_delta: bool) -> Self {
         let start = u32::try_from(start).ok().filter(|&s| s < Self::IN_DELTA).expect("fewer than 2^31 links");
-        Span { start: start | Self::IN_DELTA, len: len as u32 | if dirty { Self::HAS_DIRTY } else { 0 } }
+        Span { start: start | if in_delta { Self::IN_DELTA } else { 0 }, len: self.len }
     }
 
     #[inline]
@@ -89,12 +94,20 @@ impl Store {
         }
     }
 
-    /// Appends the run `links` of links and `cands` of candidates of `from`.
-    fn append(&mut self, from: &Store, links: std::ops::Range<usize>, cands: std::ops::Range<usize>) {
-        self.emitter.extend_from_slice(&from.emitter[links.clone()]);
-        self.coef.extend_from_slice(&from.coef[links.clone()]);
-        self.dirty.extend_from_slice(&from.dirty[links]);
-        self.cands.extend_from_slice(&from.cands[cands]);
+    /// Appends the links `run` of `from`; returns where they start here.
+    fn append_links(&mut self, from: &Store, run: std::ops::Range<usize>) -> usize {
+        let at = self.emitter.len();
+        self.emitter.extend_from_slice(&from.emitter[run.clone()]);
+        self.coef.extend_from_slice(&from.coef[run.clone()]);
+        self.dirty.extend_from_slice(&from.dirty[run]);
+        at
+    }
+
+    /// Appends the candidates `run` of `from`; returns where they start here.
+    fn append_cands(&mut self, from: &Store, run: std::ops::Range<usize>) -> usize {
+        let at = self.cands.len();
+        self.cands.extend_from_slice(&from.cands[run]);
+        at
     }
 }
 
@@ -315,20 +328,16 @@ impl LinkSet {
                     for r in a as usize..z as usize {
                         let (l, m) = (old.links[r], old.cands[r]);
                         set.scale[r] = old.scale[r];
-                        set.links[r] = l;
-                        set.cands[r] = m;
-                        if l.in_delta() || m.in_delta() {
-                            let (nl, nm) = (set.delta.emitter.len(), set.delta.cands.len());
-                            let lr = if l.in_delta() { l.range() } else { 0..0 };
-                            let mr = if m.in_delta() { m.range() } else { 0..0 };
-                            set.delta.append(&old.delta, lr, mr);
-                            if l.in_delta() {
-                                set.links[r] = Span::delta(nl, l.len(), l.has_dirty());
-                            }
-                            if m.in_delta() {
-                                set.cands[r] = Span::delta(nm, m.len(), false);
-                            }
-                        }
+                        set.links[r] = if l.in_delta() {
+                            l.moved(set.delta.append_links(&old.delta, l.range()), true)
+                        } else {
+                            l
+                        };
+                        set.cands[r] = if m.in_delta() {
+                            m.moved(set.delta.append_cands(&old.delta, m.range()), true)
+                        } else {
+                            m
+                        };
                     }
                 }
             }
@@ -357,13 +366,9 @@ impl LinkSet {
             flat.dirty.reserve(self.len);
             for r in 0..self.links.len() {
                 let (l, m) = (self.links[r], self.cands[r]);
-                let (nl, nm) = (flat.emitter.len(), flat.cands.len());
-                flat.emitter.extend_from_slice(&self.store(l).emitter[l.range()]);
-                flat.coef.extend_from_slice(&self.store(l).coef[l.range()]);
-                flat.dirty.extend_from_slice(&self.store(l).dirty[l.range()]);
-                flat.cands.extend_from_slice(&self.store(m).cands[m.range()]);
-                self.links[r] = Span { start: nl as u32, len: l.len };
-                self.cands[r] = Span { start: nm as u32, len: m.len };
+                let l = l.moved(flat.append_links(self.store(l), l.range()), false);
+                let m = m.moved(flat.append_cands(self.store(m), m.range()), false);
+                (self.links[r], self.cands[r]) = (l, m);
             }
             self.base = Arc::new(flat);
             self.delta.clear();
