@@ -346,11 +346,30 @@ pub(crate) fn split_subtrees<'a, T>(
     r: usize,
     rest: &'a mut [T],
 ) -> Vec<(usize, &'a mut [T])> {
+    split_children(nodes, r, rest, |c| (nodes[c].subtree_end as usize) - c)
+}
+
+/// Splits the leaf-ordered slice of cluster `r`'s leaves among its children, as
+/// `(child, slice)`.
+pub(crate) fn split_leaves<'a, T>(
+    nodes: &[Node],
+    r: usize,
+    leaves: &'a mut [T],
+) -> Vec<(usize, &'a mut [T])> {
+    split_children(nodes, r, leaves, |c| nodes[c].leaf_count() as usize)
+}
+
+/// Splits `rest` into consecutive slices of `len(child)` entries, one per child of `r`.
+fn split_children<'a, T>(
+    nodes: &[Node],
+    r: usize,
+    rest: &'a mut [T],
+    len: impl Fn(usize) -> usize,
+) -> Vec<(usize, &'a mut [T])> {
     let mut rest = rest;
     let mut parts = Vec::with_capacity(4);
     for &c in nodes[r].children() {
-        let len = (nodes[c as usize].subtree_end - c) as usize;
-        let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
+        let (a, b) = std::mem::take(&mut rest).split_at_mut(len(c as usize));
         parts.push((c as usize, a));
         rest = b;
     }

@@ -27,7 +27,7 @@ use super::point_sample::ReceiverSources;
 use crate::Rgb;
 use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
-use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_subtrees};
+use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
 use crate::mesh::Mesh;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -451,7 +451,7 @@ impl HierarchicalSolver {
             out[0] = b.into();
             return;
         }
-        let parts = split_leaves(&self.hierarchy, r, out);
+        let parts = split_leaves(&self.hierarchy.nodes, r, out);
         if n.leaf_count() > PAR_LEAVES {
             let subs: Vec<Ctx> = parts
                 .into_par_iter()
@@ -808,19 +808,6 @@ fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
         let p = h.nodes[i].parent as usize;
         b[i - r] += b[p - r];
     }
-}
-
-/// Splits a receiver's leaf-ordered output slice among its children.
-fn split_leaves<'a, T>(h: &Hierarchy, r: usize, out: &'a mut [T]) -> Vec<(usize, &'a mut [T])> {
-    let mut rest = out;
-    let mut parts = Vec::with_capacity(4);
-    for &c in h.nodes[r].children() {
-        let len = h.nodes[c as usize].leaf_count() as usize;
-        let (a, b) = rest.split_at_mut(len);
-        parts.push((c as usize, a));
-        rest = b;
-    }
-    parts
 }
 
 #[inline]
