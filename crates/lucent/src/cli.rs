@@ -1,6 +1,8 @@
 //! Command-line interface (clap).
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use lucent_core::solver::Oracle;
+use lucent_core::solver::oracle::OracleMode;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -83,6 +85,43 @@ pub fn parse_hierarchy(s: &str) -> Result<HierarchyChoice, String> {
     }
 }
 
+/// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
+/// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
+/// steradians). Every threshold must be a positive, finite number; the rest stay at their
+/// defaults ([`Oracle::default`]).
+pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
+    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2`";
+    let (mode, values) = s.split_once(':').unwrap_or((s, ""));
+    let (mode, counts) = match mode {
+        "transport" => (OracleMode::Transport, [0, 2, 3].as_slice()),
+        "solid-angle" => (OracleMode::SolidAngle, [2].as_slice()),
+        _ => return Err(format!("{usage}, got `{s}`")),
+    };
+    let eps: Vec<f32> = if values.is_empty() {
+        Vec::new()
+    } else {
+        values
+            .split(',')
+            .map(|v| match v.trim().parse::<f32>() {
+                Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                _ => Err(format!("oracle thresholds must be positive numbers, got `{v}` in `{s}`")),
+            })
+            .collect::<Result<_, _>>()?
+    };
+    if !counts.contains(&eps.len()) {
+        return Err(format!("{usage}, got {} threshold(s) in `{s}`", eps.len()));
+    }
+    let mut oracle = Oracle { mode, ..Oracle::default() };
+    if let [e1, e2, ref rest @ ..] = eps[..] {
+        oracle.eps1 = e1;
+        oracle.eps2 = e2;
+        if let [abs] = *rest {
+            oracle.eps_abs = abs;
+        }
+    }
+    Ok(oracle)
+}
+
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:\n  \
     lucent render --mesh bunny.obj --material marble --scale 0.1 --light dir:1,-1,1 --out m.png\n  \
@@ -152,6 +191,13 @@ pub struct RenderArgs {
     /// 0..=9; that wrapped mesh is what is solved and rendered).
     #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
     pub hierarchy: HierarchyChoice,
+    /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default:
+    /// one-point transport estimates, ε1 = 0.3, ε2 = 0.1, ε_abs = 3e-4, within 1% of the exact
+    /// solve on the bunny), `transport:EPS1,EPS2[,EPS_ABS]`, or the paper's solid angles
+    /// `solid-angle:EPS1,EPS2` (steradians). Larger thresholds: fewer links, faster, less
+    /// accurate (`lucent bench solver --sweep` measures the trade).
+    #[arg(long, default_value = "transport", value_parser = parse_oracle)]
+    pub oracle: Oracle,
     /// Mode of the hierarchical solve (Mertens §5.5). Default on-the-fly for one image,
     /// incremental for an animation (links made once, updated per frame).
     #[arg(long, value_enum)]
@@ -285,6 +331,10 @@ pub struct BenchArgs {
     /// `bench solver` only: Mertens table 5 (form factor against point sampling).
     #[arg(long)]
     pub table5: bool,
+    /// `bench solver` table 3 only: the refinement oracle (as `lucent render --oracle`;
+    /// default `transport`), e.g. `solid-angle:0.2,0.8` for the paper's link count.
+    #[arg(long, value_parser = parse_oracle)]
+    pub oracle: Option<Oracle>,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -339,4 +389,37 @@ pub struct ViewArgs {
     /// Window height, logical pixels.
     #[arg(long, default_value_t = 700)]
     pub height: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn oracle_flag_sets_mode_and_thresholds_and_rejects_bad_values() {
+        assert_eq!(parse_oracle("transport"), Ok(Oracle::default()));
+        let o = parse_oracle("transport:0.5,0.2").unwrap();
+        assert_eq!(
+            (o.mode, o.eps1, o.eps2, o.eps_abs),
+            (OracleMode::Transport, 0.5, 0.2, Oracle::default().eps_abs)
+        );
+        assert_eq!(parse_oracle("transport:0.5,0.2,1e-3").unwrap().eps_abs, 1e-3);
+        let o = parse_oracle("solid-angle:0.02,0.05").unwrap();
+        assert_eq!((o.mode, o.eps1, o.eps2), (OracleMode::SolidAngle, 0.02, 0.05));
+        assert_eq!(o.eps_near_cluster, Oracle::default().eps_near_cluster);
+        for bad in [
+            "solid-angle",
+            "solid-angle:0.1",
+            "solid-angle:0.1,0.2,0.3",
+            "transport:0.1",
+            "transport:0.1,-0.2",
+            "transport:0.1,nan",
+            "transport:0.1,0",
+            "transport:a,b",
+            "jensen:0.1,0.1",
+        ] {
+            let err = parse_oracle(bad).expect_err(bad);
+            assert!(err.contains(bad) || err.contains("positive"), "{bad}: {err}");
+        }
+    }
 }

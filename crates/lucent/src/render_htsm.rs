@@ -74,7 +74,7 @@ pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Tim
         renderer.reference_size(),
         memory.thesis_bytes() as f64 / 1e6,
     );
-    Ok((image, Timings { solve_ms: volume_ms, render_ms, adapter: ctx.describe() }))
+    Ok((image, Timings { solve_ms: volume_ms, render_ms, adapter: ctx.describe(), links: None }))
 }
 
 fn model_name(m: TransportModel) -> &'static str {

@@ -363,3 +363,42 @@ fn shrink_wrap_hierarchy_renders_the_wrapped_mesh() {
     );
     assert_clean_failure(&run, "not closed", &never);
 }
+
+#[test]
+fn oracle_flag_trades_links_for_accuracy() {
+    let dir = scratch("oracle");
+    let links_of = |oracle: &str| {
+        let out = dir.join(format!("{}.png", oracle.replace([':', ','], "_")));
+        let run = lucent(
+            &[
+                "render",
+                "--oracle",
+                oracle,
+                "--width",
+                "96",
+                "--height",
+                "72",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[],
+        );
+        assert!(run.status.success(), "{oracle}: {:?}", stderr_lines(&run));
+        assert!(object_luminance(&image::open(&out).unwrap().to_rgba8()) > 0.0, "{oracle}");
+        let summary = String::from_utf8_lossy(&run.stdout).to_string();
+        let (before, _) = summary.split_once(" links)").unwrap_or_else(|| panic!("{summary}"));
+        before.rsplit('(').next().unwrap().parse::<usize>().unwrap()
+    };
+    let default = links_of("transport");
+    let coarse = links_of("transport:0.6,0.3,1e-3");
+    let paper = links_of("solid-angle:0.2,0.8");
+    assert!(coarse < default && paper < default, "{default} {coarse} {paper}");
+
+    // A bad value is a usage error (clap, exit 2) naming the flag and the value.
+    let never = dir.join("never.png");
+    let run = lucent(&["render", "--oracle", "solid-angle:0.1", "--out", never.to_str().unwrap()], &[]);
+    assert_eq!(run.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("--oracle") && err.contains("solid-angle:0.1"), "{err}");
+    assert!(!never.exists());
+}

@@ -10,6 +10,6 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
-        BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5),
+        BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle),
     }
 }

@@ -4,7 +4,8 @@
 //!   stretched, subdivided 4..7 times: 2048, 8192, 32768, 131072 triangles; the paper's 2016,
 //!   8160, 32736, 131736) scaled at 2.5 cm under a point light: links, links per triangle,
 //!   on-the-fly, incremental (after a small bump) and render times (medians), and the relative
-//!   RMSE of per-vertex `B` against the exact O(N²) solve where that is affordable.
+//!   RMSE of per-vertex `B` against the exact O(N²) solve where that is affordable; with the
+//!   default oracle or the one `--oracle` names.
 //! * `--sweep`: oracle thresholds against error and link count (both oracle modes).
 //! * `--table5`: table 5 of the paper: full on-the-fly evaluation with the semi-analytic form
 //!   factor for near links against uniform point sampling of the near faces, marble at
@@ -64,14 +65,17 @@ struct SweepRow {
     rel_rmse_vs_exact: f64,
 }
 
-pub fn run(json: bool, sweep: bool, table5: bool) -> anyhow::Result<()> {
+pub fn run(json: bool, sweep: bool, table5: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
+    if oracle.is_some() && (sweep || table5) {
+        anyhow::bail!("--oracle applies to table 3 only: --sweep and --table5 choose their own oracles");
+    }
     if sweep {
         return run_sweep(json);
     }
     if table5 {
         return run_table5(json);
     }
-    run_table3(json)
+    run_table3(json, oracle.unwrap_or_default())
 }
 
 fn oracle_name(o: &Oracle) -> String {
@@ -121,11 +125,10 @@ fn bump(positions: &[Vec3], at: Vec3, radius: f32, h: f32) -> Vec<Vec3> {
         .collect()
 }
 
-fn run_table3(json: bool) -> anyhow::Result<()> {
+fn run_table3(json: bool, oracle: Oracle) -> anyhow::Result<()> {
     let max_t: usize =
         std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
     let marble = Material::by_name("marble").context("marble preset")?;
-    let oracle = table3_oracle();
     let base = octahedron(Vec3::new(1.0, 1.25, 0.9));
     if !json {
         println!(
@@ -206,12 +209,6 @@ fn run_table3(json: bool) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// The oracle of the table 3 run: the default (transport) oracle, tuned for <= 1% error on
-/// the bunny (see `--sweep` for the paper's solid-angle criteria).
-fn table3_oracle() -> Oracle {
-    Oracle::default()
 }
 
 fn run_sweep(json: bool) -> anyhow::Result<()> {

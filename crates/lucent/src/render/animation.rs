@@ -47,7 +47,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let mode = args.mode.unwrap_or(SolveMode::Incremental);
     let mut ctx = Some(GpuContext::new()?);
     let started = Instant::now();
-    let mut solver = FrameSolver::new(scene, args.method, mode)?;
+    let mut solver = FrameSolver::new(scene, args.method, mode, args.oracle)?;
     let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };

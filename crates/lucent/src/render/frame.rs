@@ -51,8 +51,9 @@ pub struct FrameSolver<'a> {
 }
 
 impl<'a> FrameSolver<'a> {
-    /// A solver for `scene`'s rest mesh (the hierarchy is built on it once).
-    pub fn new(scene: &'a Scene, method: Method, mode: SolveMode) -> Result<Self> {
+    /// A solver for `scene`'s rest mesh (the hierarchy is built on it once), refining with
+    /// `oracle`.
+    pub fn new(scene: &'a Scene, method: Method, mode: SolveMode, oracle: Oracle) -> Result<Self> {
         if method == Method::Htsm {
             bail!("--method htsm has no per-face solve");
         }
@@ -61,7 +62,7 @@ impl<'a> FrameSolver<'a> {
                 Some(h) => h.clone(),
                 None => lucent_core::hierarchy::face_cluster::build(&scene.mesh),
             };
-            let mut s = HierarchicalSolver::new(scene.mesh.clone(), h, scene.dipole, Oracle::default());
+            let mut s = HierarchicalSolver::new(scene.mesh.clone(), h, scene.dipole, oracle);
             s.ff_opts = FormFactorOptions::default();
             s
         });

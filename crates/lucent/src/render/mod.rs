@@ -43,13 +43,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     write_png_atomically(&image, &out)?;
     println!(
-        "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms, render {:.0} ms on {}, total {:.0} ms -> {}",
+        "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms{}, render {:.0} ms on {}, total {:.0} ms -> {}",
         scene.source,
         scene.mesh.triangles.len(),
         scene.material.name,
         scene.scale,
         method_name(args.method),
         timings.solve_ms,
+        timings.links.map(|l| format!(" ({l} links)")).unwrap_or_default(),
         timings.render_ms,
         timings.adapter,
         started.elapsed().as_secs_f64() * 1e3,
@@ -95,6 +96,8 @@ pub struct Timings {
     pub render_ms: f64,
     /// The adapter used, e.g. `"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)"`.
     pub adapter: String,
+    /// Links of the hierarchical solve, if it made any.
+    pub links: Option<usize>,
 }
 
 pub(crate) fn method_name(m: Method) -> &'static str {
@@ -159,7 +162,7 @@ fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(i
     let ctx = GpuContext::new()?;
     let mesh = scene.deformed(1.0);
     let t = Instant::now();
-    let mut solver = FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly))?;
+    let mut solver = FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly), args.oracle)?;
     let solved = solver.solve(&mesh, &scene.lights)?;
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
     log::info!(
@@ -182,7 +185,7 @@ fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(i
     )?;
     let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter() }))
+    Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter(), links: solved.links }))
 }
 
 /// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.
