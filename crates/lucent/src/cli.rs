@@ -192,7 +192,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
     pub hierarchy: HierarchyChoice,
     /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default:
-    /// one-point transport estimates, ε1 = 0.3, ε2 = 0.1, ε_abs = 3e-4, within 1% of the exact
+    /// one-point transport estimates, ε1 = 0.3, ε2 = 0.1, ε_abs = 1e-3, within 1% of the exact
     /// solve on the bunny), `transport:EPS1,EPS2[,EPS_ABS]`, or the paper's solid angles
     /// `solid-angle:EPS1,EPS2` (steradians). Larger thresholds: fewer links, faster, less
     /// accurate (`lucent bench solver --sweep` measures the trade).

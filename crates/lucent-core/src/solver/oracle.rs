@@ -84,7 +84,7 @@ pub struct Oracle {
     /// [`OracleMode::Transport`] only: absolute error floor per link, relative to the
     /// material's largest `R_d_total` (unitless). Interactions whose estimated error is below
     /// this are accepted whatever their relative error, so negligible far transport stays
-    /// coarse. Default 3e-4.
+    /// coarse. Default 1e-3.
     pub eps_abs: f32,
 }
 
@@ -97,7 +97,7 @@ impl Default for Oracle {
             eps_near_cluster: 0.0,
             min_flatness: 0.98,
             eps_normal: 0.05,
-            eps_abs: 3e-4,
+            eps_abs: 1e-3,
         }
     }
 }
