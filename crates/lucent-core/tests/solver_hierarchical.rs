@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, face_irradiance};
@@ -81,7 +81,7 @@ fn render_mode_equals_on_the_fly() {
     let h = face_cluster::build(&mesh);
     let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
     let e = face_irradiance(&mesh, &point_light(), d.eta);
-    let mut s = HierarchicalSolver::new(mesh.clone(), h, d, Oracle::default());
+    let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::default());
     let otf = s.solve_on_the_fly(&e);
     let link_stats = s.link();
     let render = s.solve_render(&e);
@@ -106,7 +106,7 @@ fn links_partition_every_receiver_emitter_pair() {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
     let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.02);
-    let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+    let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     s.link();
     let l = s.links().unwrap();
     let n = mesh.triangles.len();
@@ -138,7 +138,7 @@ fn flat_plane_gives_total_diffuse_reflectance() {
     let want = d.total_diffuse_reflectance();
     let exact_b = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
     let h = face_cluster::build(&mesh);
-    let s = HierarchicalSolver::new(mesh.clone(), h, d, Oracle::default());
+    let s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::default());
     let hier_b = mesh.face_to_vertex(&s.solve_on_the_fly(&e).face_b);
     for c in 0..3 {
         let ex = exact_b[centre][c] as f64;
@@ -159,7 +159,7 @@ fn accuracy_against_exact() {
             let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale);
             let e = face_irradiance(&mesh, &lights, d.eta);
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
-            let s = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            let s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             let sol = s.solve_on_the_fly(&e);
             let err = rel_rmse(&want, &mesh.face_to_vertex(&sol.face_b));
             println!("{name} at {scale} m: rel RMSE {:.3}%, {} links", 100.0 * err, sol.stats.links);
@@ -191,17 +191,17 @@ fn incremental_matches_on_the_fly_after_deformation() {
     moved.positions = deformed.clone();
     let e = face_irradiance(&moved, &point_light(), d.eta);
 
-    let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+    let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     inc.link();
     inc.update_incremental(&deformed, None);
     let got = inc.solve_render(&e).face_b;
-    let fresh = HierarchicalSolver::new(moved.clone(), h.clone(), d, Oracle::default());
+    let fresh = HierarchicalSolver::new(moved.clone(), h.clone(), d.clone(), Oracle::default());
     let want = fresh.solve_on_the_fly(&e).face_b;
     let err = rel_rmse(&moved.face_to_vertex(&want), &moved.face_to_vertex(&got));
     assert!(err <= 0.01, "incremental vs on-the-fly: {:.4}%", 100.0 * err);
 
     // With a budget of 2000 evaluations per frame, stale coefficients are caught up.
-    let mut inc = HierarchicalSolver::new(mesh.clone(), h, d, Oracle::default());
+    let mut inc = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::default());
     let total = inc.link().links;
     inc.update_incremental(&deformed, Some(2000));
     for _ in 0..total / 2000 + 1 {
@@ -229,6 +229,23 @@ fn light_for(mesh: &Mesh) -> [Light; 1] {
 /// mode (stored links) must agree with on the fly.
 #[test]
 fn bunny_accuracy_against_exact() {
+    bunny_accuracy(ProfileKind::Mertens, false);
+}
+
+/// The same for the distance-form dipole with single scattering (whose energy bound acts on
+/// the ears: the exact solve applies it too).
+#[test]
+fn bunny_accuracy_against_exact_dipole_profile() {
+    bunny_accuracy(ProfileKind::Dipole, false);
+}
+
+/// The same for photon beam diffusion (the default profile).
+#[test]
+fn bunny_accuracy_against_exact_pbd_profile() {
+    bunny_accuracy(ProfileKind::Pbd, true);
+}
+
+fn bunny_accuracy(kind: ProfileKind, single: bool) {
     let mesh = lucent_core::mesh::embedded::bunny();
     assert_eq!(mesh.triangles.len(), 3674);
     let h = face_cluster::build(&mesh);
@@ -237,18 +254,18 @@ fn bunny_accuracy_against_exact() {
     for name in ["marble", "skimmilk", "ketchup"] {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
-            let d = Dipole::for_model_scale(&material, mesh.extent() as f64, scale);
+            let d = Dipole::profile_for_model_scale(&material, mesh.extent() as f64, scale, kind, single);
             let e = face_irradiance(&mesh, &lights, d.eta);
             let t = std::time::Instant::now();
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
             let t_exact = t.elapsed().as_secs_f64();
-            let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             let sol = s.solve_on_the_fly(&e);
             let err = rel_rmse(&want, &mesh.face_to_vertex(&sol.face_b));
             let render = s.solve_render(&e);
             let err_render = rel_rmse(&want, &mesh.face_to_vertex(&render.face_b));
             println!(
-                "bunny {name} at {scale} m: rel RMSE {:.3}% (render {:.3}%), {:.1} links/face, exact {t_exact:.1} s",
+                "bunny {kind} {name} at {scale} m: rel RMSE {:.3}% (render {:.3}%), {:.1} links/face, exact {t_exact:.1} s",
                 100.0 * err,
                 100.0 * err_render,
                 sol.stats.links as f64 / mesh.triangles.len() as f64
@@ -258,7 +275,7 @@ fn bunny_accuracy_against_exact() {
             worst = worst.max(err);
         }
     }
-    println!("bunny worst rel RMSE {:.3}%", 100.0 * worst);
+    println!("bunny {kind} worst rel RMSE {:.3}%", 100.0 * worst);
 }
 
 /// On the bunny, after a twist and a bump, incremental mode (stored links updated in place)
@@ -279,11 +296,11 @@ fn bunny_incremental_matches_on_the_fly_after_deformation() {
         for scale in [0.01, 0.1, 1.0] {
             let d = Dipole::for_model_scale(&material, ext as f64, scale);
             let e = face_irradiance(&moved, &lights, d.eta);
-            let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             inc.link();
             inc.update_incremental(&moved.positions, None);
             let got = inc.solve_render(&e).face_b;
-            let fresh = HierarchicalSolver::new(moved.clone(), h.clone(), d, Oracle::default());
+            let fresh = HierarchicalSolver::new(moved.clone(), h.clone(), d.clone(), Oracle::default());
             let want = fresh.solve_on_the_fly(&e).face_b;
             let err = rel_rmse(&moved.face_to_vertex(&want), &moved.face_to_vertex(&got));
             println!("bunny deformed {name} at {scale} m: incremental vs on-the-fly {:.4}%", 100.0 * err);
@@ -311,11 +328,11 @@ fn bunny_local_incremental_update_equals_fresh_links() {
     for (name, scale) in [("skimmilk", 0.1), ("ketchup", 0.01)] {
         let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), ext as f64, scale);
         let e = face_irradiance(&bumped, &lights, d.eta);
-        let mut fresh = HierarchicalSolver::new(bumped.clone(), h.clone(), d, Oracle::default());
+        let mut fresh = HierarchicalSolver::new(bumped.clone(), h.clone(), d.clone(), Oracle::default());
         let want_links = fresh.link().links;
         let want = fresh.solve_render(&e).face_b;
         for budget in [None, Some(300)] {
-            let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+            let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             inc.link();
             let first = inc.update_incremental(&bumped.positions, budget);
             let mut frames = 1;

@@ -163,7 +163,7 @@ mod solved {
     /// Per-vertex `B / pi` of the exact solve.
     fn solve(mesh: &Mesh, dipole: &Dipole, e: &[Rgb]) -> Vec<Rgb> {
         let b = solver::exact::solve(mesh, dipole, e, &FormFactorOptions::default());
-        shading::diffuse_radiance(&mesh.face_to_vertex(&b))
+        shading::diffuse_radiance(&mesh.face_to_vertex(&b), dipole)
     }
 
     struct Shot {
@@ -325,7 +325,7 @@ mod solved {
         let env_map = EnvironmentMap::from_rgba_f32(&ctx, 256, 128, &texels).unwrap();
         let shading = Shading { eta: material.eta as f32, environment: 1.0, ..Default::default() };
         let tone = ToneMap { exposure: 0.6, ..Default::default() };
-        let radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b));
+        let radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b), &dipole);
         // The image's mean colour over six views along the axes (pitch 89 for the poles): a
         // view's mean is a zonal convolution of the radiance about the view direction, so its
         // first- and second-order SH terms sum to zero over the six, leaving R_d_total times the

@@ -27,3 +27,15 @@ pub fn fresnel_transmittance(cos_theta: f64, eta: f64) -> f64 {
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
     -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
 }
+// TEMPORARY SHIM
+pub fn fresnel_moment1(eta: f64) -> f64 {
+    let (e2, e3, e4, e5) = (eta * eta, eta * eta * eta, eta.powi(4), eta.powi(5));
+    if eta < 1.0 {
+        0.45966 - 1.73965 * eta + 3.37668 * e2 - 3.904945 * e3 + 2.49277 * e4 - 0.68441 * e5
+    } else {
+        -4.61686 + 11.1136 * eta - 10.4646 * e2 + 5.11455 * e3 - 1.27198 * e4 + 0.12746 * e5
+    }
+}
+pub fn fresnel_moment2(eta: f64) -> f64 {
+    eta
+}

@@ -1,18 +1,27 @@
-//! The dipole diffusion BSSRDF (Jensen, Marschner, Levoy & Hanrahan 2001), in the form of
-//! Mertens et al. 2003, table 1, with the measured materials of Jensen et al. 2001.
+//! The diffusion BSSRDF: the dipole of Jensen, Marschner, Levoy & Hanrahan 2001 in the form of
+//! Mertens et al. 2003, table 1, its distance form, and photon beam diffusion (Habel et al.
+//! 2013), with the measured materials of Jensen et al. 2001 ([`profile`] compares them).
 //!
-//! The real source sits `z_r` below the surface and the virtual source `z_v` *above* it
-//! (`x_v = x_i + z_v N_i`, as Mertens writes; the Shopf thesis's table 3.1 has a sign typo).
+//! In Mertens' placement the real source sits `z_r` below the surface and the virtual source
+//! `z_v` *above* it (`x_v = x_i + z_v N_i`, as Mertens writes; the Shopf thesis's table 3.1 has
+//! a sign typo).
 
+pub mod beam_diffusion;
 mod fresnel;
 mod material;
+pub mod profile;
 
-pub use fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_transmittance};
+pub use fresnel::{
+    fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2, fresnel_transmittance,
+};
 pub use material::{Material, MaterialError, PRESETS};
+pub use profile::{ProfileKind, RadialTable, UnknownProfile};
 
-/// The dipole coefficients of one material at one model scale, per colour channel, with every
+/// The diffusion profile of one material at one model scale, per colour channel, with every
 /// length in *mesh units* (coefficients are measured in mm^-1 and converted by `mm_per_unit`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The dipole's coefficients are kept for every profile: they set the length scales the
+/// solver's oracle and the form factor's segmentation use.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Dipole {
     /// Effective transport coefficient `sigma_tr = sqrt(3 sigma_a sigma_t')`, per mesh unit.
     pub sigma_tr: [f64; 3],
@@ -26,11 +35,35 @@ pub struct Dipole {
     pub eta: f64,
     /// How many millimetres one mesh unit stands for.
     pub mm_per_unit: f64,
+    /// Which radial profile `R` is (default for [`Dipole::new`]: [`ProfileKind::Mertens`], the
+    /// paper's; front ends default to [`ProfileKind::default`]).
+    pub profile: ProfileKind,
+    /// Whether the single-scattering term is included (tabulated, see [`profile`]). Always
+    /// `false` for [`ProfileKind::Mertens`].
+    pub single_scattering: bool,
+    /// Extinction coefficient `σ_t = σ_a + σ_s'` per channel, per mesh unit.
+    pub sigma_t: [f64; 3],
+    /// The tabulated part of the profile, per channel, if any (PBD; the single-scattering
+    /// term of the distance-form dipole).
+    pub tables: Option<profile::SharedTables>,
 }
 
 impl Dipole {
-    /// Dipole coefficients for `material` when one mesh unit is `mm_per_unit` millimetres.
+    /// Mertens' dipole for `material` when one mesh unit is `mm_per_unit` millimetres (the
+    /// paper's model; see [`Dipole::with_profile`] for the others).
     pub fn new(material: &Material, mm_per_unit: f64) -> Self {
+        Self::with_profile(material, mm_per_unit, ProfileKind::Mertens, false)
+    }
+
+    /// Profile `kind` for `material` when one mesh unit is `mm_per_unit` millimetres, with or
+    /// without single scattering (ignored for [`ProfileKind::Mertens`]). Tabulated profiles
+    /// cost a table per distinct `eta` once (shared) and three channel tables here.
+    pub fn with_profile(
+        material: &Material,
+        mm_per_unit: f64,
+        kind: ProfileKind,
+        single_scattering: bool,
+    ) -> Self {
         let f_dr = fresnel_diffuse_reflectance(material.eta);
         let a = (1.0 + f_dr) / (1.0 - f_dr);
         let mut d = Dipole {
@@ -40,6 +73,10 @@ impl Dipole {
             alpha_prime: [0.0; 3],
             eta: material.eta,
             mm_per_unit,
+            profile: kind,
+            single_scattering: single_scattering && kind != ProfileKind::Mertens,
+            sigma_t: [0.0; 3],
+            tables: None,
         };
         for c in 0..3 {
             let sigma_a = material.sigma_a[c] * mm_per_unit;
@@ -49,6 +86,17 @@ impl Dipole {
             d.z_r[c] = 1.0 / sigma_t;
             d.z_v[c] = d.z_r[c] * (1.0 + 4.0 * a / 3.0);
             d.alpha_prime[c] = sigma_s / sigma_t;
+            d.sigma_t[c] = sigma_t;
+        }
+        let multiple = kind == ProfileKind::Pbd;
+        if multiple || d.single_scattering {
+            d.tables = Some(profile::channel_tables(
+                &d.alpha_prime,
+                &d.sigma_t,
+                d.eta,
+                multiple,
+                d.single_scattering,
+            ));
         }
         d
     }
@@ -59,19 +107,54 @@ impl Dipole {
         Self::new(material, scale_m * 1000.0 / extent)
     }
 
-    /// `R_d` for a point source pair at planar distance `r` (mesh units), per mesh unit^2.
+    /// [`Dipole::with_profile`] at a model scale (see [`Dipole::for_model_scale`]).
+    pub fn profile_for_model_scale(
+        material: &Material,
+        extent: f64,
+        scale_m: f64,
+        kind: ProfileKind,
+        single_scattering: bool,
+    ) -> Self {
+        Self::with_profile(material, scale_m * 1000.0 / extent, kind, single_scattering)
+    }
+
+    /// Whether solves apply the energy bound of [`crate::solver::energy`] (every profile but
+    /// Mertens', which is kept as published to reproduce the paper's tables).
+    #[inline]
+    pub fn bounds_energy(&self) -> bool {
+        self.profile != ProfileKind::Mertens
+    }
+
+    /// Whether the analytic dipole terms are part of the profile (all but PBD).
+    #[inline]
+    pub fn has_analytic(&self) -> bool {
+        self.profile != ProfileKind::Pbd
+    }
+
+    /// `R` at distance `r` (mesh units) in the plane of the entry point, per mesh unit^2. For
+    /// the distance-form profiles this is the whole profile.
     pub fn rd_planar(&self, r: f64) -> [f64; 3] {
         std::array::from_fn(|c| {
-            let (zr, zv) = (self.z_r[c], self.z_v[c]);
-            let s_r = (r * r + zr * zr).sqrt();
-            let s_v = (r * r + zv * zv).sqrt();
-            self.rd_from_distances(c, s_r, s_v)
+            let mut v = 0.0;
+            if self.has_analytic() {
+                let (zr, zv) = (self.z_r[c], self.z_v[c]);
+                let s_r = (r * r + zr * zr).sqrt();
+                let s_v = (r * r + zv * zv).sqrt();
+                v += self.rd_from_distances(c, s_r, s_v);
+            }
+            if let Some(t) = &self.tables {
+                v += t.channels[c].radial(r);
+            }
+            v
         })
     }
 
-    /// `R_d(x_i, x_o)` for arbitrary points with the dipole placed at `x_i` along its normal
-    /// `n_i` (unit), as in Mertens table 1.
+    /// `R(x_i, x_o)` between an entry point `x_i` with unit normal `n_i` (where Mertens'
+    /// dipole sits, table 1) and an exit point `x_o`. The distance-form profiles ignore `n_i`.
     pub fn rd(&self, x_i: glam::DVec3, n_i: glam::DVec3, x_o: glam::DVec3) -> [f64; 3] {
+        if self.profile != ProfileKind::Mertens {
+            return self.rd_planar(x_i.distance(x_o));
+        }
         std::array::from_fn(|c| {
             let s_r = (x_i - self.z_r[c] * n_i - x_o).length();
             let s_v = (x_i + self.z_v[c] * n_i - x_o).length();
@@ -79,7 +162,8 @@ impl Dipole {
         })
     }
 
-    /// `R_d` in channel `c` from the distances to the real (`s_r`) and virtual (`s_v`) sources.
+    /// The analytic dipole's `R_d` in channel `c` from the distances to the real (`s_r`) and
+    /// virtual (`s_v`) sources.
     #[inline]
     pub fn rd_from_distances(&self, c: usize, s_r: f64, s_v: f64) -> f64 {
         let sigma = self.sigma_tr[c];
@@ -87,16 +171,63 @@ impl Dipole {
         self.alpha_prime[c] / (4.0 * std::f64::consts::PI) * (term(self.z_r[c], s_r) + term(self.z_v[c], s_v))
     }
 
-    /// Total diffuse reflectance `R_d_total = ∫ R_d dA` over an infinite plane, closed form
-    /// (Jensen et al. 2001, eq. 6), per channel. Unitless, 0..1.
+    /// Distance (mesh units) from `p` to the nearest point where `R` peaks, per channel, for the
+    /// dipole at `x_o` with normal `n_o`: the nearer of Mertens' two sources, or for the
+    /// distance-form profiles `√(|p - x_o|² + z_r²)` (their `R` is smooth on the scale `z_r`).
+    #[inline]
+    pub fn peak_distance(&self, x_o: glam::DVec3, n_o: glam::DVec3, p: glam::DVec3) -> [f64; 3] {
+        std::array::from_fn(|c| match self.profile {
+            ProfileKind::Mertens => {
+                let s_r = (x_o - self.z_r[c] * n_o - p).length();
+                let s_v = (x_o + self.z_v[c] * n_o - p).length();
+                s_r.min(s_v)
+            }
+            _ => (p.distance_squared(x_o) + self.z_r[c] * self.z_r[c]).sqrt(),
+        })
+    }
+
+    /// Whether a sphere (`centre`, `radius`, mesh units) lies so far from the dipole at `x_o`
+    /// (normal `n_o`) that `R` over it is below `e^{-60}` of its peak (beyond the tables'
+    /// reach, for tabulated parts).
+    pub fn out_of_reach(&self, x_o: glam::DVec3, n_o: glam::DVec3, centre: glam::DVec3, radius: f64) -> bool {
+        let s = self.peak_distance(x_o, n_o, centre);
+        (0..3).all(|c| {
+            let analytic_far = !self.has_analytic() || self.sigma_tr[c] * (s[c] - radius) > 60.0;
+            let table_far =
+                self.tables.as_ref().is_none_or(|t| x_o.distance(centre) - radius > t.channels[c].r_max);
+            analytic_far && table_far
+        })
+    }
+
+    /// Total diffuse reflectance `∫ R dA` over an infinite plane, per channel, unitless 0..1:
+    /// for the dipoles the closed form of Jensen et al. 2001 (eq. 6), plus the tabulated
+    /// single-scattering total where included; for PBD its table's effective albedo.
     pub fn total_diffuse_reflectance(&self) -> [f64; 3] {
         let f_dr = fresnel_diffuse_reflectance(self.eta);
         let a = (1.0 + f_dr) / (1.0 - f_dr);
         std::array::from_fn(|c| {
-            let ap = self.alpha_prime[c];
-            let k = (3.0 * (1.0 - ap)).sqrt();
-            0.5 * ap * (1.0 + (-(4.0 / 3.0) * a * k).exp()) * (-k).exp()
+            let mut total = 0.0;
+            if self.has_analytic() {
+                let ap = self.alpha_prime[c];
+                let k = (3.0 * (1.0 - ap)).sqrt();
+                total += 0.5 * ap * (1.0 + (-(4.0 / 3.0) * a * k).exp()) * (-k).exp();
+            }
+            if let Some(t) = &self.tables {
+                total += t.channels[c].total();
+            }
+            total
         })
+    }
+
+    /// The factor `1 / c`, `c = 1 - 2 FM_1(1/η)`, that normalises the exit term `F_t(η, ω_o) /
+    /// (c π)` so that it integrates to 1 over the hemisphere (pbrt-v3's separable BSSRDF).
+    /// 1 at `η = 1`, and 1 for [`ProfileKind::Mertens`], which keeps the paper's `F_t / π`.
+    /// Applied to `B` by [`crate::shading`].
+    pub fn exit_normalization(&self) -> f64 {
+        if self.profile == ProfileKind::Mertens {
+            return 1.0;
+        }
+        1.0 / (1.0 - 2.0 * fresnel_moment1(1.0 / self.eta))
     }
 }
 

@@ -39,15 +39,11 @@ pub fn radon7(a: DVec3, b: DVec3, c: DVec3) -> [(DVec3, f64); 7] {
 }
 
 /// `k ρ` of a polygon with centre `centre` and radius `radius` for the dipole at `x_o`
-/// (normal `n_o`): the largest over channels and both sources of `(σ_tr + 3/s) ρ`.
+/// (normal `n_o`): the largest over channels of `(σ_tr + 3/s) ρ`, `s` the distance from the
+/// centre to where the profile peaks ([`Dipole::peak_distance`]).
 pub fn k_rho(dipole: &Dipole, x_o: DVec3, n_o: DVec3, centre: DVec3, radius: f64) -> f64 {
-    (0..3)
-        .map(|c| {
-            let s_r = (x_o - dipole.z_r[c] * n_o - centre).length();
-            let s_v = (x_o + dipole.z_v[c] * n_o - centre).length();
-            (dipole.sigma_tr[c] + 3.0 / s_r.min(s_v)) * radius
-        })
-        .fold(0.0, f64::max)
+    let s = dipole.peak_distance(x_o, n_o, centre);
+    (0..3).map(|c| (dipole.sigma_tr[c] + 3.0 / s[c]) * radius).fold(0.0, f64::max)
 }
 
 /// `∫_P R_d` over polygon `polygon` (planar, any winding, convex or not) by the rule on the

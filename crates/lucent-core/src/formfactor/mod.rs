@@ -45,7 +45,7 @@
 //!
 //! Everything is `f64`, allocation free and deterministic.
 
-use crate::bssrdf::Dipole;
+use crate::bssrdf::{Dipole, ProfileKind, RadialTable};
 use crate::fastexp::exp_neg_f64;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
@@ -171,29 +171,9 @@ pub fn form_factor_counted(
         let d = v - origin;
         DVec2::new(d.dot(e1), d.dot(e2))
     };
-
-    // The six point sources: (real, virtual) per channel.
-    let mut src = [Source::default(); 6];
-    for c in 0..3 {
-        let sigma = dipole.sigma_tr[c];
-        for (k, pos, z) in [
-            (2 * c, x_o - dipole.z_r[c] * n_o, dipole.z_r[c]),
-            (2 * c + 1, x_o + dipole.z_v[c] * n_o, dipole.z_v[c]),
-        ] {
-            let rel = pos - origin;
-            let h = rel.dot(n_p).abs().max(HEIGHT_FLOOR * z);
-            src[k] = Source {
-                d: DVec2::new(rel.dot(e1), rel.dot(e2)),
-                h2: h * h,
-                h,
-                z,
-                sigma,
-                winding: 0,
-                on_line: false,
-                i2: 0.0,
-            };
-        }
-    }
+    let (src, n_src) = sources(dipole, x_o, n_o, origin, n_p, e1, e2);
+    let mut src = src;
+    let src = &mut src[..n_src];
 
     let seg = Segmenter::new(opts);
     let mut segments = 0usize;
@@ -229,43 +209,167 @@ pub fn form_factor_counted(
             }
             let t_a = w.dot(u);
             let t_b = t_a + len;
-            let r2 = r_s * r_s;
-            let (i2, segs) = edge_i2(r_s.abs(), r2 + s.h2, s.sigma, t_a, t_b, &seg);
+            let s2 = r_s * r_s + s.h2;
+            let (i2, segs) = match s.tail {
+                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma }, t_a, t_b, &seg),
+                Tail::Table(c) => {
+                    let table = &dipole.tables.as_ref().expect("table source without tables").channels[c];
+                    edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg)
+                }
+            };
             s.i2 += i2.copysign(r_s);
             segments += segs;
         }
     }
 
     let mut f = [0.0; 3];
-    for (k, s) in src.iter().enumerate() {
+    for s in src.iter() {
         let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
-        let i1 = theta * exp_neg_f64(-s.sigma * s.h) / s.h;
-        let c = k / 2;
-        f[c] += s.z * (i1 - s.i2);
+        let q_h = match s.tail {
+            Tail::Pole => PoleTail { sigma: s.sigma }.q(s.h),
+            Tail::Table(c) => dipole.tables.as_ref().expect("tables").channels[c].tail(s.h),
+        };
+        f[s.channel] += s.weight * (theta * q_h - s.i2);
     }
-    let f = std::array::from_fn(|c| {
-        let v = dipole.alpha_prime[c] / (4.0 * PI) * f[c];
-        if v.is_finite() { v.max(0.0) } else { 0.0 }
-    });
+    let f = f.map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 });
     (f, segments)
 }
 
-/// One point source of the dipole, in the polygon's 2D frame, with its running sums.
+/// Which radial tail `Q(s)` a source integrates.
+#[derive(Clone, Copy, Default, PartialEq)]
+enum Tail {
+    /// One pole of the analytic dipole: `Q(s) = e^{-σs} / s` (times `z`, in the weight).
+    #[default]
+    Pole,
+    /// A channel's tabulated profile (`Q` from the table, weight 1).
+    Table(usize),
+}
+
+/// One source of the profile, in the polygon's 2D frame, with its running sums.
 #[derive(Clone, Copy, Default)]
 struct Source {
     /// Projection `d'` onto the polygon's plane (2D plane coordinates, mesh units).
     d: DVec2,
-    /// Height above the plane (floored), and its square.
+    /// Height above the plane (floored for Mertens' poles; `√(h² + z²)` for the distance
+    /// form, whose poles sit at `x_o` but `z` away in distance), and its square.
     h: f64,
     h2: f64,
-    /// `z_r` or `z_v` (mesh units) and `sigma_tr` (per mesh unit).
-    z: f64,
+    /// Factor of `(I1 - I2)` in `F`: `α'/4π · z` for a pole, 1 for a table.
+    weight: f64,
+    /// The rate (per mesh unit) the segment conditions use: `σ_tr` for a pole, `σ_t` for a
+    /// table (tabulated profiles vary on the mean free path near 0).
     sigma: f64,
+    tail: Tail,
+    channel: usize,
     /// Winding number of the polygon around `d'`, whether `d'` lies on some edge's line, and
-    /// the running sum of the signed I2 terms (over `z`).
+    /// the running sum of the signed I2 terms.
     winding: i32,
     on_line: bool,
     i2: f64,
+}
+
+/// The profile's sources for the receiver `x_o` (normal `n_o`) in the frame of a polygon
+/// (origin, unit normal `n_p`, in-plane axes `e1`, `e2`): Mertens' six poles on the normal,
+/// the distance form's six poles at `x_o`, and a tabulated source per channel. Returns the
+/// array and how many are used.
+fn sources(
+    dipole: &Dipole,
+    x_o: DVec3,
+    n_o: DVec3,
+    origin: DVec3,
+    n_p: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+) -> ([Source; 9], usize) {
+    let mut src = [Source::default(); 9];
+    let mut n = 0;
+    let mut push = |pos: DVec3, h: f64, weight: f64, sigma: f64, tail: Tail, channel: usize| {
+        let rel = pos - origin;
+        src[n] = Source {
+            d: DVec2::new(rel.dot(e1), rel.dot(e2)),
+            h,
+            h2: h * h,
+            weight,
+            sigma,
+            tail,
+            channel,
+            ..Default::default()
+        };
+        n += 1;
+    };
+    let h_o = (x_o - origin).dot(n_p).abs();
+    for c in 0..3 {
+        let k = dipole.alpha_prime[c] / (4.0 * PI);
+        let sigma = dipole.sigma_tr[c];
+        if dipole.has_analytic() {
+            for (z, sign) in [(dipole.z_r[c], -1.0), (dipole.z_v[c], 1.0)] {
+                if dipole.profile == ProfileKind::Mertens {
+                    let pos = x_o + sign * z * n_o;
+                    let h = (pos - origin).dot(n_p).abs().max(HEIGHT_FLOOR * z);
+                    push(pos, h, k * z, sigma, Tail::Pole, c);
+                } else {
+                    push(x_o, (h_o * h_o + z * z).sqrt(), k * z, sigma, Tail::Pole, c);
+                }
+            }
+        }
+        if dipole.tables.is_some() {
+            push(x_o, h_o, 1.0, dipole.sigma_t[c], Tail::Table(c), c);
+        }
+    }
+    (src, n)
+}
+
+/// A radial tail `Q(s)` as the edge integrals see it.
+trait TailFn {
+    /// `Q(s)` at distance `s` (mesh units).
+    fn q(&self, s: f64) -> f64;
+    /// The rate (per mesh unit) for the `σ L` segment condition.
+    fn sigma(&self) -> f64;
+    /// Whether everything at distance `s` and beyond is negligible (with `s_min` the least
+    /// distance along the edge).
+    fn negligible(&self, s: f64, s_min: f64) -> bool;
+}
+
+/// One analytic pole, `e^{-σs} / s`.
+struct PoleTail {
+    sigma: f64,
+}
+
+impl TailFn for PoleTail {
+    #[inline(always)]
+    fn q(&self, s: f64) -> f64 {
+        exp_neg_f64(-self.sigma * s) / s
+    }
+    #[inline(always)]
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+    #[inline(always)]
+    fn negligible(&self, s: f64, s_min: f64) -> bool {
+        // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along can matter.
+        self.sigma * (s - s_min) > 40.0
+    }
+}
+
+/// A tabulated channel.
+struct TableTail<'a> {
+    table: &'a RadialTable,
+    sigma: f64,
+}
+
+impl TailFn for TableTail<'_> {
+    #[inline(always)]
+    fn q(&self, s: f64) -> f64 {
+        self.table.tail(s)
+    }
+    #[inline(always)]
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+    #[inline(always)]
+    fn negligible(&self, s: f64, _s_min: f64) -> bool {
+        s >= self.table.r_max
+    }
 }
 
 /// `Σ_e Δθ_e`, the signed angle the polygon's edges subtend at `d'` (2D), for the rare case
@@ -302,14 +406,14 @@ fn boundary_angle(polygon: &[DVec3], to_2d: &impl Fn(DVec3) -> DVec2, d: DVec2) 
 /// The integrand is even in `t`, so the edge is split at the foot point `t = 0` and each half
 /// integrated over `|t|`.
 #[inline]
-fn edge_i2(r: f64, s2: f64, sigma: f64, t_a: f64, t_b: f64, seg: &Segmenter) -> (f64, usize) {
+fn edge_i2(r: f64, s2: f64, tail: &impl TailFn, t_a: f64, t_b: f64, seg: &Segmenter) -> (f64, usize) {
     if t_a >= 0.0 {
-        half_edge_i2(r, s2, sigma, t_a, t_b, seg)
+        half_edge_i2(r, s2, tail, t_a, t_b, seg)
     } else if t_b <= 0.0 {
-        half_edge_i2(r, s2, sigma, -t_b, -t_a, seg)
+        half_edge_i2(r, s2, tail, -t_b, -t_a, seg)
     } else {
-        let (i1, n1) = half_edge_i2(r, s2, sigma, 0.0, -t_a, seg);
-        let (i2, n2) = half_edge_i2(r, s2, sigma, 0.0, t_b, seg);
+        let (i1, n1) = half_edge_i2(r, s2, tail, 0.0, -t_a, seg);
+        let (i2, n2) = half_edge_i2(r, s2, tail, 0.0, t_b, seg);
         (i1 + i2, n1 + n2)
     }
 }
@@ -343,13 +447,11 @@ impl Segmenter {
 /// count by `O(log(L/S))` even for `R → 0`. Beyond `σ(s - S) > 40` the integrand is below
 /// `e^{-40}` of its peak and the rest of the edge is dropped.
 #[inline]
-fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) -> (f64, usize) {
+fn half_edge_i2(r: f64, s2: f64, tail: &impl TailFn, a: f64, b: f64, seg: &Segmenter) -> (f64, usize) {
     let r2 = r * r;
     let s = s2.sqrt();
-    let f = |t: f64| {
-        let s = (s2 + t * t).sqrt();
-        exp_neg_f64(-sigma * s) / (s * (r2 + t * t))
-    };
+    let sigma = tail.sigma();
+    let f = |t: f64| tail.q((s2 + t * t).sqrt()) / (r2 + t * t);
     let mut sum = 0.0;
     let mut segments = 0;
     let mut pos = a;
@@ -362,8 +464,7 @@ fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) ->
         let p0 = p1 + hp;
         let g = |p: f64| {
             let t = r * p.tan();
-            let s = (s2 + t * t).sqrt();
-            exp_neg_f64(-sigma * s) / s
+            tail.q((s2 + t * t).sqrt())
         };
         let dp = hp * GL_X;
         sum += hp * (GL_W_CENTER * g(p0) + GL_W_OUTER * (g(p0 - dp) + g(p0 + dp)));
@@ -373,8 +474,7 @@ fn half_edge_i2(r: f64, s2: f64, sigma: f64, a: f64, b: f64, seg: &Segmenter) ->
     let sigma_len = if sigma > 0.0 { seg.sigma_limit / sigma } else { f64::INFINITY };
     let mut t_sum = 0.0;
     while pos < b {
-        // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along can matter.
-        if sigma * pos > 40.0 && sigma * ((s2 + pos * pos).sqrt() - s) > 40.0 {
+        if tail.negligible((s2 + pos * pos).sqrt(), s) {
             break;
         }
         let l_ratio = if seg.kappa > 0.0 {

@@ -20,6 +20,7 @@
 //! recursive refinement of §3.2 reordered by receiver, so subtrees are independent and run in
 //! parallel, and links come out sorted by receiver in preorder.
 
+use super::energy;
 use super::link_coef;
 use super::link_set::{ChunkPool, LinkChunk, LinkSet};
 use super::oracle::{Decision, Evaluator, LinkKind, Oracle, ReceiverView, Samples};
@@ -93,6 +94,9 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     frame: [Vec<Vec3A>; 2],
+    /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
+    /// under uniform irradiance, until the links change.
+    bound: Option<Vec<Rgb>>,
 }
 
 /// Per-task state of a traversal.
@@ -372,6 +376,7 @@ impl HierarchicalSolver {
             spare: None,
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
+            bound: None,
         }
     }
 
@@ -408,13 +413,15 @@ impl HierarchicalSolver {
         }
         let e_node = self.pull(face_irradiance);
         let t1 = Instant::now();
-        let mut leaf_b = vec![Rgb::ZERO; h.leaf_count()];
+        let mut leaf_b = vec![[Rgb::ZERO; 2]; h.leaf_count()];
         let mut ctx = Ctx::new(self);
-        self.otf_rec(&mut ctx, 0, Cands::ROOT, Vec3A::ZERO, &e_node, &mut leaf_b);
+        self.otf_rec(&mut ctx, 0, Cands::ROOT, [Vec3A::ZERO; 2], &e_node, &mut leaf_b);
         let t2 = Instant::now();
+        let bound = self.dipole.bounds_energy();
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
         for (pos, &f) in h.leaf_faces.iter().enumerate() {
-            face_b[f as usize] = leaf_b[pos];
+            let [b, u] = leaf_b[pos];
+            face_b[f as usize] = if bound { b * energy::bound(u) } else { b };
         }
         let t3 = Instant::now();
         ctx.fill(&mut stats);
@@ -431,24 +438,28 @@ impl HierarchicalSolver {
         ctx: &mut Ctx,
         r: usize,
         cands: Cands,
-        b_acc: Vec3A,
+        b_acc: [Vec3A; 2],
         e_node: &[Vec3A],
-        out: &mut [Rgb],
+        out: &mut [[Rgb; 2]],
     ) {
         let mut defer = Deferred::default();
-        let mut b = b_acc;
+        // `B` and, for the energy bound, `B` under uniform irradiance 1.
+        let [mut b, mut u] = b_acc;
         ctx.receive(
             &self.oracle,
             r,
             cands.iter(),
             &mut defer,
             &mut Evaluate(|e, _, f| {
-                b += e_node[e] * Vec3A::from_array(f);
+                let f = Vec3A::from_array(f);
+                b += e_node[e] * f;
+                u += f;
             }),
         );
+        let b = [b, u];
         let n = self.hierarchy.nodes[r];
         if n.is_leaf() {
-            out[0] = b.into();
+            out[0] = b.map(Into::into);
             return;
         }
         let parts = split_leaves(&self.hierarchy.nodes, r, out);
@@ -499,6 +510,7 @@ impl HierarchicalSolver {
         self.chunk_pool.put(chunks);
         stats.links = set.len();
         self.links = Some(set);
+        self.bound = None;
         stats
     }
 
@@ -627,7 +639,20 @@ impl HierarchicalSolver {
         if self.links.is_none() {
             self.link();
         }
-        self.render_stored(face_irradiance)
+        let mut solution = self.render_stored(face_irradiance);
+        if self.dipole.bounds_energy() {
+            let t0 = Instant::now();
+            if self.bound.is_none() {
+                let ones = vec![Rgb::ONE; self.hierarchy.leaf_count()];
+                let uniform = self.render_stored(&ones).face_b;
+                self.bound = Some(uniform.into_iter().map(energy::bound).collect());
+            }
+            let bound = self.bound.as_ref().expect("bound made above");
+            solution.face_b.iter_mut().zip(bound).for_each(|(b, s)| *b *= *s);
+            solution.stats.push_ms += ms(t0.elapsed());
+            solution.stats.total_ms += ms(t0.elapsed());
+        }
+        solution
     }
 
     /// Render mode over the stored links (which must exist).
@@ -744,6 +769,7 @@ impl HierarchicalSolver {
         self.mesh.positions.copy_from_slice(positions);
         self.hierarchy.refit(&self.mesh);
         self.links = None;
+        self.bound = None;
     }
 
     /// Changes the material: every stored link's coefficient becomes stale and is recomputed by
@@ -752,6 +778,7 @@ impl HierarchicalSolver {
     pub fn set_dipole(&mut self, dipole: Dipole) {
         self.dipole = dipole;
         self.spare = None;
+        self.bound = None;
         if let Some(l) = self.links.as_mut() {
             l.mark_all_dirty();
         }

@@ -519,7 +519,7 @@ mod tests {
         let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), ext as f64, 0.05);
         let light =
             [Light::Point { position: hi + Vec3::splat(ext), intensity: Vec3::splat(4.0 * ext * ext) }];
-        let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d, Oracle::default());
+        let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
         inc.link();
         assert!(inc.links().unwrap().delta.emitter.is_empty(), "a fresh link is all base");
         let (mut shared, mut rebuilt, mut taken_over) = (0, 0, 0);
@@ -545,7 +545,7 @@ mod tests {
                 other => panic!("update {k}: unexpected storage {other:?}"),
             }
             let e = face_irradiance(&shape, &light, d.eta);
-            let mut fresh = HierarchicalSolver::new(shape.clone(), h.clone(), d, Oracle::default());
+            let mut fresh = HierarchicalSolver::new(shape.clone(), h.clone(), d.clone(), Oracle::default());
             let want_links = fresh.link().links;
             let want = fresh.solve_render(&e).face_b;
             assert_eq!(l.len(), want_links, "update {k}");

@@ -1,5 +1,6 @@
 //! Solving `B(x_o) = Σ_k E_k F(A_k, x_o)` (Mertens eq. 6).
 //!
+//! * [`energy`]: the energy bound that keeps thin and touching parts from glowing.
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
 //!   §5.5) in on-the-fly, render and incremental modes.
@@ -10,6 +11,7 @@
 //! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
+pub mod energy;
 pub mod exact;
 pub mod hierarchical;
 pub mod link_coef;

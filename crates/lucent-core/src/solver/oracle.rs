@@ -251,7 +251,7 @@ impl Oracle {
                             // Buhler's sample count that, unlike a solid angle, sees σ_tr).
                             // The link's coefficient is this very estimate.
                             *estimate = Some(f);
-                            let dist = view.src.nearest(eg.midpoint);
+                            let dist = view.src.nearest(d, eg.midpoint);
                             let err: [f32; 3] = std::array::from_fn(|c| {
                                 let k = d.sigma_tr[c] + 3.0 / dist[c];
                                 k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
@@ -303,7 +303,7 @@ impl Oracle {
                             let inv_d = 1.0 / (rg.midpoint - eg.midpoint).length();
                             let mut sens = 0.0f32;
                             for c in 0..3 {
-                                sens = sens.max(d.z_v[c] * (d.sigma_tr[c] + 3.0 * inv_d));
+                                sens = sens.max(d.normal_weight * d.z_v[c] * (d.sigma_tr[c] + 3.0 * inv_d));
                             }
                             split = spread * sens > self.eps_normal;
                         }

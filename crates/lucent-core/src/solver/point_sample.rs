@@ -10,6 +10,7 @@
 //! library `expf` is a scalar call and was a tenth of the solve.
 
 use crate::bssrdf::Dipole;
+use crate::bssrdf::profile::TABLE_SIZE;
 use crate::fastexp::exp_neg;
 use crate::formfactor::cubature;
 use glam::Vec3;
@@ -18,9 +19,9 @@ use glam::Vec3;
 /// would waste a quarter; instead lane `3 j + c` is point `j`, channel `c`).
 const LANES: usize = 12;
 
-/// The dipole's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
+/// The profile's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
 /// lengths in mesh units).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct DipoleF32 {
     /// `sigma_tr` per channel, per mesh unit.
     pub sigma_tr: [f32; 3],
@@ -30,7 +31,18 @@ pub struct DipoleF32 {
     pub z_v: [f32; 3],
     /// `alpha' / 4π` per channel.
     pub k: [f32; 3],
-    /// The same four coefficients repeated over the [`LANES`] of a batch.
+    /// 1 where the poles sit on the receiver's normal (Mertens), 0 for the distance form
+    /// (poles at the receiver point, `z` away in distance).
+    pub normal_weight: f32,
+    /// Squared distances added to the real and virtual poles' (`z²` in the distance form, 0
+    /// for Mertens), per channel.
+    off_r: [f32; 3],
+    off_v: [f32; 3],
+    /// Whether the analytic poles are part of the profile (all but PBD).
+    analytic: bool,
+    /// The tabulated part, if any.
+    table: Option<TableF32>,
+    /// The same coefficients repeated over the [`LANES`] of a batch.
     lanes: Lanes,
 }
 
@@ -40,6 +52,35 @@ struct Lanes {
     z_r: [f32; LANES],
     z_v: [f32; LANES],
     k: [f32; LANES],
+    off_r: [f32; LANES],
+    off_v: [f32; LANES],
+}
+
+/// A tabulated profile in `f32`: `r R(r)` per channel on the grid of [`RadialTable`].
+#[derive(Clone, Debug)]
+struct TableF32 {
+    /// Channel `c`'s `TABLE_SIZE + 1` samples start at `c (TABLE_SIZE + 1)`.
+    values: Vec<f32>,
+    inv_r_max: [f32; 3],
+    r_floor: [f32; 3],
+}
+
+impl TableF32 {
+    /// `R(r)` in channel `c` from the squared distance `s2` to the receiver point.
+    #[inline(always)]
+    fn radial(&self, c: usize, s2: f32) -> f32 {
+        const N: usize = TABLE_SIZE;
+        let r = s2.sqrt();
+        let x = (r * self.inv_r_max[c]).sqrt() * N as f32;
+        if !(x < N as f32) {
+            return 0.0;
+        }
+        let i = x as usize;
+        let f = x - i as f32;
+        let base = c * (N + 1) + i;
+        let w = self.values[base] * (1.0 - f) + self.values[base + 1] * f;
+        w / r.max(self.r_floor[c])
+    }
 }
 
 impl DipoleF32 {
@@ -49,27 +90,75 @@ impl DipoleF32 {
         let z_r = d.z_r.map(|v| v as f32);
         let z_v = d.z_v.map(|v| v as f32);
         let k = d.alpha_prime.map(|v| (v / (4.0 * std::f64::consts::PI)) as f32);
+        let normal_weight = if d.profile.uses_normals() { 1.0 } else { 0.0 };
+        let off = |z: [f32; 3]| z.map(|z| (1.0 - normal_weight) * z * z);
+        let (off_r, off_v) = (off(z_r), off(z_v));
+        let table = d.tables.as_ref().map(|t| TableF32 {
+            values: t.channels.iter().flat_map(|c| c.r_radial.iter().copied()).collect(),
+            inv_r_max: std::array::from_fn(|c| (1.0 / t.channels[c].r_max) as f32),
+            r_floor: std::array::from_fn(|c| t.channels[c].r_floor as f32),
+        });
         let rep = |a: [f32; 3]| std::array::from_fn(|i| a[i % 3]);
         DipoleF32 {
             sigma_tr,
             z_r,
             z_v,
             k,
-            lanes: Lanes { sigma_tr: rep(sigma_tr), z_r: rep(z_r), z_v: rep(z_v), k: rep(k) },
+            normal_weight,
+            off_r,
+            off_v,
+            analytic: d.has_analytic(),
+            table,
+            lanes: Lanes {
+                sigma_tr: rep(sigma_tr),
+                z_r: rep(z_r),
+                z_v: rep(z_v),
+                k: rep(k),
+                off_r: rep(off_r),
+                off_v: rep(off_v),
+            },
         }
     }
 
-    /// `area R_d` per lane from the squared distances to the real (`s2_r`) and virtual
-    /// (`s2_v`) sources (Jensen et al. 2001, eq. 5, with `k = α'/4π`).
+    /// `area R` per lane from the squared distances to the real (`s2_r`) and virtual
+    /// (`s2_v`) poles' points (Jensen et al. 2001, eq. 5, with `k = α'/4π`), plus the table.
     #[inline(always)]
     fn rd_lanes(&self, s2_r: &[f32; LANES], s2_v: &[f32; LANES], area: &[f32; LANES]) -> [f32; LANES] {
         let l = &self.lanes;
         let mut out = [0.0f32; LANES];
+        if self.analytic {
+            for i in 0..LANES {
+                let sig = l.sigma_tr[i];
+                out[i] = l.k[i]
+                    * (pole(l.z_r[i], sig, s2_r[i] + l.off_r[i]) + pole(l.z_v[i], sig, s2_v[i] + l.off_v[i]));
+            }
+        }
+        if let Some(t) = &self.table {
+            for i in 0..LANES {
+                out[i] += t.radial(i % 3, s2_r[i]);
+            }
+        }
         for i in 0..LANES {
-            let sig = l.sigma_tr[i];
-            out[i] = area[i] * l.k[i] * (pole(l.z_r[i], sig, s2_r[i]) + pole(l.z_v[i], sig, s2_v[i]));
+            out[i] *= area[i];
         }
         out
+    }
+
+    /// `R` in channel `c` from the squared distances to the poles' points: the same arithmetic
+    /// as one lane of [`DipoleF32::rd_lanes`], so scalar and batched estimates agree exactly.
+    #[inline(always)]
+    fn rd_one(&self, c: usize, s2_r: f32, s2_v: f32) -> f32 {
+        let mut v = 0.0f32;
+        if self.analytic {
+            let sig = self.sigma_tr[c];
+            v = self.k[c]
+                * (pole(self.z_r[c], sig, s2_r + self.off_r[c])
+                    + pole(self.z_v[c], sig, s2_v + self.off_v[c]));
+        }
+        if let Some(t) = &self.table {
+            v += t.radial(c, s2_r);
+        }
+        v
     }
 }
 
@@ -80,8 +169,10 @@ fn pole(z: f32, sigma_tr: f32, s2: f32) -> f32 {
     z * (1.0 + sigma_tr * s) * exp_neg(-sigma_tr * s) / (s2 * s)
 }
 
-/// The dipole sources of one receiver point (the dipole sits at the receiver, §4's inverse
-/// interpretation): real sources `x_o - z_r n_o`, virtual sources `x_o + z_v n_o`, per channel.
+/// The poles of one receiver point (the profile sits at the receiver, §4's inverse
+/// interpretation): for Mertens real sources `x_o - z_r n_o` and virtual sources
+/// `x_o + z_v n_o` per channel; for the distance-form profiles both at `x_o` (their `z`
+/// enters as an added squared distance).
 #[derive(Clone, Copy, Debug)]
 pub struct ReceiverSources {
     x_r: [Vec3; 3],
@@ -92,40 +183,44 @@ impl ReceiverSources {
     /// The sources for receiver point `x_o` with unit normal `n_o`.
     #[inline]
     pub fn new(d: &DipoleF32, x_o: Vec3, n_o: Vec3) -> Self {
+        let n = d.normal_weight * n_o;
         ReceiverSources {
-            x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n_o),
-            x_v: std::array::from_fn(|c| x_o + d.z_v[c] * n_o),
+            x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n),
+            x_v: std::array::from_fn(|c| x_o + d.z_v[c] * n),
         }
     }
 
-    /// Whether every source is farther from `p` than `margin + base + spread z` (its own `z`):
-    /// the sources of all points within `base` of the receiver point whose normals stray by at
-    /// most `spread` stay `margin` away from `p`.
+    /// Whether every pole is farther from `p` than `margin + base + spread z` (its own `z`;
+    /// distances include the distance form's added `z²`): the poles of all points within
+    /// `base` of the receiver point whose normals stray by at most `spread` stay `margin` away
+    /// from `p`.
     #[inline]
     pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
+        let spread = spread * d.normal_weight;
         (0..3).all(|c| {
             let rr = margin + base + spread * d.z_r[c];
             let rv = margin + base + spread * d.z_v[c];
-            (self.x_r[c] - p).length_squared() > rr * rr && (self.x_v[c] - p).length_squared() > rv * rv
+            (self.x_r[c] - p).length_squared() + d.off_r[c] > rr * rr
+                && (self.x_v[c] - p).length_squared() + d.off_v[c] > rv * rv
         })
     }
 
-    /// Distance from `p` to the nearer of the two sources, per channel.
+    /// Distance from `p` to the nearer of the two poles, per channel (with the distance
+    /// form's added `z²`): where `R` varies fastest.
     #[inline]
-    pub fn nearest(&self, p: Vec3) -> [f32; 3] {
+    pub fn nearest(&self, d: &DipoleF32, p: Vec3) -> [f32; 3] {
         std::array::from_fn(|c| {
-            (self.x_r[c] - p).length_squared().min((self.x_v[c] - p).length_squared()).sqrt()
+            ((self.x_r[c] - p).length_squared() + d.off_r[c])
+                .min((self.x_v[c] - p).length_squared() + d.off_v[c])
+                .sqrt()
         })
     }
 
-    /// One-point form factor `A R_d(p)` for an emitter of area `area` at `p`.
+    /// One-point form factor `A R(p)` for an emitter of area `area` at `p`.
     #[inline]
     pub fn point_sample(&self, d: &DipoleF32, p: Vec3, area: f32) -> [f32; 3] {
         std::array::from_fn(|c| {
-            let sig = d.sigma_tr[c];
-            let tr = pole(d.z_r[c], sig, (self.x_r[c] - p).length_squared());
-            let tv = pole(d.z_v[c], sig, (self.x_v[c] - p).length_squared());
-            area * d.k[c] * (tr + tv)
+            area * d.rd_one(c, (self.x_r[c] - p).length_squared(), (self.x_v[c] - p).length_squared())
         })
     }
 
@@ -166,7 +261,7 @@ impl ReceiverSources {
     /// [`cubature::MAX_K_RHO`]).
     #[inline]
     pub fn k_rho(&self, d: &DipoleF32, mid: Vec3, radius: f32) -> f32 {
-        let s = self.nearest(mid);
+        let s = self.nearest(d, mid);
         (0..3).map(|c| (d.sigma_tr[c] + 3.0 / s[c]) * radius).fold(0.0, f32::max)
     }
 }

@@ -151,7 +151,7 @@ fn run_table3(json: bool, oracle: Oracle) -> anyhow::Result<()> {
         let mesh = sub.mesh;
         let dipole = Dipole::for_model_scale(&marble, mesh.extent() as f64, 0.025);
         let e = face_irradiance(&mesh, &light_for(&mesh), dipole.eta);
-        let mut solver = HierarchicalSolver::new(mesh.clone(), sub.hierarchy, dipole, oracle);
+        let mut solver = HierarchicalSolver::new(mesh.clone(), sub.hierarchy, dipole.clone(), oracle);
         let runs = if mesh.triangles.len() > 40_000 { 3 } else { 5 };
         let otf = median_ms(runs, || solver.solve_on_the_fly(&e).stats.total_ms);
         let link_ms = solver.link().total_ms;
@@ -243,7 +243,7 @@ fn run_sweep(json: bool) -> anyhow::Result<()> {
         }
         oracles.push(Oracle::default());
         for o in oracles {
-            let solver = HierarchicalSolver::new(mesh.clone(), h.clone(), dipole, o);
+            let solver = HierarchicalSolver::new(mesh.clone(), h.clone(), dipole.clone(), o);
             let mut links = 0;
             let mut b = Vec::new();
             let ms = median_ms(3, || {

@@ -62,7 +62,7 @@ impl<'a> FrameSolver<'a> {
                 Some(h) => h.clone(),
                 None => lucent_core::hierarchy::face_cluster::build(&scene.mesh),
             };
-            let mut s = HierarchicalSolver::new(scene.mesh.clone(), h, scene.dipole, oracle);
+            let mut s = HierarchicalSolver::new(scene.mesh.clone(), h, scene.dipole.clone(), oracle);
             s.ff_opts = FormFactorOptions::default();
             s
         });
@@ -100,7 +100,7 @@ impl<'a> FrameSolver<'a> {
                 (solver::exact::solve(mesh, &self.scene.dipole, &e, &opts), 0.0, None)
             }
         };
-        let vertex_radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b));
+        let vertex_radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b), &self.scene.dipole);
         let solve_ms = (ms_since(t) - link_ms).max(0.0);
         Ok(Solved { vertex_radiance, irradiance_ms, link_ms, solve_ms, links })
     }

@@ -164,27 +164,27 @@ impl SolverSession {
     fn solve_hierarchical(&mut self, mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
         let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
         let eps = (params.epsilon1, params.epsilon2);
-        let h = self.hierarchy_for(mesh, dipole, eps);
+        let h = self.hierarchy_for(mesh, dipole.clone(), eps);
         let moved = h.solver.mesh.positions != mesh.positions;
         let changed = moved || h.dipole != dipole || h.eps != eps;
         let mut link_stats = SolveStats::default();
         let solution = match params.mode {
             SolverMode::OnTheFly => {
                 move_to(&mut h.solver, mesh, moved);
-                h.solver.dipole = dipole;
+                h.solver.dipole = dipole.clone();
                 h.solver.solve_on_the_fly(e)
             }
             SolverMode::Render => {
                 if changed || h.solver.links().is_none() {
                     move_to(&mut h.solver, mesh, moved);
-                    h.solver.dipole = dipole;
+                    h.solver.dipole = dipole.clone();
                     link_stats = h.solver.link();
                 }
                 h.solver.solve_render(e)
             }
             SolverMode::Incremental => {
                 if h.dipole != dipole {
-                    h.solver.set_dipole(dipole);
+                    h.solver.set_dipole(dipole.clone());
                 }
                 if h.eps != eps {
                     h.solver.link();
@@ -198,7 +198,7 @@ impl SolverSession {
         let s = solution.stats;
         let clusters = params.cluster_face.and_then(|f| cluster_colours(&h.solver, f as usize));
         Solution {
-            vertex_radiance: diffuse_radiance(&mesh.face_to_vertex(&solution.face_b)),
+            vertex_radiance: diffuse_radiance(&mesh.face_to_vertex(&solution.face_b), &h.dipole),
             timings: Timings {
                 irradiance_ms: 0.0,
                 link_ms: s.link_ms + link_stats.link_ms,
@@ -219,7 +219,8 @@ impl SolverSession {
         });
         if !same {
             let oracle = Oracle { eps1: eps.0 as f32, eps2: eps.1 as f32, ..Oracle::default() };
-            let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(mesh), dipole, oracle);
+            let solver =
+                HierarchicalSolver::new(mesh.clone(), face_cluster::build(mesh), dipole.clone(), oracle);
             self.hierarchical = Some(Hierarchical { solver, dipole, eps });
         }
         let h = self.hierarchical.as_mut().expect("set above");
