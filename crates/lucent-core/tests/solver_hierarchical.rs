@@ -259,7 +259,8 @@ fn bunny_accuracy(kind: ProfileKind, single: bool) {
             let t = std::time::Instant::now();
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
             let t_exact = t.elapsed().as_secs_f64();
-            let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
+            let mut s =
+                HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::for_profile(kind));
             let sol = s.solve_on_the_fly(&e);
             let err = rel_rmse(&want, &mesh.face_to_vertex(&sol.face_b));
             let render = s.solve_render(&e);

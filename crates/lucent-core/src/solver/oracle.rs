@@ -5,7 +5,7 @@
 
 use super::point_sample::point_samples_from;
 pub use super::point_sample::{DipoleF32, ReceiverSources};
-use crate::bssrdf::Dipole;
+use crate::bssrdf::{Dipole, ProfileKind};
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::{ClusterGeom, Hierarchy};
@@ -86,6 +86,21 @@ pub struct Oracle {
     /// this are accepted whatever their relative error, so negligible far transport stays
     /// coarse. Default 1e-3.
     pub eps_abs: f32,
+}
+
+impl Oracle {
+    /// The default oracle for profile `kind`: [`Oracle::default`] for Mertens' dipole; for the
+    /// distance-form profiles (`dipole`, `pbd`) tighter emitter and absolute thresholds, which
+    /// they need to stay near 1% of the exact solve on the bunny at 1 cm (measured with
+    /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`).
+    pub fn for_profile(kind: ProfileKind) -> Oracle {
+        match kind {
+            ProfileKind::Mertens => Oracle::default(),
+            ProfileKind::Dipole | ProfileKind::Pbd => {
+                Oracle { eps1: 0.1, eps2: 0.03, eps_abs: 3e-4, ..Oracle::default() }
+            }
+        }
+    }
 }
 
 impl Default for Oracle {
@@ -326,6 +341,20 @@ impl Oracle {
                                 rg.radius,
                                 view.spread,
                             ) =>
+                    {
+                        split = true
+                    }
+                    // The distance-form profiles do not depend on the receiver's normal, so
+                    // nothing above splits a receiver for its size: estimate the variation of
+                    // `R` over the receiver from its radius, as the emitter test does.
+                    OracleMode::Transport
+                        if d.normal_weight == 0.0 && {
+                            let dist = view.src.nearest(d, eg.midpoint);
+                            let err: [f32; 3] = std::array::from_fn(|c| {
+                                (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius * 0.5 * f_mid[c]
+                            });
+                            !self.within(err, f_mid, self.eps1, view.inv_rtot)
+                        } =>
                     {
                         split = true
                     }
