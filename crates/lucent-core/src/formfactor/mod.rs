@@ -1,21 +1,26 @@
 //! The semi-analytic point-to-polygon form factor of Mertens et al. 2003, §4:
-//! `F(A, x_o) = ∫_A R_d(x_i, x_o) dx_i`, with the dipole placed at the receiver `x_o`
+//! `F(A, x_o) = ∫_A R(x_i, x_o) dx_i`, with the profile placed at the receiver `x_o`
 //! (the "inverse interpretation" of §4) and the area integral reduced to the polygon's edges.
 //!
-//! For one source `d` of the dipole (depth/height `z`, transport coefficient `σ = sigma_tr`) the
-//! area integral of eq. (8), `I = ∫_A z (1 + σs) e^{-σs} / s^3 dx`, is written in polar
-//! coordinates around `d'`, the orthogonal projection of `d` onto the polygon's plane (height
-//! `h = |d - d'|`). The radial integral is analytic (eq. 10), which leaves, per edge `e` with
-//! signed angle `Δθ_e` seen from `d'`,
+//! Every profile of [`crate::bssrdf::profile`] is a sum of radial terms, each a function of the
+//! distance `s` from a point `d` at height `h` over the polygon's plane, with a radial tail
+//! `Q(s) = ∫_s^∞ R(t) t dt`. In polar coordinates around `d'`, the orthogonal projection of `d`
+//! onto the plane, the radial integral is `Q(h) - Q(s_edge)` (eq. 10), which leaves, per edge
+//! `e` with signed angle `Δθ_e` seen from `d'`,
 //!
 //! ```text
-//! I = z Σ_e [ Δθ_e e^{-σh}/h  -  sign_e ∫_e e^{-σ s(θ)}/s(θ) |dθ| ]      (I1 - I2, eqs. 10-13)
+//! I = Σ_e [ Δθ_e Q(h)  -  sign_e ∫_e Q(s(θ)) |dθ| ]      (I1 - I2, eqs. 10-13)
 //! ```
+//!
+//! The terms: Mertens' six dipole poles on the receiver's normal (`Q = z e^{-σs}/s`, the paper's
+//! form); the distance-form dipole's poles, which sit at `x_o` with the effective height
+//! `√(h² + z²)` (its `R` depends on `√(r² + z²)` only); and a tabulated `Q` per channel (photon
+//! beam diffusion, single scattering) at `x_o` itself.
 //!
 //! `Σ_e Δθ_e` is `2π` when `d'` is inside the polygon, `0` outside (and the interior angle when
 //! `d'` lies on the boundary), so the I1 terms need only the winding number of the polygon
 //! around `d'` (the angles themselves only when `d'` is on an edge's line). The I2 integral along
-//! an edge, `z R ∫ e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (eq. 13), is split into
+//! an edge, `R ∫ Q(√(S²+t²)) / (R²+t²) dt` (eq. 13), is split into
 //! segments under condition (19) (`L / r_0 < ratio`, `σ L < limit`) as in the paper, laid out outwards from the
 //! foot point `t = 0`, but each
 //! segment is integrated with 3-point Gauss-Legendre instead of the paper's one-term Taylor
@@ -36,10 +41,11 @@
 //!   `e^{-σs}/s` to within `R/S` of the ends `φ = ±π/2` and costs accuracy.)
 //! * `d'` exactly on an edge's line (`R = 0`): the triangle `(d', a, b)` has zero area and that
 //!   edge contributes nothing (the limit of `I1 - I2` as `R → 0` is 0 from both sides).
-//! * Source (nearly) in the polygon's plane (`h → 0`): the true integral diverges like `1/h`
-//!   when `d'` is inside the polygon (the dipole model breaks down there), so `h` is clamped to
+//! * A Mertens pole (nearly) in the polygon's plane (`h → 0`): the true integral diverges like
+//!   `1/h` when `d'` is inside the polygon (the dipole model breaks down there), so `h` is clamped to
 //!   [`HEIGHT_FLOOR`]` · z`. When `d'` is outside, the angle sum is exactly 0 (a winding number) and the
-//!   finite result is the difference of the I2 terms, with no `1/h` cancellation.
+//!   finite result is the difference of the I2 terms, with no `1/h` cancellation. The
+//!   distance-form terms never diverge (`h ≥ z`, and tables give a finite `Q(0)`).
 //! * Degenerate polygons (fewer than 3 vertices, zero area) and non-finite input give 0;
 //!   round-off below 0 is clamped to 0. Never NaN.
 //!
