@@ -97,3 +97,18 @@ fn the_bound_follows_an_incremental_update() {
     let err: f32 = got.iter().zip(&want).map(|(a, b)| (*a - *b).length()).fold(0.0, f32::max);
     assert!(err < 0.05, "incremental bound vs exact: largest difference {err}");
 }
+
+/// `lucent bench energy`'s figures: the thin slab breaks energy without the bound (both sides
+/// gather) and keeps it with the bound.
+#[test]
+fn uniform_report_measures_before_and_after_the_bound() {
+    let mesh = thin_slab();
+    let marble = Material::by_name("marble").unwrap();
+    let d = Dipole::profile_for_model_scale(&marble, mesh.extent() as f64, 0.02, ProfileKind::Dipole, true);
+    let r = lucent_core::solver::energy::uniform_report(&mesh, &d, Oracle::for_profile(ProfileKind::Dipole));
+    println!("{r:?}");
+    assert_eq!(r.faces, mesh.triangles.len());
+    assert!(r.max_b_unbounded > 1.05, "{r:?}");
+    assert!(r.max_b_uniform <= 1.0 + 1e-6, "{r:?}");
+    assert!(r.faces_bounded > 0 && r.faces_bounded < r.faces && r.links > 0, "{r:?}");
+}

@@ -46,6 +46,10 @@ pub struct Dipole {
     /// The tabulated part of the profile, per channel, if any (PBD; the single-scattering
     /// term of the distance-form dipole).
     pub tables: Option<profile::SharedTables>,
+    /// Whether solves scale each face's `B` so that uniform irradiance never gives more than 1
+    /// ([`crate::solver::energy`]). Default: on for every profile but Mertens', which is kept
+    /// as published to reproduce the paper's tables.
+    pub energy_bound: bool,
 }
 
 impl Dipole {
@@ -77,6 +81,7 @@ impl Dipole {
             single_scattering: single_scattering && kind != ProfileKind::Mertens,
             sigma_t: [0.0; 3],
             tables: None,
+            energy_bound: kind != ProfileKind::Mertens,
         };
         for c in 0..3 {
             let sigma_a = material.sigma_a[c] * mm_per_unit;
@@ -118,11 +123,10 @@ impl Dipole {
         Self::with_profile(material, scale_m * 1000.0 / extent, kind, single_scattering)
     }
 
-    /// Whether solves apply the energy bound of [`crate::solver::energy`] (every profile but
-    /// Mertens', which is kept as published to reproduce the paper's tables).
+    /// Whether solves apply the energy bound of [`crate::solver::energy`] ([`Dipole::energy_bound`]).
     #[inline]
     pub fn bounds_energy(&self) -> bool {
-        self.profile != ProfileKind::Mertens
+        self.energy_bound
     }
 
     /// Whether the analytic dipole terms are part of the profile (all but PBD).

@@ -19,3 +19,44 @@ use crate::Rgb;
 pub fn bound(uniform: Rgb) -> Rgb {
     Rgb::from_array(uniform.to_array().map(|u| if u > 1.0 && u.is_finite() { 1.0 / u } else { 1.0 }))
 }
+
+/// What [`uniform_report`] measures on one mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UniformReport {
+    /// Largest `B` over faces and channels under uniform irradiance 1 after the bound
+    /// (unitless; at most 1 for the bounded profiles).
+    pub max_b_uniform: f32,
+    /// The same before the bound: how far the profile alone breaks energy conservation.
+    pub max_b_unbounded: f32,
+    /// Faces whose `B` the bound lowered (any channel).
+    pub faces_bounded: usize,
+    /// Faces in the mesh.
+    pub faces: usize,
+    /// Links of the hierarchical solve.
+    pub links: usize,
+}
+
+/// Solves `mesh` under uniform irradiance 1 with the hierarchical solver (on the fly) and
+/// reports the largest `B` with and without the bound (`lucent bench energy`).
+pub fn uniform_report(
+    mesh: &crate::mesh::Mesh,
+    dipole: &crate::bssrdf::Dipole,
+    oracle: super::Oracle,
+) -> UniformReport {
+    let h = crate::hierarchy::face_cluster::build(mesh);
+    let mut unbounded = dipole.clone();
+    unbounded.energy_bound = false;
+    let ones = vec![Rgb::ONE; mesh.triangles.len()];
+    let solver = super::HierarchicalSolver::new(mesh.clone(), h, unbounded, oracle);
+    let raw = solver.solve_on_the_fly(&ones);
+    let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
+    let bounded: Vec<Rgb> =
+        raw.face_b.iter().map(|&u| if dipole.bounds_energy() { u * bound(u) } else { u }).collect();
+    UniformReport {
+        max_b_uniform: max(&bounded),
+        max_b_unbounded: max(&raw.face_b),
+        faces_bounded: raw.face_b.iter().filter(|u| u.max_element() > 1.0).count(),
+        faces: mesh.triangles.len(),
+        links: raw.stats.links,
+    }
+}
