@@ -217,7 +217,7 @@ pub fn form_factor_counted(
             let t_b = t_a + len;
             let s2 = r_s * r_s + s.h2;
             let (i2, segs) = match s.tail {
-                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma }, t_a, t_b, &seg),
+                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, &seg),
                 Tail::Table(c) => {
                     let table = &dipole.tables.as_ref().expect("table source without tables").channels[c];
                     edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg)
@@ -232,7 +232,7 @@ pub fn form_factor_counted(
     for s in src.iter() {
         let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
         let q_h = match s.tail {
-            Tail::Pole => PoleTail { sigma: s.sigma }.q(s.h),
+            Tail::Pole => PoleTail { sigma: s.sigma, h: s.h }.q(s.h),
             Tail::Table(c) => dipole.tables.as_ref().expect("tables").channels[c].tail(s.h),
         };
         f[s.channel] += s.weight * (theta * q_h - s.i2);
@@ -336,9 +336,10 @@ trait TailFn {
     fn negligible(&self, s: f64, s_min: f64) -> bool;
 }
 
-/// One analytic pole, `e^{-σs} / s`.
+/// One analytic pole, `e^{-σs} / s`, at height `h` over the polygon's plane.
 struct PoleTail {
     sigma: f64,
+    h: f64,
 }
 
 impl TailFn for PoleTail {
@@ -352,8 +353,10 @@ impl TailFn for PoleTail {
     }
     #[inline(always)]
     fn negligible(&self, s: f64, s_min: f64) -> bool {
-        // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along can matter.
-        self.sigma * (s - s_min) > 40.0
+        // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along the edge can matter; and
+        // once below e^{-50} of the pole's own peak `e^{-σh}/h`, however the edge runs (an
+        // edge far out of an opaque material's reach costs no segments).
+        self.sigma * (s - s_min) > 40.0 || self.sigma * (s - self.h) > 50.0
     }
 }
 
