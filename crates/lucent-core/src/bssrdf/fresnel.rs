@@ -27,15 +27,32 @@ pub fn fresnel_transmittance(cos_theta: f64, eta: f64) -> f64 {
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
     -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
 }
-// TEMPORARY SHIM
+/// The first angular moment of the dielectric Fresnel reflectance, `∫_0^1 F_r(μ) μ dμ`, for
+/// light travelling from a medium of index `eta` into one of index 1 (pbrt's convention:
+/// `eta > 1` is internal reflection, with total reflection past the critical angle; `1/eta` is
+/// external reflection onto index `eta`). 0 at `eta = 1`. Simpson's rule on 2,048 intervals,
+/// split at the critical angle (accurate to ~1e-9).
 pub fn fresnel_moment1(eta: f64) -> f64 {
-    let (e2, e3, e4, e5) = (eta * eta, eta * eta * eta, eta.powi(4), eta.powi(5));
-    if eta < 1.0 {
-        0.45966 - 1.73965 * eta + 3.37668 * e2 - 3.904945 * e3 + 2.49277 * e4 - 0.68441 * e5
-    } else {
-        -4.61686 + 11.1136 * eta - 10.4646 * e2 + 5.11455 * e3 - 1.27198 * e4 + 0.12746 * e5
-    }
+    fresnel_moment(eta, 1)
 }
+
+/// The second moment, `∫_0^1 F_r(μ) μ² dμ`, in the convention of [`fresnel_moment1`].
 pub fn fresnel_moment2(eta: f64) -> f64 {
-    eta
+    fresnel_moment(eta, 2)
+}
+
+fn fresnel_moment(eta: f64, power: i32) -> f64 {
+    // Light from index `eta` into 1 sees the relative index 1/eta.
+    let rel = 1.0 / eta;
+    let f = |mu: f64| fresnel_dielectric(mu, rel) * mu.powi(power);
+    let simpson = |a: f64, b: f64| {
+        const N: usize = 1024;
+        let h = (b - a) / N as f64;
+        let inner: f64 = (1..N).map(|i| f(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 }).sum();
+        (f(a) + f(b) + inner) * h / 3.0
+    };
+    // Total internal reflection (F_r = 1) below the critical cosine.
+    let mu_c = if rel < 1.0 { (1.0 - rel * rel).sqrt() } else { 0.0 };
+    let below = if mu_c > 0.0 { mu_c.powi(power + 1) / (power + 1) as f64 } else { 0.0 };
+    below + simpson(mu_c, 1.0)
 }

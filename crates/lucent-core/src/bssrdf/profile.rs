@@ -134,6 +134,35 @@ impl RadialTable {
         RadialTable { r_max, r_radial, tail, r_floor: 1e-3 / sigma_t }
     }
 
+    /// Tabulates a profile given in optical units by `R_opt` alone, up to optical radius
+    /// `r_opt_max`: the tail `Q` is integrated on the grid (trapezoid rule in `x`, from the
+    /// outside in). `R_opt` is evaluated at the 1,024 inner grid points, in parallel.
+    pub fn from_radial(sigma_t: f64, r_opt_max: f64, radial_opt: impl Fn(f64) -> f64 + Sync) -> Self {
+        use rayon::prelude::*;
+        let n = TABLE_SIZE;
+        // `r R(r)` in optical units at x_k; the integrand of Q in x is `r R(r) · 2 r_max x`.
+        let w: Vec<f64> = (0..=n)
+            .into_par_iter()
+            .map(|k| {
+                let x = k as f64 / n as f64;
+                let r = r_opt_max * x * x;
+                if k == n { 0.0 } else { r * radial_opt(r) }
+            })
+            .collect();
+        let mut tail = vec![0.0; n + 1];
+        for k in (0..n).rev() {
+            let (x0, x1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+            let g = |x: f64, w: f64| w * 2.0 * r_opt_max * x;
+            tail[k] = tail[k + 1] + 0.5 * (x1 - x0) * (g(x0, w[k]) + g(x1, w[k + 1]));
+        }
+        RadialTable {
+            r_max: r_opt_max / sigma_t,
+            r_radial: w.iter().map(|&v| (sigma_t * v) as f32).collect(),
+            tail,
+            r_floor: 1e-3 / sigma_t,
+        }
+    }
+
     /// Grid position of distance `r`: cell index and fraction, or `None` beyond `r_max`.
     #[inline]
     fn cell(&self, r: f64) -> Option<(usize, f64)> {
@@ -176,12 +205,9 @@ pub struct ProfileTables {
 /// Shared, immutable tables (cloning a [`super::Dipole`] shares them).
 pub type SharedTables = Arc<ProfileTables>;
 
-/// Largest optical radius (`σ_t r`) the beam diffusion table reaches.
-const PBD_R_OPT_MAX: f64 = 200.0;
-
 /// Per-channel tables of photon beam diffusion for reduced albedos `rho` and extinctions
 /// `sigma_t` (per mesh unit) at relative index `eta`: its multiple-scattering part, its
-/// single-scattering part, or both.
+/// single-scattering part, or both, evaluated on each channel's grid (no albedo interpolation).
 pub fn channel_tables(
     rho: &[f64; 3],
     sigma_t: &[f64; 3],
@@ -189,17 +215,22 @@ pub fn channel_tables(
     multiple: bool,
     single: bool,
 ) -> SharedTables {
-    let table = super::beam_diffusion::BeamDiffusionTable::shared(eta);
-    let pick = |s: super::beam_diffusion::Split| {
-        (if multiple { s.multiple } else { 0.0 }) + (if single { s.single } else { 0.0 })
-    };
+    use super::beam_diffusion::{beam_diffusion_multiple, beam_diffusion_single};
     let channels = std::array::from_fn(|c| {
-        RadialTable::from_optical(
-            sigma_t[c],
-            PBD_R_OPT_MAX,
-            |r| pick(table.radial(rho[c], r)),
-            |r| pick(table.tail(rho[c], r)),
-        )
+        let rho = rho[c].clamp(0.0, 1.0 - 1e-9);
+        // Both parts decay at least as fast as e^{-σ_tr r}, σ_tr = √(3(1-ρ)/(2-ρ)) (Grosjean).
+        let sigma_tr = (3.0 * (1.0 - rho) / (2.0 - rho)).sqrt();
+        let r_opt_max = (20.0 / sigma_tr + 30.0).min(400.0);
+        RadialTable::from_radial(sigma_t[c], r_opt_max, |r| {
+            let mut v = 0.0;
+            if multiple {
+                v += beam_diffusion_multiple(rho, 1.0 - rho, eta, r);
+            }
+            if single {
+                v += beam_diffusion_single(rho, 1.0 - rho, eta, r);
+            }
+            v
+        })
     });
     Arc::new(ProfileTables { channels })
 }
