@@ -104,6 +104,11 @@ impl OffscreenRenderer {
         })
     }
 
+    /// Width and height of the targets, pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
     /// The mesh pass, e.g. to set an environment map.
     pub fn mesh_pass_mut(&mut self) -> &mut MeshPass {
         &mut self.mesh_pass

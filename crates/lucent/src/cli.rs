@@ -1,9 +1,10 @@
 //! Command-line interface (clap).
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use lucent_core::bssrdf::ProfileKind;
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -89,6 +90,20 @@ pub fn parse_hierarchy(s: &str) -> Result<HierarchyChoice, String> {
 /// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
 /// steradians). Every threshold must be a positive, finite number; the rest stay at their
 /// defaults ([`Oracle::default`]).
+/// `--profile NAME`: one of the diffusion profiles, case-insensitive.
+pub fn parse_profile(s: &str) -> Result<ProfileKind, String> {
+    s.parse::<ProfileKind>().map_err(|e| e.to_string())
+}
+
+/// `on`/`off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
+pub fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.trim().to_ascii_lowercase().as_str() {
+        "on" | "true" | "yes" | "1" => Ok(true),
+        "off" | "false" | "no" | "0" => Ok(false),
+        _ => Err(format!("expected on or off, got '{s}'")),
+    }
+}
+
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
@@ -178,10 +193,32 @@ pub struct RenderArgs {
     /// Image height in pixels.
     #[arg(long, default_value_t = 600)]
     pub height: u32,
-    /// Output PNG file; with --frames, the output directory (created if its parent exists).
-    /// Default lucent.png, or frames/ with --frames.
+    /// Output file (PNG, or OpenEXR when it ends in .exr); with --frames, the output directory
+    /// (created if its parent exists). Default lucent.png (lucent.exr with --format exr), or
+    /// frames/ with --frames.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Output format: `png` (tone-mapped 8-bit) or `exr` (linear radiance before exposure and
+    /// tone curve, R, G, B premultiplied by A = coverage of the object, 32-bit float; the
+    /// background is 0 with alpha 0). Default: exr when --out ends in .exr, else png; with
+    /// --frames, png (frame_0001.png, or frame_0001.exr with --format exr).
+    #[arg(long, value_enum)]
+    pub format: Option<ImageFormat>,
+    /// Switch off the surface reflection (the Fresnel-weighted environment reflection) and the
+    /// specular highlight (HTSM: its lit-side diffuse and specular terms too), leaving only the
+    /// subsurface term F_t B / pi. Scene key: `surface = false`.
+    #[arg(long)]
+    pub no_surface: bool,
+    /// Diffusion profile (homogeneous methods): `pbd` (photon beam diffusion, Habel et al.
+    /// 2013, multiple and single scattering; default), `dipole` (Jensen et al. 2001 in distance
+    /// form) or `mertens` (the paper's dipole on the receiver's normal, to reproduce its
+    /// tables). Scene key `profile`.
+    #[arg(long, value_parser = parse_profile)]
+    pub profile: Option<ProfileKind>,
+    /// Include the single-scattering term (`on`/`off`; default on for pbd and dipole, mertens
+    /// has none). Scene key `single_scattering`.
+    #[arg(long, value_parser = parse_on_off)]
+    pub single_scattering: Option<bool>,
     /// Solver.
     #[arg(long, value_enum, default_value_t = Method::Hierarchical)]
     pub method: Method,
@@ -192,7 +229,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
     pub hierarchy: HierarchyChoice,
     /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default:
-    /// one-point transport estimates, ε1 = 0.3, ε2 = 0.1, ε_abs = 1e-3, within 1% of the exact
+    /// one-point transport estimates at the profile's default thresholds, ε1 = 0.1, ε2 = 0.03,
+    /// ε_abs = 3e-4 for pbd and dipole, 0.3, 0.1, 1e-3 for mertens, within 1% of the exact
     /// solve on the bunny), `transport:EPS1,EPS2[,EPS_ABS]`, or the paper's solid angles
     /// `solid-angle:EPS1,EPS2` (steradians). Larger thresholds: fewer links, faster, less
     /// accurate (`lucent bench solver --sweep` measures the trade).
@@ -283,6 +321,40 @@ pub struct HtsmArgs {
     /// Side of the light-view reference images, texels (16..=device limit).
     #[arg(long, default_value_t = 256, help_heading = "HTSM (--method htsm)")]
     pub htsm_size: u32,
+}
+
+/// The file format of `lucent render --out` (`--format`).
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// Tone-mapped, gamma-encoded 8-bit RGBA PNG (what the eye sees).
+    #[default]
+    Png,
+    /// Linear HDR radiance and coverage, 32-bit float RGBA OpenEXR (what a path tracer compares).
+    Exr,
+}
+
+impl ImageFormat {
+    /// The file extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            ImageFormat::Png => "png",
+            ImageFormat::Exr => "exr",
+        }
+    }
+
+    /// `--format` if given; else `exr` when `out` is a single file ending in `.exr`
+    /// (case-insensitive); else `png`. A `--frames` directory has no extension to go by.
+    pub fn resolve(flag: Option<ImageFormat>, out: Option<&Path>, frames: bool) -> ImageFormat {
+        if let Some(f) = flag {
+            return f;
+        }
+        let exr = !frames
+            && out
+                .and_then(|p| p.extension())
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        if exr { ImageFormat::Exr } else { ImageFormat::Png }
+    }
 }
 
 /// HTSM transport model.

@@ -6,7 +6,8 @@
 //! `KHR_materials_volume` (attenuation colour, attenuation distance in mesh units, converted to
 //! object units), else the defaults. HTSM renders from one light: the first `--light`.
 
-use crate::cli::{HtsmArgs, HtsmModel, RenderArgs};
+use crate::cli::{HtsmArgs, HtsmModel, ImageFormat, RenderArgs};
+use crate::render::output::{Frame, HdrImage};
 use crate::render::{Scene, Timings, tone_map};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
@@ -26,14 +27,19 @@ pub const DEFAULT_TRANSPORT_DISTANCE: f32 = 0.5;
 /// object units: far beyond any path through the object.
 const CLEAR_TRANSPORT_DISTANCE: f32 = 1.0e4;
 
-/// Renders `scene` with HTSM; returns the image and the timings of the summary line.
-pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
+/// Renders `scene` with HTSM; returns the frame in `format` and the timings of the summary line.
+pub fn render(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(Frame, Timings)> {
     let gltf = match &scene.mesh_path {
         Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
         _ => None,
     };
     let mut params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
     params.tone = tone_map(args, scene.exposure);
+    if !scene.surface {
+        // The lit side's Lambert and Blinn-Phong terms: only the transport term remains.
+        params.diffuse = 0.0;
+        params.specular = 0.0;
+    }
     let light =
         scene.lights.first().context("HTSM needs a light (an environment alone is not enough)")?.light;
     if scene.lights.len() > 1 {
@@ -55,7 +61,13 @@ pub fn render(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Tim
         width: args.width,
         height: args.height,
     };
-    let image = renderer.render(&ctx, &view, &params)?;
+    let image = match format {
+        ImageFormat::Png => Frame::Ldr(renderer.render(&ctx, &view, &params)?),
+        ImageFormat::Exr => {
+            let pixels = renderer.render_hdr(&ctx, &view, &params)?;
+            Frame::Hdr(HdrImage { width: args.width, height: args.height, pixels })
+        }
+    };
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let memory = renderer.memory();
     println!(

@@ -7,6 +7,9 @@
 //! material = "marble"         # a preset, or { sigma_s_prime = [..], sigma_a = [..], eta = 1.3 }
 //! scale = 0.05                # largest bounding-box side, metres
 //! exposure = 1.0
+//! surface = true             # false: subsurface term only (no reflection, no highlight)
+//! profile = "pbd"             # diffusion profile: pbd, dipole or mertens
+//! single_scattering = true    # single scattering (pbd, dipole)
 //! deform = ["twist:30"]       # twist:DEGREES, bump:x,y,z,radius,height, noise:amplitude,frequency
 //!
 //! [[light]]
@@ -66,6 +69,20 @@ pub struct Scene {
     /// Exposure multiplier applied to radiance before tone mapping (> 0). Default 1.
     #[serde(default = "one")]
     pub exposure: f32,
+    /// Whether the surface reflection (Fresnel-weighted environment reflection) and the specular
+    /// highlight are drawn; `false` leaves only the subsurface term `F_t B / pi` (as
+    /// `lucent render --no-surface`). Default true.
+    #[serde(default = "yes")]
+    pub surface: bool,
+    /// Diffusion profile: `"pbd"` (photon beam diffusion, the default), `"dipole"` (Jensen's
+    /// distance form) or `"mertens"` (the paper's dipole on the receiver's normal), as
+    /// `lucent render --profile`.
+    #[serde(default)]
+    pub profile: Option<String>,
+    /// Whether the single-scattering term is included (default: true for `pbd` and `dipole`;
+    /// `mertens` has none), as `lucent render --single-scattering`.
+    #[serde(default)]
+    pub single_scattering: Option<bool>,
     /// Lights (`[[light]]` tables). Default: none, and the renderer adds its default light when
     /// there is neither a light nor an environment.
     #[serde(default, rename = "light")]

@@ -48,6 +48,7 @@ struct Vertex {
 struct Targets {
     width: u32,
     height: u32,
+    hdr: wgpu::Texture,
     hdr_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
     ldr: wgpu::Texture,
@@ -582,7 +583,9 @@ impl HtsmRenderer {
         let hdr = make(
             "htsm hdr",
             HDR_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
         );
         let depth = make("htsm depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
         let ldr = make(
@@ -595,6 +598,7 @@ impl HtsmRenderer {
         self.targets = Some(Targets {
             width,
             height,
+            hdr,
             hdr_view,
             depth_view: depth.create_view(&Default::default()),
             ldr_view: ldr.create_view(&Default::default()),
@@ -796,6 +800,21 @@ impl HtsmRenderer {
         ctx.check("rendering HTSM")?;
         let t = self.targets.as_ref().expect("encode ensures targets");
         Ok(read_texture(ctx, &t.ldr, 0)?.to_rgba_image()?)
+    }
+
+    /// Renders one frame and reads back the HDR radiance before tone mapping: RGBA `f32`,
+    /// alpha = coverage (1 on the object, 0 elsewhere, radiance 0 there), rows top first.
+    pub fn render_hdr(
+        &mut self,
+        ctx: &GpuContext,
+        view: &HtsmView,
+        params: &HtsmParams,
+    ) -> Result<Vec<[f32; 4]>, HtsmError> {
+        let encoder = self.encode(ctx, view, params)?;
+        self.queue.submit([encoder.finish()]);
+        ctx.check("rendering HTSM")?;
+        let t = self.targets.as_ref().expect("encode ensures targets");
+        Ok(read_texture(ctx, &t.hdr, 0)?.to_rgba_f32()?)
     }
 
     /// Renders one frame without read-back and blocks until the queue has finished it

@@ -6,17 +6,18 @@
 
 use super::frame::{FrameSolver, GpuFrame};
 use super::setup::{Scene, orbit_lights};
-use super::{method_name, tone_map, write_png_atomically};
-use crate::cli::{Method, RenderArgs, SolveMode};
+use super::{image_format, method_name, tone_map};
+use crate::cli::{ImageFormat, Method, RenderArgs, SolveMode};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lucent_gpu::GpuContext;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The frames' file name: 1-based, four digits, as video tools expect (`frame_%04d.png`).
-pub fn frame_name(index: u32) -> String {
-    format!("frame_{:04}.png", index + 1)
+/// The frames' file name: 1-based, four digits, as video tools expect (`frame_%04d.png`, or
+/// `.exr`).
+pub fn frame_name(index: u32, format: ImageFormat) -> String {
+    format!("frame_{:04}.{}", index + 1, format.extension())
 }
 
 /// Checks the output directory before any work: an existing directory, or a path whose parent
@@ -28,7 +29,7 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
     if out.exists() {
         bail!("{}: --out must be a directory with --frames (this is a file)", out.display());
     }
-    let parent = super::output_dir(out);
+    let parent = super::output::output_dir(out);
     if !parent.is_dir() {
         bail!("{}: the output directory's parent {} does not exist", out.display(), parent.display());
     }
@@ -45,9 +46,10 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     }
     // Incremental by default: the links made on the first frame are updated, not rebuilt.
     let mode = args.mode.unwrap_or(SolveMode::Incremental);
+    let format = image_format(args);
     let mut ctx = Some(GpuContext::new()?);
     let started = Instant::now();
-    let mut solver = FrameSolver::new(scene, args.method, mode, args.oracle)?;
+    let mut solver = FrameSolver::new(scene, args.method, mode, scene.oracle(args.oracle))?;
     let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
@@ -75,7 +77,8 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         let t = Instant::now();
         let image = match &mut gpu {
             Some(g) => {
-                g.draw((!scene.deform.is_empty()).then_some(&mesh), &solved.vertex_radiance, &lights)?
+                let moved = (!scene.deform.is_empty()).then_some(&mesh);
+                g.draw(moved, &solved.vertex_radiance, &lights, format)?
             }
             None => {
                 let ctx = ctx.take().expect("used once");
@@ -88,7 +91,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
                     &solved.vertex_radiance,
                     !args.no_env_background,
                 )?);
-                g.draw(None, &solved.vertex_radiance, &lights)?
+                g.draw(None, &solved.vertex_radiance, &lights, format)?
             }
         };
         let render_ms = ms_since(t);
@@ -97,7 +100,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
             std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
             created_dir = true;
         }
-        write_png_atomically(&image, &out.join(frame_name(i)))?;
+        image.write(&out.join(frame_name(i, format)))?;
         times.push(&solved, render_ms, ms_since(t));
         bar.set_message(format!("solve {:.0} ms", solved.total_ms()));
         bar.inc(1);
@@ -115,7 +118,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         frames,
         started.elapsed().as_secs_f64(),
         adapter,
-        out.join(frame_name(0)).display(),
+        out.join(frame_name(0, format)).display(),
     );
     // Before the medians sort the columns.
     let first_link_ms = times.link.first().copied().unwrap_or(0.0);
@@ -186,9 +189,9 @@ mod tests {
 
     #[test]
     fn frame_names_sort_and_start_at_one() {
-        assert_eq!(frame_name(0), "frame_0001.png");
-        assert_eq!(frame_name(41), "frame_0042.png");
-        assert!(frame_name(8) < frame_name(9));
+        assert_eq!(frame_name(0, ImageFormat::Png), "frame_0001.png");
+        assert_eq!(frame_name(41, ImageFormat::Exr), "frame_0042.exr");
+        assert!(frame_name(8, ImageFormat::Png) < frame_name(9, ImageFormat::Png));
     }
 
     #[test]

@@ -3,8 +3,9 @@
 //! (§5.5: made once, updated per frame); [`GpuFrame`] keeps the device, targets, mesh buffers and
 //! environment map, and uploads only what changed.
 
+use super::output::{Frame, HdrImage};
 use super::setup::Scene;
-use crate::cli::{Method, SolveMode};
+use crate::cli::{ImageFormat, Method, SolveMode};
 use anyhow::{Result, bail};
 use lucent_core::Rgb;
 use lucent_core::formfactor::FormFactorOptions;
@@ -163,8 +164,9 @@ pub struct GpuFrame {
 
 impl GpuFrame {
     /// Targets of `width` x `height`, `mesh` uploaded with `radiance`, the environment map (if
-    /// any) set for the reflection and, with `env_background`, drawn behind the mesh, and the
-    /// camera framed on the scene's rest mesh (fixed over an animation).
+    /// any) set for the reflection (unless the scene has no surface term) and, with
+    /// `env_background`, drawn behind the mesh, and the camera framed on the scene's rest mesh
+    /// (fixed over an animation).
     pub fn new(
         ctx: GpuContext,
         scene: &Scene,
@@ -179,14 +181,20 @@ impl GpuFrame {
         let mut renderer = OffscreenRenderer::new(&ctx, width, height)?;
         let (center, radius) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
         let camera = scene.camera.frame(center, radius, width as f32 / height as f32);
-        let mut shading =
-            Shading { eta: scene.material.eta as f32, lights: scene.plain_lights(), ..Default::default() };
+        let mut shading = Shading {
+            eta: scene.material.eta as f32,
+            lights: scene.plain_lights(),
+            specular: if scene.surface { 1.0 } else { 0.0 },
+            ..Default::default()
+        };
         let environment = match &scene.environment {
             Some(env) => {
                 let (w, h) = (env.reflection.width as u32, env.reflection.height as u32);
                 let map = EnvironmentMap::from_rgba_f32(&ctx, w, h, &env.reflection_rgba())?;
                 renderer.mesh_pass_mut().set_environment(&ctx, &map);
-                shading.environment = env.environment.intensity;
+                if scene.surface {
+                    shading.environment = env.environment.intensity;
+                }
                 if env_background {
                     shading.background = env.environment.intensity;
                 }
@@ -198,20 +206,30 @@ impl GpuFrame {
     }
 
     /// Draws the mesh with new per-vertex `radiance`, new geometry (`mesh`, when it moved) and
-    /// `lights` for the highlight, and reads the tone-mapped image back.
+    /// `lights` for the highlight, and reads the frame back: the tone-mapped image, or for
+    /// [`ImageFormat::Exr`] the HDR radiance and coverage with nothing behind the object.
     pub fn draw(
         &mut self,
         mesh: Option<&Mesh>,
         radiance: &[Rgb],
         lights: &[SceneLight],
-    ) -> Result<image::RgbaImage> {
+        format: ImageFormat,
+    ) -> Result<Frame> {
         if let Some(m) = mesh {
             self.mesh.update_geometry(&self.ctx, &m.positions, &m.vertex_normals())?;
         }
         self.mesh.update_radiance(&self.ctx, radiance)?;
         self.shading.lights = lights.iter().map(|l| l.light).collect();
+        if format == ImageFormat::Exr {
+            // The background would cover alpha and bleed into the object's edge pixels.
+            let shading = Shading { background: 0.0, ..self.shading.clone() };
+            self.renderer.render(&self.ctx, &self.mesh, &self.camera, &shading, &self.tone)?;
+            let (width, height) = self.renderer.size();
+            let pixels = self.renderer.read_hdr(&self.ctx)?;
+            return Ok(Frame::Hdr(HdrImage { width, height, pixels }));
+        }
         self.renderer.render(&self.ctx, &self.mesh, &self.camera, &self.shading, &self.tone)?;
-        Ok(self.renderer.read_image(&self.ctx)?)
+        Ok(Frame::Ldr(self.renderer.read_image(&self.ctx)?))
     }
 
     /// The adapter, for the summary line.

@@ -1,7 +1,8 @@
 //! `lucent render`: mesh ─► irradiance at the faces with ray-cast shadows and the SH environment
 //! (Mertens §5.3) ─► subsurface solve (§3, §5.2, §5.5) ─► area-weighted per-vertex `B / pi`
 //! (§3.2) ─► GPU raster with the exit Fresnel factor, highlights and the Fresnel-weighted
-//! environment reflection, tone mapped (§5.4) ─► PNG, written atomically.
+//! environment reflection, tone mapped (§5.4) ─► PNG, or the HDR frame as OpenEXR, written
+//! atomically ([`output`]).
 //!
 //! * [`setup`]: the scene from the flags and an optional scene file (flags win).
 //! * [`frame`]: the solve and the GPU frame, reusable across frames.
@@ -12,17 +13,18 @@
 
 pub mod animation;
 pub mod frame;
+pub mod output;
 pub mod setup;
 
 pub use setup::{Scene, load_scene};
 
-use crate::cli::{HierarchyChoice, Method, RenderArgs, SolveMode, ToneCurve};
+use crate::cli::{HierarchyChoice, ImageFormat, Method, RenderArgs, SolveMode, ToneCurve};
 use anyhow::{Context, Result, bail};
 use frame::{FrameSolver, GpuFrame};
 use lucent_gpu::GpuContext;
 use lucent_gpu::tonemap::{ToneMap, ToneOperator};
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use output::{Frame, output_dir};
+use std::path::PathBuf;
 use std::time::Instant;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -35,13 +37,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let out = args.out.clone().unwrap_or_else(animation::default_out);
         return animation::run(args, &scene, frames, &out);
     }
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("lucent.png"));
+    let format = image_format(args);
+    let out = single_out(args);
     let started = Instant::now();
     let (image, timings) = match args.method {
-        Method::Htsm => render_htsm(&scene, args)?,
-        method => render_mertens(&scene, args, method)?,
+        Method::Htsm => render_htsm(&scene, args, format)?,
+        method => render_mertens(&scene, args, method, format)?,
     };
-    write_png_atomically(&image, &out)?;
+    image.write(&out)?;
     println!(
         "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms{}, render {:.0} ms on {}, total {:.0} ms -> {}",
         scene.source,
@@ -108,6 +111,17 @@ pub(crate) fn method_name(m: Method) -> &'static str {
     }
 }
 
+/// The output format: `--format`, else by `--out`'s extension.
+pub(crate) fn image_format(args: &RenderArgs) -> ImageFormat {
+    ImageFormat::resolve(args.format, args.out.as_deref(), args.frames.is_some())
+}
+
+/// The output file of a single image: `--out`, else `lucent.png` or `lucent.exr`.
+fn single_out(args: &RenderArgs) -> PathBuf {
+    let default = || PathBuf::from(format!("lucent.{}", image_format(args).extension()));
+    args.out.clone().unwrap_or_else(default)
+}
+
 /// Rejects bad numbers and an unwritable output location before any work is done.
 fn check_args(args: &RenderArgs) -> Result<()> {
     if let Some(scale) = args.scale
@@ -137,32 +151,31 @@ fn check_args(args: &RenderArgs) -> Result<()> {
     if args.frames.is_some() {
         return animation::check_out_dir(&args.out.clone().unwrap_or_else(animation::default_out));
     }
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("lucent.png"));
+    let out = single_out(args);
     let dir = output_dir(&out);
     if !dir.is_dir() {
         bail!("{}: the output directory {} does not exist", out.display(), dir.display());
     }
     if out.is_dir() {
-        bail!("{}: --out names a directory; give a .png file (or use --frames)", out.display());
+        bail!("{}: --out names a directory; give a .png or .exr file (or use --frames)", out.display());
     }
     Ok(())
 }
 
-pub(crate) fn output_dir(out: &Path) -> PathBuf {
-    match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
-}
-
 /// Mertens 2003: solve on the CPU (with `--deform` applied in full), then rasterise per-vertex
 /// radiance on the GPU.
-fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(image::RgbaImage, Timings)> {
+fn render_mertens(
+    scene: &Scene,
+    args: &RenderArgs,
+    method: Method,
+    format: ImageFormat,
+) -> Result<(Frame, Timings)> {
     // The adapter first: without one, fail before the (possibly long) solve.
     let ctx = GpuContext::new()?;
     let mesh = scene.deformed(1.0);
     let t = Instant::now();
-    let mut solver = FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly), args.oracle)?;
+    let mut solver =
+        FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly), scene.oracle(args.oracle))?;
     let solved = solver.solve(&mesh, &scene.lights)?;
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
     log::info!(
@@ -183,14 +196,14 @@ fn render_mertens(scene: &Scene, args: &RenderArgs, method: Method) -> Result<(i
         &solved.vertex_radiance,
         !args.no_env_background,
     )?;
-    let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights)?;
+    let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights, format)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter(), links: solved.links }))
 }
 
 /// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.
-fn render_htsm(scene: &Scene, args: &RenderArgs) -> Result<(image::RgbaImage, Timings)> {
-    crate::render_htsm::render(scene, args)
+fn render_htsm(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(Frame, Timings)> {
+    crate::render_htsm::render(scene, args, format)
 }
 
 pub(crate) fn tone_map(args: &RenderArgs, exposure: f32) -> ToneMap {
@@ -203,27 +216,4 @@ pub(crate) fn tone_map(args: &RenderArgs, exposure: f32) -> ToneMap {
         },
         ..Default::default()
     }
-}
-
-/// Encodes `image` as PNG into a temporary file next to `out`, then renames it over `out`:
-/// readers never see a partial file, and on error `out` is left untouched.
-pub fn write_png_atomically(image: &image::RgbaImage, out: &Path) -> Result<()> {
-    let mut png = Vec::new();
-    image
-        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .context("encoding the PNG")?;
-    let name =
-        out.file_name().with_context(|| format!("{}: not a file name", out.display()))?.to_string_lossy();
-    let tmp = output_dir(out).join(format!(".{name}.{}.png.tmp", std::process::id()));
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(&png)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, out)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("{}: cannot write the image", out.display()));
-    }
-    Ok(())
 }

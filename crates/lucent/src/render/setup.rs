@@ -6,10 +6,11 @@ use crate::cli::RenderArgs;
 use crate::scene::{self as scene_file, LoadedEnvironment};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
+use lucent_core::solver::Oracle;
 use lucent_gpu::camera::OrbitCamera;
 use std::path::{Path, PathBuf};
 
@@ -28,7 +29,8 @@ pub struct Scene {
     pub material: Material,
     /// Model scale: the largest side of the mesh's bounding box, metres.
     pub scale: f64,
-    /// Dipole coefficients converted to mesh units by the model scale.
+    /// The diffusion profile (`--profile`) with its coefficients converted to mesh units by the
+    /// model scale.
     pub dipole: Dipole,
     /// Lights (mesh units) with whether each casts shadows.
     pub lights: Vec<SceneLight>,
@@ -40,12 +42,21 @@ pub struct Scene {
     pub camera: OrbitCamera,
     /// Exposure multiplier before tone mapping (> 0).
     pub exposure: f32,
+    /// Whether the surface reflection and highlight are drawn (false: `--no-surface` or the
+    /// scene's `surface = false`, the subsurface term alone).
+    pub surface: bool,
     /// A hierarchy built with `mesh` (`--hierarchy shrink-wrap:L`); `None`: the solver builds
     /// the face-cluster hierarchy of `mesh`.
     pub hierarchy: Option<lucent_core::hierarchy::Hierarchy>,
 }
 
 impl Scene {
+    /// The oracle to solve with: `requested` when it names thresholds, else (plain
+    /// `transport`, the default) the profile's own defaults ([`Oracle::for_profile`]).
+    pub fn oracle(&self, requested: Oracle) -> Oracle {
+        if requested == Oracle::default() { Oracle::for_profile(self.dipole.profile) } else { requested }
+    }
+
     /// The rest mesh deformed by every deformation at animation parameter `t` (0 = rest pose,
     /// 1 = as specified; see `Deformation::apply`).
     pub fn deformed(&self, t: f32) -> Mesh {
@@ -98,7 +109,17 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     if !(exposure.is_finite() && exposure > 0.0) {
         bail!("--exposure must be a positive number, got {exposure}");
     }
-    let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, scale);
+    let profile = match (args.profile, file.as_ref().and_then(|f| f.profile.as_deref())) {
+        (Some(p), _) => p,
+        (None, Some(name)) => name.parse::<ProfileKind>().map_err(|e| anyhow::anyhow!("scene file: {e}"))?,
+        (None, None) => ProfileKind::default(),
+    };
+    let single_scattering = args
+        .single_scattering
+        .or(file.as_ref().and_then(|f| f.single_scattering))
+        .unwrap_or(profile.single_scattering_by_default());
+    let dipole =
+        Dipole::profile_for_model_scale(&material, mesh.extent() as f64, scale, profile, single_scattering);
     let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
 
     let environment = match (&args.env, &file) {
@@ -168,6 +189,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         deform,
         camera,
         exposure,
+        surface: !args.no_surface && file.as_ref().is_none_or(|f| f.surface),
         hierarchy: None,
     })
 }

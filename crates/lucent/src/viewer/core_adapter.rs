@@ -138,6 +138,19 @@ pub struct SolverSession {
     shadows: Option<(ShadowCaster, usize)>,
     environment: Option<(EnvChoice, Option<Environment>)>,
     hierarchical: Option<Hierarchical>,
+    /// The last profile made and what it was made for: a tabulated profile costs ~50 ms, too
+    /// much to redo every frame.
+    profile: Option<(ProfileKey, Dipole)>,
+}
+
+/// What a [`Dipole`] is made from.
+#[derive(Clone, Debug, PartialEq)]
+struct ProfileKey {
+    material: lucent_core::bssrdf::Material,
+    extent: f32,
+    scale_m: f64,
+    kind: lucent_core::bssrdf::ProfileKind,
+    single_scattering: bool,
 }
 
 /// The hierarchical solver with what its links were made for.
@@ -162,7 +175,24 @@ impl SolverSession {
     /// from scratch after a geometry, material or threshold change; incremental re-evaluates
     /// only the links that the change touched.
     fn solve_hierarchical(&mut self, mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
-        let dipole = Dipole::for_model_scale(&params.material, mesh.extent() as f64, params.scale_m);
+        let key = ProfileKey {
+            material: params.material.clone(),
+            extent: mesh.extent(),
+            scale_m: params.scale_m,
+            kind: params.profile,
+            single_scattering: params.single_scattering,
+        };
+        if self.profile.as_ref().is_none_or(|(k, _)| *k != key) {
+            let d = Dipole::profile_for_model_scale(
+                &key.material,
+                key.extent as f64,
+                key.scale_m,
+                key.kind,
+                key.single_scattering,
+            );
+            self.profile = Some((key, d));
+        }
+        let dipole = self.profile.as_ref().expect("made above").1.clone();
         let eps = (params.epsilon1, params.epsilon2);
         let h = self.hierarchy_for(mesh, dipole.clone(), eps);
         let moved = h.solver.mesh.positions != mesh.positions;
@@ -214,18 +244,19 @@ impl SolverSession {
 
     /// The solver for `mesh`'s topology, built (hierarchy and all) when the topology changed.
     fn hierarchy_for(&mut self, mesh: &Mesh, dipole: Dipole, eps: (f64, f64)) -> &mut Hierarchical {
+        let kind = dipole.profile;
         let same = self.hierarchical.as_ref().is_some_and(|h| {
             h.solver.mesh.triangles == mesh.triangles && h.solver.mesh.positions.len() == mesh.positions.len()
         });
         if !same {
-            let oracle = Oracle { eps1: eps.0 as f32, eps2: eps.1 as f32, ..Oracle::default() };
+            let oracle =
+                Oracle { eps1: eps.0 as f32, eps2: eps.1 as f32, ..Oracle::for_profile(dipole.profile) };
             let solver =
                 HierarchicalSolver::new(mesh.clone(), face_cluster::build(mesh), dipole.clone(), oracle);
             self.hierarchical = Some(Hierarchical { solver, dipole, eps });
         }
         let h = self.hierarchical.as_mut().expect("set above");
-        h.solver.oracle.eps1 = eps.0 as f32;
-        h.solver.oracle.eps2 = eps.1 as f32;
+        h.solver.oracle = Oracle { eps1: eps.0 as f32, eps2: eps.1 as f32, ..Oracle::for_profile(kind) };
         h
     }
 

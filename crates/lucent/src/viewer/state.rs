@@ -6,6 +6,7 @@
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
+use lucent_core::bssrdf::ProfileKind;
 
 /// Kind of a light in the lights list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -186,6 +187,10 @@ pub struct SolveParams {
     pub env_strength: f32,
     /// Solver mode.
     pub mode: SolverMode,
+    /// Diffusion profile (default [`ProfileKind::default`]: photon beam diffusion).
+    pub profile: ProfileKind,
+    /// Whether the single-scattering term is included (pbd, dipole).
+    pub single_scattering: bool,
     /// Refinement oracle threshold ε1 at the receiver (`Oracle::eps1`, transport mode: largest
     /// relative change of the transport over a receiver cluster; smaller refines more).
     pub epsilon1: f64,
@@ -256,9 +261,12 @@ impl ViewState {
                 env_rotation_deg: 0.0,
                 env_strength: 1.0,
                 mode: SolverMode::Render,
-                // The solver's defaults (transport oracle), which meet 1% of the exact solve.
-                epsilon1: lucent_core::solver::Oracle::default().eps1 as f64,
-                epsilon2: lucent_core::solver::Oracle::default().eps2 as f64,
+                profile: ProfileKind::default(),
+                single_scattering: ProfileKind::default().single_scattering_by_default(),
+                // The profile's default thresholds (transport oracle), which meet 1% of the
+                // exact solve on the bunny.
+                epsilon1: lucent_core::solver::Oracle::for_profile(ProfileKind::default()).eps1 as f64,
+                epsilon2: lucent_core::solver::Oracle::for_profile(ProfileKind::default()).eps2 as f64,
                 shadows: true,
                 cluster_face: None,
             },

@@ -211,6 +211,15 @@ fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
             ui.radio_value(&mut p.mode, m, m.label());
         }
     });
+    ui.horizontal(|ui| {
+        ui.label("profile");
+        for k in lucent_core::bssrdf::ProfileKind::ALL {
+            ui.radio_value(&mut p.profile, k, k.name());
+        }
+    });
+    if p.profile != lucent_core::bssrdf::ProfileKind::Mertens {
+        ui.checkbox(&mut p.single_scattering, "single scattering");
+    }
     // Transport-oracle thresholds (relative errors): smaller refines more.
     ui.add(Slider::new(&mut p.epsilon1, 1e-3..=1.0).logarithmic(true).text("ε1 receiver"));
     ui.add(Slider::new(&mut p.epsilon2, 1e-3..=1.0).logarithmic(true).text("ε2 emitter"));
