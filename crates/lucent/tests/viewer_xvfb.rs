@@ -39,14 +39,18 @@ fn differs_from_background(p: &image::Rgb<u8>) -> bool {
 }
 
 /// Runs `lucent view` under Xvfb in `dir` with `script`, saving the final frame to `last`;
-/// returns the viewer's stdout.
-fn run_viewer(dir: &Path, script: &str, last: &str) -> String {
-    let xvfb = find_on_path("xvfb-run").unwrap_or_else(|| {
-        panic!(
-            "xvfb-run is not installed: the viewer test needs a virtual X server. Install it \
-             with `apt-get install xvfb xauth` (CI does this in .ci/run)."
-        )
-    });
+/// returns the viewer's stdout, or `None` when `xvfb-run` is missing and this is not CI (the
+/// test then says it was skipped and how to install it; under `CI` a missing Xvfb fails).
+fn run_viewer(dir: &Path, script: &str, last: &str) -> Option<String> {
+    let Some(xvfb) = find_on_path("xvfb-run") else {
+        let how = "the viewer test needs a virtual X server: install it with `apt-get install xvfb xauth` \
+                   (.ci/run does)";
+        if std::env::var_os("CI").is_some() {
+            panic!("xvfb-run is not installed under CI: {how}");
+        }
+        eprintln!("SKIPPED: xvfb-run is not installed; {how}");
+        return None;
+    };
     std::fs::create_dir_all(dir).unwrap();
     let output = Command::new(xvfb)
         .args(["-a", "-s", "-screen 0 1280x1024x24"])
@@ -66,7 +70,7 @@ fn run_viewer(dir: &Path, script: &str, last: &str) -> String {
         "lucent view failed ({}):\nstdout:\n{stdout}\nstderr:\n{stderr}",
         output.status
     );
-    stdout
+    Some(stdout)
 }
 
 /// Checks that the object shows in both screenshots' 3D view and that the view changed between
@@ -111,7 +115,9 @@ fn fresh_dir(name: &str, files: &[&str]) -> PathBuf {
 #[test]
 fn scripted_dent_and_light_move_change_the_image() {
     let dir = fresh_dir("viewer_xvfb", &["before.png", "after.png"]);
-    let stdout = run_viewer(&dir, "shot:before.png;dent:0.1,0.15,0.5;light:0,1,-2", "after.png");
+    let Some(stdout) = run_viewer(&dir, "shot:before.png;dent:0.1,0.15,0.5;light:0,1,-2", "after.png") else {
+        return;
+    };
     // The dent and the light move changed the 3D view.
     let fraction = check_object_and_change(&dir, &stdout, "before.png", "after.png");
     assert!(fraction > 0.01, "only {:.3}% of the 3D view changed", 100.0 * fraction);
@@ -122,7 +128,9 @@ fn scripted_dent_and_light_move_change_the_image() {
 #[test]
 fn switching_to_htsm_draws_the_object_differently() {
     let dir = fresh_dir("viewer_xvfb_htsm", &["mertens.png", "htsm.png"]);
-    let stdout = run_viewer(&dir, "light:0.2,0.6,-1.5;shot:mertens.png;method:htsm", "htsm.png");
+    let Some(stdout) = run_viewer(&dir, "light:0.2,0.6,-1.5;shot:mertens.png;method:htsm", "htsm.png") else {
+        return;
+    };
     let fraction = check_object_and_change(&dir, &stdout, "mertens.png", "htsm.png");
     assert!(fraction > 0.05, "only {:.3}% of the 3D view changed", 100.0 * fraction);
 }

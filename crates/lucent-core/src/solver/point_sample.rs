@@ -72,7 +72,7 @@ impl TableF32 {
         const N: usize = TABLE_SIZE;
         let r = s2.sqrt();
         let x = (r * self.inv_r_max[c]).sqrt() * N as f32;
-        if !(x < N as f32) {
+        if x.is_nan() || x >= N as f32 {
             return 0.0;
         }
         let i = x as usize;
