@@ -407,10 +407,26 @@ pub struct BenchArgs {
     /// default `transport`), e.g. `solid-angle:0.2,0.8` for the paper's link count.
     #[arg(long, value_parser = parse_oracle)]
     pub oracle: Option<Oracle>,
+    /// `bench energy` only: the mesh (a file, or a built-in name: bunny, candle, cube, sphere).
+    /// Default bunny.
+    #[arg(long)]
+    pub mesh: Option<String>,
+    /// `bench energy` only: the material preset. Default marble.
+    #[arg(long)]
+    pub material: Option<String>,
+    /// `bench energy` only: model scale, metres (> 0). Default 0.1.
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// `bench energy` only: the diffusion profile (as `lucent render --profile`). Default pbd.
+    #[arg(long, value_parser = parse_profile)]
+    pub profile: Option<ProfileKind>,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchTarget {
+    /// Energy under uniform irradiance 1: the largest B per face with and without the energy
+    /// bound (`max_b_uniform` must not exceed 1) on `--mesh`.
+    Energy,
     /// Semi-analytic form factor against converged Monte Carlo (Mertens fig. 3).
     Formfactor,
     /// Hierarchical solver: Mertens table 3 (links, on-the-fly, incremental and render times on

@@ -28,7 +28,8 @@ pub struct UniformReport {
     pub max_b_uniform: f32,
     /// The same before the bound: how far the profile alone breaks energy conservation.
     pub max_b_unbounded: f32,
-    /// Faces whose `B` the bound lowered (any channel).
+    /// Faces whose `B` exceeds 1 before the bound in some channel (those the bound lowers,
+    /// where the profile has it on).
     pub faces_bounded: usize,
     /// Faces in the mesh.
     pub faces: usize,

@@ -2,12 +2,14 @@
 
 use crate::cli::{BenchArgs, BenchTarget};
 
+mod energy;
 mod formfactor;
 mod htsm;
 mod solver;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
+        BenchTarget::Energy => energy::run(args),
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
         BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle),
