@@ -11,14 +11,32 @@ mod viewer;
 
 use clap::Parser;
 
+/// Stack of the command's thread and of rayon's workers, bytes.
+pub(crate) const STACK_BYTES: usize = 512 << 20;
+
 fn main() {
     quiet_mesa_without_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = cli::Cli::parse();
+    // The hierarchy's traversals recurse once per level, and face clustering of scanned meshes
+    // can nest thousands of levels deep (3,240 on the 11K Stanford dragon): give the worker
+    // threads and the command's own thread room (only what is touched is committed).
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(STACK_BYTES).build_global();
+    // The viewer's event loop must stay on the main thread (winit); its solves run on a worker.
     let result = match cli.command.unwrap_or_default() {
-        cli::Command::Render(args) => render::run(&args),
-        cli::Command::Bench(args) => bench::run(&args),
         cli::Command::View(args) => view::run(&args),
+        command => {
+            let worker = std::thread::Builder::new().stack_size(STACK_BYTES).spawn(move || match command {
+                cli::Command::Render(args) => render::run(&args),
+                cli::Command::Bench(args) => bench::run(&args),
+                cli::Command::View(args) => view::run(&args),
+            });
+            match worker.map(|w| w.join()) {
+                Ok(Ok(result)) => result,
+                Ok(Err(panic)) => std::panic::resume_unwind(panic),
+                Err(e) => Err(anyhow::anyhow!("cannot start the command's thread: {e}")),
+            }
+        }
     };
     if let Err(err) = result {
         // One line, with the chain of causes, and a non-zero exit: never a panic.

@@ -64,6 +64,7 @@ impl Worker {
         let (rep_tx, rep_rx) = channel();
         let thread = std::thread::Builder::new()
             .name("lucent-solve".into())
+            .stack_size(crate::STACK_BYTES)
             .spawn(move || run(req_rx, rep_tx, wake))
             .expect("spawning the solve thread");
         Worker { requests: req_tx, replies: rep_rx, _thread: thread }
