@@ -186,6 +186,8 @@ impl Dipole {
                 let s_v = (x_o + self.z_v[c] * n_o - p).length();
                 s_r.min(s_v)
             }
+            // A table with single scattering peaks like 1/r at the entry point.
+            _ if self.tables.is_some() => (p.distance_squared(x_o) + 0.01 * self.z_r[c] * self.z_r[c]).sqrt(),
             _ => (p.distance_squared(x_o) + self.z_r[c] * self.z_r[c]).sqrt(),
         })
     }

@@ -38,6 +38,10 @@ pub struct DipoleF32 {
     /// for Mertens), per channel.
     off_r: [f32; 3],
     off_v: [f32; 3],
+    /// Squared length (per channel) on which the profile is smooth at the receiver point, for
+    /// the oracle's error estimates: `z_r²` for the analytic distance form; a tabulated profile
+    /// with single scattering peaks like `1/r` there, so a tenth of `z_r`.
+    near_off: [f32; 3],
     /// Whether the analytic poles are part of the profile (all but PBD).
     analytic: bool,
     /// The tabulated part, if any.
@@ -93,6 +97,10 @@ impl DipoleF32 {
         let normal_weight = if d.profile.uses_normals() { 1.0 } else { 0.0 };
         let off = |z: [f32; 3]| z.map(|z| (1.0 - normal_weight) * z * z);
         let (off_r, off_v) = (off(z_r), off(z_v));
+        let near_off = match &d.tables {
+            Some(_) => off(z_r.map(|z| 0.1 * z)),
+            None => off_r,
+        };
         let table = d.tables.as_ref().map(|t| TableF32 {
             values: t.channels.iter().flat_map(|c| c.r_radial.iter().copied()).collect(),
             inv_r_max: std::array::from_fn(|c| (1.0 / t.channels[c].r_max) as f32),
@@ -107,6 +115,7 @@ impl DipoleF32 {
             normal_weight,
             off_r,
             off_v,
+            near_off,
             analytic: d.has_analytic(),
             table,
             lanes: Lanes {
@@ -210,8 +219,8 @@ impl ReceiverSources {
     #[inline]
     pub fn nearest(&self, d: &DipoleF32, p: Vec3) -> [f32; 3] {
         std::array::from_fn(|c| {
-            ((self.x_r[c] - p).length_squared() + d.off_r[c])
-                .min((self.x_v[c] - p).length_squared() + d.off_v[c])
+            ((self.x_r[c] - p).length_squared() + d.near_off[c])
+                .min((self.x_v[c] - p).length_squared() + d.near_off[c])
                 .sqrt()
         })
     }
