@@ -10,12 +10,12 @@
 //!   thinner than `z_r` its real source lies beyond the far wall and form factors exceed 1.
 //! * [`ProfileKind::Dipole`]: the classic dipole in Jensen et al. 2001's distance form,
 //!   `d_r = √(r² + z_r²)`, `d_v = √(r² + z_v²)`: bounded everywhere, normal-free.
-//! * [`ProfileKind::Pbd`]: photon beam diffusion (Habel, Christensen & Jarosz 2013), tabulated
-//!   over albedo and optical radius ([`super::beam_diffusion`]), multiple plus single
-//!   scattering.
+//! * [`ProfileKind::Pbd`]: photon beam diffusion (Habel, Christensen & Jarosz 2013), evaluated
+//!   per channel on the radial grid of [`RadialTable`] ([`super::beam_diffusion`]), multiple
+//!   plus single scattering.
 //!
 //! Single scattering: PBD's single-scattering term, tabulated likewise, is part of the `pbd`
-//! profile and may be added to the `dipole` profile ([`Dipole::single_scattering`]).
+//! profile and may be added to the `dipole` profile ([`super::Dipole::single_scattering`]).
 
 use std::sync::Arc;
 
@@ -26,7 +26,7 @@ pub enum ProfileKind {
     Mertens,
     /// Jensen et al. 2001's dipole in distance form (bounded, no normals).
     Dipole,
-    /// Photon beam diffusion (Habel et al. 2013), tabulated as pbrt-v3 does (the default).
+    /// Photon beam diffusion (Habel et al. 2013), tabulated per channel (the default).
     #[default]
     Pbd,
 }
