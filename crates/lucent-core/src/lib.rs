@@ -14,6 +14,7 @@
 //! * [`fastexp`]: inlined, vectorisable exponentials for the hot loops.
 //! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
 //!   reference for the same integral.
+//! * [`limits`]: what lucent reads from files and the memory it spends decoding them.
 //! * [`mesh`]: triangle meshes, file loading and validation, generators and deformers.
 //! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
@@ -30,6 +31,7 @@ pub mod fastexp;
 pub mod formfactor;
 pub mod hierarchy;
 pub mod irradiance;
+pub mod limits;
 pub mod mesh;
 pub mod shading;
 pub mod solver;

@@ -163,7 +163,7 @@ pub struct RenderArgs {
     pub material: Option<String>,
     /// Model scale: the largest side of the mesh's bounding box, in metres. Default: the
     /// scene's, else 0.05.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true)]
     pub scale: Option<f64>,
     /// A light: `point:x,y,z` (mesh units) or `dir:x,y,z` (direction the light travels).
     /// Repeatable; replaces the scene's lights. White; a point light gives irradiance 1 at the
@@ -181,17 +181,17 @@ pub struct RenderArgs {
     #[arg(long)]
     pub env: Option<String>,
     /// Rotation of the environment about +Y, degrees. Default: the scene's, else 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::ANGLE_DEG), allow_negative_numbers = true)]
     pub env_rotation: Option<f32>,
     /// Keep the flat background with an environment (by default the map is drawn behind the
     /// object, at the environment's intensity).
     #[arg(long)]
     pub no_env_background: bool,
     /// Image width in pixels.
-    #[arg(long, default_value_t = 800)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::IMAGE_SIDE), allow_negative_numbers = true, default_value_t = 800)]
     pub width: u32,
     /// Image height in pixels.
-    #[arg(long, default_value_t = 600)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::IMAGE_SIDE), allow_negative_numbers = true, default_value_t = 600)]
     pub height: u32,
     /// Output file (PNG, or OpenEXR when it ends in .exr); with --frames, the output directory
     /// (created if its parent exists). Default lucent.png (lucent.exr with --format exr), or
@@ -250,7 +250,7 @@ pub struct RenderArgs {
     /// deformation ramped from the rest pose to full (a noise deformation flows through the
     /// surface instead), or with --orbit-light the lights turning once about the vertical axis
     /// through the object.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::FRAMES), allow_negative_numbers = true)]
     pub frames: Option<u32>,
     /// With --frames: move the lights on a circle about the vertical axis through the object's
     /// centre (one full turn over the animation) instead of ramping the deformation.
@@ -258,25 +258,25 @@ pub struct RenderArgs {
     pub orbit_light: bool,
     /// Exposure multiplier applied to radiance before tone mapping. Default: the scene's,
     /// else 1.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::EXPOSURE), allow_negative_numbers = true)]
     pub exposure: Option<f32>,
     /// Tone curve: `gamma` (clamp, then the gamma curve, as in the paper) or `aces` (a filmic
     /// roll-off of highlights, then the gamma curve).
     #[arg(long, value_enum, default_value_t = ToneCurve::Gamma)]
     pub tonemap: ToneCurve,
     /// Display gamma of the tone curve.
-    #[arg(long, default_value_t = 2.2)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::GAMMA), allow_negative_numbers = true, default_value_t = 2.2)]
     pub gamma: f32,
     /// Camera yaw about the vertical axis, degrees (0: looking along -z; lights default
     /// behind). Default: the scene's, else 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::ANGLE_DEG), allow_negative_numbers = true)]
     pub yaw: Option<f32>,
     /// Camera pitch above the horizon, degrees (-89..89). Default: the scene's, else 15.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::PITCH_DEG), allow_negative_numbers = true)]
     pub pitch: Option<f32>,
     /// Camera distance from the object's centre in bounding-sphere radii (> 1); by default the
     /// scene's, else the object just fits the image.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::CAMERA_DISTANCE), allow_negative_numbers = true)]
     pub distance: Option<f32>,
     /// HTSM options (`--method htsm`, Shopf 2007).
     #[command(flatten)]
@@ -299,7 +299,7 @@ pub struct HtsmArgs {
     #[arg(long, default_value_t = 9, help_heading = "HTSM (--method htsm)")]
     pub samples: u32,
     /// Ray-cast steps through the density volume per sample ray.
-    #[arg(long, default_value_t = 16, help_heading = "HTSM (--method htsm)")]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::HTSM_STEPS), allow_negative_numbers = true, default_value_t = 16, help_heading = "HTSM (--method htsm)")]
     pub steps: u32,
     /// Transport colour r,g,b (each in (0, 1]): the colour light takes after the transport
     /// distance. Default 0.9,0.6,0.3, or the glTF file's KHR_materials_volume attenuationColor.
@@ -307,19 +307,19 @@ pub struct HtsmArgs {
     pub transport_colour: Option<String>,
     /// Transport distance, object units (> 0). Default 0.5, or the glTF file's
     /// KHR_materials_volume attenuationDistance divided by the mesh's largest side.
-    #[arg(long, help_heading = "HTSM (--method htsm)")]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::TRANSPORT_DISTANCE), allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
     pub transport_distance: Option<f32>,
     /// Henyey-Greenstein asymmetry g in (-1, 1) of the phase function.
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::PHASE_G), allow_negative_numbers = true, default_value_t = 0.3, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
     pub phase_g: f32,
     /// Extra absorption of density 1, per object unit (sigma_at = sigma_a + scale * density).
-    #[arg(long, default_value_t = 20.0, help_heading = "HTSM (--method htsm)")]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::DENSITY_SCALE), allow_negative_numbers = true, default_value_t = 20.0, help_heading = "HTSM (--method htsm)")]
     pub density_scale: f32,
     /// Transport model: `thesis` (Shopf table 4.1) or `beer-lambert` (exp(-sigma D - alpha)).
     #[arg(long, value_enum, default_value_t = HtsmModel::BeerLambert, help_heading = "HTSM (--method htsm)")]
     pub htsm_model: HtsmModel,
     /// Side of the light-view reference images, texels (16..=device limit).
-    #[arg(long, default_value_t = 256, help_heading = "HTSM (--method htsm)")]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::HTSM_SIZE), allow_negative_numbers = true, default_value_t = 256, help_heading = "HTSM (--method htsm)")]
     pub htsm_size: u32,
 }
 
@@ -415,7 +415,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub material: Option<String>,
     /// `bench energy` only: model scale, metres (> 0). Default 0.1.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true)]
     pub scale: Option<f64>,
     /// `bench energy` only: the diffusion profile (as `lucent render --profile`). Default pbd.
     #[arg(long, value_parser = parse_profile)]
@@ -455,7 +455,7 @@ pub struct ViewArgs {
     #[arg(long, default_value = "skimmilk")]
     pub material: String,
     /// Model scale: the largest side of the mesh's bounding box, in metres.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true, default_value_t = 0.05)]
     pub scale: f64,
     /// Scene file (TOML, as for `lucent render`): mesh, material, scale, exposure, lights and
     /// environment (courtyard or forest); its deformations are baked into the starting mesh.
@@ -472,10 +472,10 @@ pub struct ViewArgs {
     #[arg(long)]
     pub script: Option<String>,
     /// Window width, logical pixels.
-    #[arg(long, default_value_t = 1100)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::IMAGE_SIDE), allow_negative_numbers = true, default_value_t = 1100)]
     pub width: u32,
     /// Window height, logical pixels.
-    #[arg(long, default_value_t = 700)]
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::IMAGE_SIDE), allow_negative_numbers = true, default_value_t = 700)]
     pub height: u32,
 }
 

@@ -3,6 +3,7 @@
 
 mod bench;
 mod cli;
+mod ranges;
 mod render;
 mod render_htsm;
 mod scene;
@@ -17,7 +18,7 @@ pub(crate) const STACK_BYTES: usize = 512 << 20;
 fn main() {
     quiet_mesa_without_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let cli = cli::Cli::parse();
+    let cli = cli::Cli::try_parse().unwrap_or_else(|e| exit_on_usage_error(e));
     // The hierarchy's traversals recurse once per level, and face clustering of scanned meshes
     // can nest thousands of levels deep (3,240 on the 11K Stanford dragon): give the worker
     // threads and the command's own thread room (only what is touched is committed).
@@ -43,6 +44,21 @@ fn main() {
         eprintln!("lucent: error: {err:#}");
         std::process::exit(1);
     }
+}
+
+/// `--help` and `--version` print in full; a usage error prints one line (clap's first, which
+/// names the flag, the value and the reason) and exits with status 2.
+fn exit_on_usage_error(e: clap::Error) -> ! {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+        || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    {
+        e.exit();
+    }
+    let text = e.render().to_string();
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+    eprintln!("lucent: {} (see lucent --help)", first.trim());
+    std::process::exit(2);
 }
 
 /// Mesa's software Vulkan driver prints "error: XDG_RUNTIME_DIR is invalid or not set" on a

@@ -204,13 +204,16 @@ mod tests {
             (&["--samples", "4"][..], "samples"),
             (&["--transport-colour", "1,2"][..], "--transport-colour"),
             (&["--transport-colour", "0,0.5,0.5"][..], "transport colour"),
-            (&["--transport-distance", "0"][..], "transport distance"),
-            (&["--phase-g", "1"][..], "phase g"),
-            (&["--steps", "0"][..], "steps"),
         ] {
             let a = args(extra);
             let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, &a).unwrap_err());
             assert!(e.contains(what), "{extra:?}: {e}");
+        }
+        // Numbers out of range are refused by the flag's parser (`crate::ranges`).
+        for flag in ["--transport-distance", "--phase-g", "--steps", "--htsm-size"] {
+            let value = if flag == "--phase-g" { "1" } else { "0" };
+            let e = Cli::try_parse_from(["lucent", "render", "--method", "htsm", flag, value]).unwrap_err();
+            assert!(e.to_string().contains(flag) && e.to_string().contains("range"), "{flag}: {e}");
         }
         let a = args(&["--volume", "marble"]);
         let e = format!("{:#}", build_volume(&a.htsm, &cube()).unwrap_err());

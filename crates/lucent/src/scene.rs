@@ -249,8 +249,9 @@ pub enum LightSpec {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSpec {
-    /// Equirectangular `.hdr` or `.exr` file, relative to the scene file's folder.
-    pub path: PathBuf,
+    /// A built-in probe (`courtyard`, `forest`) or an equirectangular `.hdr` or `.exr` file,
+    /// relative to the scene file's folder and inside it.
+    pub path: String,
     /// Rotation about +Y, degrees. Default 0.
     #[serde(default)]
     pub rotation: f32,
@@ -326,16 +327,18 @@ impl Scene {
     /// Reads and validates a scene file. Errors name the file and, for syntax and type errors,
     /// the line and column.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read scene file {}", path.display()))?;
+        let bytes = lucent_core::limits::read_input(path)
+            .map_err(|reason| anyhow::anyhow!("cannot read scene file {}: {reason}", path.display()))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| anyhow::anyhow!("scene file {}: not UTF-8 text", path.display()))?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::parse(&text, dir).with_context(|| format!("scene file {}", path.display()))
     }
 
     /// Parses and validates scene text; relative paths resolve against `dir`.
     pub fn parse(text: &str, dir: PathBuf) -> Result<Scene> {
-        // toml's error shows the line, column and the offending text.
-        let mut scene: Scene = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut scene: Scene =
+            toml::from_str(text).map_err(|e| anyhow::anyhow!(toml_error_line(text, &e)))?;
         scene.dir = dir;
         scene.validate()?;
         Ok(scene)
@@ -343,35 +346,26 @@ impl Scene {
 
     /// Checks ranges that the types do not express.
     fn validate(&self) -> Result<()> {
-        if !(self.scale.is_finite() && self.scale > 0.0) {
-            bail!("scale must be a finite number of metres > 0, got {}", self.scale);
-        }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
-            bail!("exposure must be finite and > 0, got {}", self.exposure);
-        }
+        use crate::ranges::{self as r, check};
+        let ok = |e: String| anyhow::anyhow!(e);
+        check("scale (metres)", self.scale, &r::SCALE_M).map_err(ok)?;
+        check("exposure", self.exposure, &r::EXPOSURE).map_err(ok)?;
         self.material()?;
         for (i, l) in self.lights.iter().enumerate() {
             validate_light(l).with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;
         }
         if let Some(env) = &self.environment {
-            if !(env.intensity.is_finite() && env.intensity >= 0.0) {
-                bail!("environment intensity must be finite and >= 0, got {}", env.intensity);
-            }
-            if !env.rotation.is_finite() {
-                bail!("environment rotation must be finite");
-            }
+            check("environment intensity", env.intensity, &r::INTENSITY).map_err(ok)?;
+            check("environment rotation (degrees)", env.rotation, &r::ANGLE_DEG).map_err(ok)?;
         }
         let c = &self.camera;
         if !(c.fov > 0.0 && c.fov < 180.0) {
             bail!("camera fov must be within 0..180 degrees, got {}", c.fov);
         }
-        if !(-89.0..=89.0).contains(&c.pitch) || !c.yaw.is_finite() {
-            bail!("camera pitch must be within -89..89 degrees and yaw finite");
-        }
-        if let Some(d) = c.distance
-            && !(d.is_finite() && d > 1.0)
-        {
-            bail!("camera distance must be > 1 bounding-sphere radius, got {d}");
+        check("camera pitch (degrees)", c.pitch, &r::PITCH_DEG).map_err(ok)?;
+        check("camera yaw (degrees)", c.yaw, &r::ANGLE_DEG).map_err(ok)?;
+        if let Some(d) = c.distance {
+            check("camera distance (bounding-sphere radii)", d, &r::CAMERA_DISTANCE).map_err(ok)?;
         }
         self.deformations()?;
         Ok(())
@@ -406,7 +400,12 @@ impl Scene {
     /// (icosphere, 5 subdivisions). Errors name the file or list the known names.
     pub fn load_mesh(&self) -> Result<Mesh> {
         Ok(match self.mesh_source() {
-            MeshSource::File(path) => lucent_core::mesh::load_mesh(&path)?,
+            MeshSource::File(_) => {
+                // Only files inside the scene's folder: a scene from elsewhere may not read others.
+                let path = lucent_core::limits::resolve_inside(&self.dir, &self.mesh)
+                    .map_err(|reason| anyhow::anyhow!("mesh: {reason}"))?;
+                load_mesh_file(&path)?
+            }
             MeshSource::Builtin(name) => match name.as_str() {
                 "bunny" => embedded::bunny(),
                 // Finer than the generator's default, so Gouraud shading shows no bands along the side
@@ -483,7 +482,14 @@ impl Scene {
         let Some(spec) = &self.environment else {
             return Ok(None);
         };
-        let map = EnvMap::load(&self.dir.join(&spec.path))?;
+        let map = match EnvMap::builtin(&spec.path) {
+            Some(probe) => probe?,
+            None => {
+                let path = lucent_core::limits::resolve_inside(&self.dir, &spec.path)
+                    .map_err(|reason| anyhow::anyhow!("environment: {reason}"))?;
+                EnvMap::load(&path)?
+            }
+        };
         let environment = Environment {
             rotation_deg: spec.rotation,
             intensity: spec.intensity,
@@ -496,16 +502,42 @@ impl Scene {
     }
 }
 
+/// Loads a mesh file and prints one warning line per repair or problem the loader found
+/// (degenerate faces dropped, vertices welded, an open or non-manifold surface, a cut-short
+/// last line), naming the file.
+pub fn load_mesh_file(path: &Path) -> Result<Mesh> {
+    let (mesh, report) = lucent_core::mesh::load_mesh_with_report(path)?;
+    for warning in report.warnings() {
+        eprintln!("lucent: warning: {}: {warning}", path.display());
+    }
+    Ok(mesh)
+}
+
+/// toml's error as one line: `line L, column C: message` (its default rendering quotes the
+/// offending text over several lines).
+fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+    match e.span() {
+        Some(span) => {
+            let before = &text.as_bytes()[..span.start.min(text.len())];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
+    }
+}
+
 fn d2(p: Vec3, center: Vec3) -> f32 {
     (p - center).length_squared().max(1e-12)
 }
 
 fn validate_light(l: &LightSpec) -> Result<()> {
-    let finite = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
+    let finite = |v: &[f32; 3]| v.iter().all(|x| crate::ranges::COORDINATE.contains(x));
     let (color, intensity) = match l {
         LightSpec::Point { position, color, intensity, .. } => {
             if !finite(position) {
-                bail!("position must be finite");
+                bail!("position must be within {:?} mesh units", crate::ranges::COORDINATE);
             }
             (color, *intensity)
         }
@@ -515,7 +547,7 @@ fn validate_light(l: &LightSpec) -> Result<()> {
         }
         LightSpec::Spot { position, direction, color, intensity, cone_angle, soft_edge, .. } => {
             if !finite(position) {
-                bail!("position must be finite");
+                bail!("position must be within {:?} mesh units", crate::ranges::COORDINATE);
             }
             check_direction(direction)?;
             if !(*cone_angle > 0.0 && *cone_angle < 180.0) {
@@ -527,19 +559,18 @@ fn validate_light(l: &LightSpec) -> Result<()> {
             (color, *intensity)
         }
     };
-    if !finite(color) || color.iter().any(|c| *c < 0.0) {
-        bail!("color must be finite and >= 0, got {color:?}");
+    use crate::ranges::{INTENSITY, check};
+    for c in color {
+        check("color component", *c, &INTENSITY).map_err(anyhow::Error::msg)?;
     }
-    if !(intensity.is_finite() && intensity >= 0.0) {
-        bail!("intensity must be finite and >= 0, got {intensity}");
-    }
+    check("intensity", intensity, &INTENSITY).map_err(anyhow::Error::msg)?;
     Ok(())
 }
 
 fn check_direction(d: &[f32; 3]) -> Result<()> {
     let v = Vec3::from_array(*d);
-    if !v.is_finite() || v.length_squared() == 0.0 {
-        bail!("direction must be finite and non-zero, got {d:?}");
+    if !d.iter().all(|x| crate::ranges::COORDINATE.contains(x)) || v.length_squared() == 0.0 {
+        bail!("direction must be non-zero with components within {:?}, got {d:?}", crate::ranges::COORDINATE);
     }
     Ok(())
 }

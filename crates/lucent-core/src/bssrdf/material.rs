@@ -20,11 +20,20 @@ pub struct Material {
 pub enum MaterialError {
     #[error("unknown material '{name}'; known materials: {known}")]
     Unknown { name: String, known: String },
-    #[error("material '{name}': {what} must be finite and > 0 in every channel, got {values:?}")]
+    #[error(
+        "material '{name}': {what} must be within {MIN_SIGMA}..={MAX_SIGMA} mm^-1 in every channel, got {values:?}"
+    )]
     NonPositive { name: String, what: &'static str, values: [f64; 3] },
     #[error("material '{name}': eta must be finite and within 1.0..=3.0, got {eta}")]
     BadEta { name: String, eta: f64 },
 }
+
+/// The smallest coefficient accepted, mm^-1 (a mean free path of a million km: no absorption
+/// or scattering, for any object lucent renders).
+pub const MIN_SIGMA: f64 = 1e-12;
+/// The largest coefficient accepted, mm^-1: a mean free path of 0.1 micrometre, below the
+/// wavelength of light, where diffusion (and this renderer) has nothing left to show.
+pub const MAX_SIGMA: f64 = 1e4;
 
 /// One row of the preset table: name, `sigma_s'` (mm^-1), `sigma_a` (mm^-1).
 type Row = (&'static str, [f64; 3], [f64; 3]);
@@ -81,7 +90,7 @@ impl Material {
 
     /// Checks that every coefficient is finite and positive and `eta` is in range.
     pub fn validate(&self) -> Result<(), MaterialError> {
-        let bad = |v: &[f64; 3]| v.iter().any(|x| !x.is_finite() || *x <= 0.0);
+        let bad = |v: &[f64; 3]| v.iter().any(|x| !(MIN_SIGMA..=MAX_SIGMA).contains(x));
         if bad(&self.sigma_s_prime) {
             return Err(MaterialError::NonPositive {
                 name: self.name.clone(),

@@ -99,15 +99,28 @@ impl EnvMap {
     /// non-finite or negative texels, naming the file.
     pub fn load(path: &Path) -> Result<EnvMap, EnvMapError> {
         let name = path.display().to_string();
-        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-        let decoded = match ext.as_deref() {
-            Some("exr") => std::fs::read(path).map_err(|e| e.to_string()).and_then(|b| decode_exr(&b)),
-            Some("hdr") => std::fs::read(path).map_err(|e| e.to_string()).and_then(|b| decode_hdr(&b)),
-            _ => return Err(EnvMapError::Format { path: name }),
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        if ext != "exr" && ext != "hdr" {
+            return Err(EnvMapError::Format { path: name });
+        }
+        let bytes = crate::limits::read_input(path)
+            .map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?;
+        Self::from_bytes(&bytes, &ext, &name)
+    }
+
+    /// Decodes an environment map held in memory: `ext` is `"exr"` or `"hdr"`, `name` stands
+    /// for the file in errors. The header's size is checked against the decoding budget and the
+    /// data's length ([`crate::limits`]) before any texel is allocated.
+    pub fn from_bytes(bytes: &[u8], ext: &str, name: &str) -> Result<EnvMap, EnvMapError> {
+        let decode = match ext {
+            "exr" => decode_exr,
+            "hdr" => decode_hdr,
+            _ => return Err(EnvMapError::Format { path: name.into() }),
         };
-        let (width, height, texels) =
-            decoded.map_err(|reason| EnvMapError::Read { path: name.clone(), reason })?;
-        EnvMap::checked(name, width, height, texels)
+        let (width, height, texels) = crate::limits::catch_quietly(|| decode(bytes))
+            .unwrap_or_else(|panic| Err(format!("malformed file (decoder failed: {panic})")))
+            .map_err(|reason| EnvMapError::Read { path: name.into(), reason })?;
+        EnvMap::checked(name.into(), width, height, texels)
     }
 
     /// One of the light probes compiled into lucent, by name (case-insensitive): `courtyard` or
@@ -272,8 +285,16 @@ pub const BUILTIN_PROBES: [(&str, &[u8]); 2] = [
     ("forest", include_bytes!("../../../../assets/forest.exr")),
 ];
 
+/// Bytes of the decoded map per texel (our `Rgb` plus the decoder's own RGBA float copy).
+const DECODED_BYTES_PER_TEXEL: u128 = 32;
+
 fn decode_exr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
     use exr::prelude::*;
+    // The header first: its data window sizes the texel buffer allocated below.
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| e.to_string())?;
+    let texels: u128 = meta.headers.iter().map(|h| h.layer_size.area() as u128).sum();
+    crate::limits::plausible_expansion("the image", texels * DECODED_BYTES_PER_TEXEL, bytes.len())?;
     struct Pixels {
         width: usize,
         texels: Vec<Rgb>,
@@ -300,6 +321,11 @@ fn decode_exr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
 }
 
 fn decode_hdr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
+    let header =
+        image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| e.to_string())?;
+    let meta = header.metadata();
+    let texels = meta.width as u128 * meta.height as u128;
+    crate::limits::plausible_expansion("the image", texels * DECODED_BYTES_PER_TEXEL, bytes.len())?;
     let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)
         .map_err(|e| e.to_string())?
         .into_rgb32f();

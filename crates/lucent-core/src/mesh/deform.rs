@@ -143,7 +143,10 @@ impl Deformer for Noise {
             .par_iter()
             .zip(&normals)
             .map(|(&p, &n)| {
-                let q = (self.frequency * p + self.offset).as_dvec3();
+                // The noise crate's Perlin repeats every 256 units (its hash masks the lattice
+                // coordinate with 0xff) and panics where the lattice coordinate leaves isize:
+                // wrapping first gives the same value and never panics.
+                let q = (self.frequency * p + self.offset).as_dvec3().rem_euclid(glam::DVec3::splat(256.0));
                 p + (self.amplitude as f64 * perlin.get(q.to_array())) as f32 * n
             })
             .collect_into_vec(out);
@@ -206,6 +209,15 @@ pub struct DeformationParseError {
     pub reason: String,
 }
 
+/// The largest twist accepted, degrees either way: three full turns. More folds the surface
+/// through itself many times, which no translucency model can show and costs minutes to link.
+pub const MAX_TWIST_DEGREES: f32 = 1080.0;
+/// The largest length a deformation takes (bump centre, radius and height, noise amplitude),
+/// mesh units.
+pub const MAX_DEFORM_LENGTH: f32 = 1e6;
+/// The highest noise frequency, per mesh unit.
+pub const MAX_NOISE_FREQUENCY: f32 = 1e6;
+
 impl FromStr for Deformation {
     type Err = DeformationParseError;
 
@@ -234,15 +246,30 @@ impl FromStr for Deformation {
                 )))
             }
         };
+        let within = |what: &str, v: f32, range: std::ops::RangeInclusive<f32>| {
+            if range.contains(&v) {
+                Ok(())
+            } else {
+                Err(err(format!("{what} {v} is outside {}..={}", range.start(), range.end())))
+            }
+        };
         match kind.trim().to_ascii_lowercase().as_str() {
             "twist" => {
                 expect(1)?;
+                within("twist angle (degrees)", values[0], -MAX_TWIST_DEGREES..=MAX_TWIST_DEGREES)?;
                 Ok(Deformation::Twist { degrees: values[0] })
             }
             "bump" => {
                 expect(5)?;
                 if values[3] <= 0.0 {
                     return Err(err(format!("bump radius must be > 0, got {}", values[3])));
+                }
+                for (what, v) in
+                    [("bump centre", values[0]), ("bump centre", values[1]), ("bump centre", values[2])]
+                        .into_iter()
+                        .chain([("bump radius", values[3]), ("bump height", values[4])])
+                {
+                    within(what, v, -MAX_DEFORM_LENGTH..=MAX_DEFORM_LENGTH)?;
                 }
                 Ok(Deformation::Bump(bump(Vec3::new(values[0], values[1], values[2]), values[3], values[4])))
             }
@@ -251,6 +278,8 @@ impl FromStr for Deformation {
                 if values[1] <= 0.0 {
                     return Err(err(format!("noise frequency must be > 0, got {}", values[1])));
                 }
+                within("noise amplitude", values[0], -MAX_DEFORM_LENGTH..=MAX_DEFORM_LENGTH)?;
+                within("noise frequency", values[1], 0.0..=MAX_NOISE_FREQUENCY)?;
                 Ok(Deformation::Noise { amplitude: values[0], frequency: values[1] })
             }
             other => Err(err(format!("unknown deformation kind '{other}'"))),

@@ -118,9 +118,9 @@ pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
 pub fn load_mesh_with_report(path: &Path) -> Result<(Mesh, MeshReport), MeshError> {
     let format = MeshFormat::from_path(path)?;
     let name = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|e| MeshError::invalid(&name, format!("cannot read file: {e}")))?;
-    parse_mesh_inner(&bytes, format, &name, path.parent())
+    let bytes = crate::limits::read_input(path).map_err(|reason| MeshError::invalid(&name, reason))?;
+    // `Path::parent` of a bare file name is "": buffers then resolve against the working folder.
+    parse_mesh_inner(&bytes, format, &name, Some(path.parent().unwrap_or(Path::new(""))))
 }
 
 /// Parses and validates a mesh held in memory. `name` stands for the file in error messages.
@@ -148,19 +148,20 @@ fn parse_mesh_inner(
     };
     let (mesh, mut report) = validate(mesh, name)?;
     report.welded_vertices = welded;
+    let text = match format {
+        MeshFormat::Obj | MeshFormat::Off => true,
+        MeshFormat::Ply => bytes.windows(12).take(256).any(|w| w == b"format ascii"),
+        MeshFormat::Gltf => false,
+    };
+    let last_line = bytes.rsplit(|&b| b == b'\n').next().unwrap_or_default();
+    report.unterminated_last_line = text && last_line.iter().any(|b| !b.is_ascii_whitespace());
     Ok((mesh, report))
 }
 
 /// Runs a third-party parser and turns a panic into an error naming the file.
 fn guard<T>(name: &str, f: impl FnOnce() -> T) -> Result<T, MeshError> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
-        let what = payload
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| payload.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown".into());
-        MeshError::invalid(name, format!("malformed file (parser failed: {what})"))
-    })
+    crate::limits::catch_quietly(f)
+        .map_err(|what| MeshError::invalid(name, format!("malformed file (parser failed: {what})")))
 }
 
 /// Appends a polygon as a triangle fan `(v0, v_i, v_i+1)`.
@@ -455,8 +456,7 @@ fn parse_off(bytes: &[u8]) -> Result<Mesh, String> {
 fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, String> {
     let gltf = read_gltf(bytes)?;
     let document = gltf.document;
-    let buffers = gltf::import_buffers(&document, base_dir, gltf.blob)
-        .map_err(|e| format!("cannot load glTF buffers: {e}"))?;
+    let buffers = gltf_buffers(&document, base_dir, gltf.blob)?;
 
     let mut mesh = Mesh::default();
     let mut add = |m: gltf::Mesh<'_>, world: Mat4| -> Result<(), String> {
@@ -466,7 +466,8 @@ fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, String> {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            check_accessor_types(m.index(), &prim)?;
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(pos) = reader.read_positions() else {
                 continue;
             };
@@ -522,6 +523,106 @@ fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
+/// The data of every buffer: the GLB binary chunk, a `data:` URI, or a file named by a relative
+/// URI that resolves inside `base_dir` (the glTF file's own folder). Anything else (an absolute
+/// path, `..` leading out, another URI scheme, a link pointing outside) is refused, so a model
+/// cannot make lucent read files beside it; with `base_dir = None` (data held in memory) only the
+/// chunk and data URIs are accepted.
+fn gltf_buffers(
+    document: &gltf::Document,
+    base_dir: Option<&Path>,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>, String> {
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                blob.take().ok_or_else(|| format!("glTF buffer {i} refers to a missing GLB binary chunk"))?
+            }
+            gltf::buffer::Source::Uri(uri) => read_buffer_uri(uri, base_dir)
+                .map_err(|reason| format!("glTF buffer {i} (uri '{}'): {reason}", short(uri)))?,
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "glTF buffer {i} holds {} bytes, fewer than its byteLength {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
+}
+
+/// At most 80 characters of a URI, for messages (data URIs are long).
+fn short(uri: &str) -> String {
+    match uri.char_indices().nth(80) {
+        Some((k, _)) => format!("{}...", &uri[..k]),
+        None => uri.to_string(),
+    }
+}
+
+fn read_buffer_uri(uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, String> {
+    if let Some(data) = uri.strip_prefix("data:") {
+        let (_, payload) = data.split_once(";base64,").ok_or("only base64 data URIs are supported")?;
+        return base64::decode(payload).map_err(|e| format!("invalid base64 data: {e}"));
+    }
+    let relative = percent_decode(uri)?;
+    let base = base_dir.ok_or("external buffers cannot be read for a model held in memory")?;
+    let path = crate::limits::resolve_inside(base, &relative)?;
+    crate::limits::read_input(&path).map_err(|reason| format!("{}: {reason}", path.display()))
+}
+
+/// Decodes `%XX` escapes (URIs in glTF are percent-encoded).
+fn percent_decode(uri: &str) -> Result<String, String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut k = 0;
+    while k < bytes.len() {
+        if bytes[k] == b'%' {
+            let hex = bytes.get(k + 1..k + 3).and_then(|h| std::str::from_utf8(h).ok());
+            let byte =
+                hex.and_then(|h| u8::from_str_radix(h, 16).ok()).ok_or("invalid %-escape in the URI")?;
+            out.push(byte);
+            k += 3;
+        } else {
+            out.push(bytes[k]);
+            k += 1;
+        }
+    }
+    String::from_utf8(out).map_err(|_| "the URI is not UTF-8 after %-decoding".to_string())
+}
+
+/// The gltf crate's reader assumes the types the specification requires and panics on others:
+/// positions must be float VEC3 and indices unsigned integer scalars.
+fn check_accessor_types(mesh: usize, prim: &gltf::Primitive<'_>) -> Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    let where_ = || format!("glTF mesh {mesh} primitive {}", prim.index());
+    if let Some(a) = prim.get(&gltf::Semantic::Positions)
+        && (a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3)
+    {
+        return Err(format!(
+            "{}: POSITION must be float VEC3, not {:?} {:?}",
+            where_(),
+            a.data_type(),
+            a.dimensions()
+        ));
+    }
+    if let Some(a) = prim.indices()
+        && (!matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+            || a.dimensions() != Dimensions::Scalar)
+    {
+        return Err(format!(
+            "{}: indices must be unsigned integer scalars, not {:?} {:?}",
+            where_(),
+            a.data_type(),
+            a.dimensions()
+        ));
+    }
+    Ok(())
+}
+
 /// Parses and validates glTF JSON or GLB. gltf-json 1.4.1's validation indexes the accessor
 /// array with a primitive's POSITION index unchecked (a panic on a bad file), so that index is
 /// checked first.
@@ -552,8 +653,7 @@ fn read_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
 /// extinction from the asset.
 pub fn load_gltf_volume_params(path: &Path) -> Result<Option<([f32; 3], f32)>, MeshError> {
     let name = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|e| MeshError::invalid(&name, format!("cannot read file: {e}")))?;
+    let bytes = crate::limits::read_input(path).map_err(|reason| MeshError::invalid(&name, reason))?;
     guard(&name, || {
         let gltf = read_gltf(&bytes).map_err(|reason| MeshError::invalid(&name, reason))?;
         Ok(gltf

@@ -45,6 +45,9 @@ pub struct MeshReport {
     /// Euler characteristic `V - E + F` over referenced vertices: 2 per closed genus-0
     /// component.
     pub euler_characteristic: i64,
+    /// A text file (OBJ, OFF, ASCII PLY) whose last line has no line end: it may have been cut
+    /// short, and the mesh may be missing its last faces.
+    pub unterminated_last_line: bool,
 }
 
 impl MeshReport {
@@ -57,6 +60,27 @@ impl MeshReport {
     /// component.
     pub fn is_clean(&self) -> bool {
         self.degenerate_faces == 0 && self.is_closed_manifold() && self.components == 1
+    }
+
+    /// One line per thing lucent repaired or the user should know, with counts (empty for a
+    /// clean mesh), e.g. `removed 2 degenerate faces`, `open mesh: 12 boundary edges`.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.unterminated_last_line {
+            w.push("the last line has no line end: the file may be cut short".to_string());
+        }
+        for (n, what) in [
+            (self.degenerate_faces, "removed {} degenerate faces (a repeated vertex or zero area)"),
+            (self.welded_vertices, "welded {} duplicate vertices"),
+            (self.boundary_edges, "open mesh: {} boundary edges (subsurface light leaks at holes)"),
+            (self.nonmanifold_edges, "non-manifold mesh: {} edges shared by more than two faces"),
+            (self.inconsistent_edges, "{} edges between faces of opposite orientation"),
+        ] {
+            if n > 0 {
+                w.push(what.replace("{}", &n.to_string()));
+            }
+        }
+        w
     }
 }
 
@@ -202,6 +226,7 @@ pub fn analyze(mesh: &Mesh) -> MeshReport {
         unreferenced_vertices: n - used,
         components,
         euler_characteristic: used as i64 - unique as i64 + mesh.triangles.len() as i64,
+        unterminated_last_line: false,
     }
 }
 

@@ -206,7 +206,8 @@ impl VolumeSpec {
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, VolumeError> {
-    std::fs::read(path).map_err(|source| VolumeError::Io { path: path.display().to_string(), source })
+    crate::limits::read_input(path)
+        .map_err(|reason| VolumeError::Read { path: path.display().to_string(), reason })
 }
 
 /// Checks every density is finite and in `[0, 1]`, naming the file otherwise.
@@ -220,8 +221,17 @@ fn check_values(path: &Path, data: &[f32]) -> Result<(), VolumeError> {
 /// Reads a headerless grid of `dims` voxels in `format` (module docs). The file must be exactly
 /// the right size.
 pub fn load_raw(path: &Path, dims: [u32; 3], format: RawFormat) -> Result<DensityVolume, VolumeError> {
+    parse_raw(&read_file(path)?, dims, format, path)
+}
+
+/// Decodes a headerless grid held in memory; `path` names it in errors.
+pub fn parse_raw(
+    bytes: &[u8],
+    dims: [u32; 3],
+    format: RawFormat,
+    path: &Path,
+) -> Result<DensityVolume, VolumeError> {
     let n = check_dims(dims)?;
-    let bytes = read_file(path)?;
     let expected = (n * format.bytes()) as u64;
     if bytes.len() as u64 != expected {
         return Err(VolumeError::Size {
@@ -246,7 +256,11 @@ pub fn load_raw(path: &Path, dims: [u32; 3], format: RawFormat) -> Result<Densit
 
 /// Reads an `LVOL` file (module docs).
 pub fn load_lvol(path: &Path) -> Result<DensityVolume, VolumeError> {
-    let bytes = read_file(path)?;
+    parse_lvol(&read_file(path)?, path)
+}
+
+/// Decodes an `LVOL` file held in memory; `path` names it in errors.
+pub fn parse_lvol(bytes: &[u8], path: &Path) -> Result<DensityVolume, VolumeError> {
     let header_err = |reason: String| VolumeError::Header { path: path.display().to_string(), reason };
     if bytes.len() < LVOL_HEADER_BYTES {
         return Err(header_err(format!(

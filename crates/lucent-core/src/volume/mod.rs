@@ -17,22 +17,22 @@ pub mod procedural;
 #[cfg(test)]
 mod tests;
 
-pub use io::{RawFormat, VolumeSpec, load_lvol, load_raw, save_lvol};
+pub use io::{RawFormat, VolumeSpec, load_lvol, load_raw, parse_lvol, parse_raw, save_lvol};
 
 /// The largest side accepted for a volume, in voxels: wgpu's default limit for 3D textures
 /// (`max_texture_dimension_3d`), so every volume lucent accepts can be uploaded.
 pub const MAX_DIM: u32 = 2048;
 
+/// The most voxels a volume may have: the decoding budget of [`crate::limits`] at four bytes a
+/// voxel (268M, e.g. 645^3 or 2048 x 2048 x 64).
+pub const MAX_VOXELS: u64 = crate::limits::MAX_DECODED_BYTES / 4;
+
 /// Why a volume could not be made or read. File errors always name the file.
 #[derive(Debug, thiserror::Error)]
 pub enum VolumeError {
-    /// The file could not be opened or read.
-    #[error("{path}: cannot read volume: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file could not be opened or read (or is not a regular file, or is too large).
+    #[error("{path}: cannot read volume: {reason}")]
+    Read { path: String, reason: String },
     /// The file could not be written.
     #[error("{path}: cannot write volume: {source}")]
     Write {
@@ -193,5 +193,12 @@ pub(crate) fn check_dims(dims: [u32; 3]) -> Result<usize, VolumeError> {
     if dims.iter().any(|&d| d > MAX_DIM) {
         return Err(VolumeError::Dims { dims, reason: format!("every side must be at most {MAX_DIM}") });
     }
-    Ok(dims.iter().map(|&d| d as usize).product())
+    let n: usize = dims.iter().map(|&d| d as usize).product();
+    if n as u64 > MAX_VOXELS {
+        return Err(VolumeError::Dims {
+            dims,
+            reason: format!("{n} voxels, more than the {MAX_VOXELS} lucent holds (4 bytes each)"),
+        });
+    }
+    Ok(n)
 }

@@ -122,32 +122,9 @@ fn single_out(args: &RenderArgs) -> PathBuf {
     args.out.clone().unwrap_or_else(default)
 }
 
-/// Rejects bad numbers and an unwritable output location before any work is done.
+/// Rejects an unwritable output location before any work is done.
 fn check_args(args: &RenderArgs) -> Result<()> {
-    if let Some(scale) = args.scale
-        && !(scale.is_finite() && scale > 0.0)
-    {
-        bail!("--scale must be a positive number of metres, got {scale}");
-    }
-    if let Some(e) = args.exposure
-        && !(e.is_finite() && e > 0.0)
-    {
-        bail!("--exposure must be a positive number, got {e}");
-    }
-    if !(args.gamma.is_finite() && args.gamma > 0.0) {
-        bail!("--gamma must be a positive number, got {}", args.gamma);
-    }
-    if args.width == 0 || args.height == 0 {
-        bail!("--width and --height must be at least 1, got {}x{}", args.width, args.height);
-    }
-    if let Some(d) = args.distance
-        && !(d.is_finite() && d > 1.0)
-    {
-        bail!("--distance is in bounding-sphere radii and must be > 1, got {d}");
-    }
-    if args.frames == Some(0) {
-        bail!("--frames must be at least 1");
-    }
+    // Numbers were range-checked by the flags' parsers (`crate::ranges`).
     if args.frames.is_some() {
         return animation::check_out_dir(&args.out.clone().unwrap_or_else(animation::default_out));
     }

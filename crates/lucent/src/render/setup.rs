@@ -85,7 +85,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     };
     let (source, mesh, mesh_path) = match (&args.mesh, &file) {
         (Some(path), _) => {
-            (path.display().to_string(), lucent_core::mesh::load_mesh(path)?, Some(path.clone()))
+            (path.display().to_string(), scene_file::load_mesh_file(path)?, Some(path.clone()))
         }
         (None, Some(f)) => {
             let mesh = f.load_mesh().map_err(in_file)?;
@@ -101,14 +101,9 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         (None, Some(f)) => f.material()?,
         (None, None) => Material::by_name("skimmilk")?,
     };
+    // Flags and scene keys were range-checked where they were read (`crate::ranges`).
     let scale = args.scale.or(file.as_ref().map(|f| f.scale)).unwrap_or(0.05);
-    if !(scale.is_finite() && scale > 0.0) {
-        bail!("--scale must be a positive number of metres, got {scale}");
-    }
     let exposure = args.exposure.or(file.as_ref().map(|f| f.exposure)).unwrap_or(1.0);
-    if !(exposure.is_finite() && exposure > 0.0) {
-        bail!("--exposure must be a positive number, got {exposure}");
-    }
     let profile = match (args.profile, file.as_ref().and_then(|f| f.profile.as_deref())) {
         (Some(p), _) => p,
         (None, Some(name)) => name.parse::<ProfileKind>().map_err(|e| anyhow::anyhow!("scene file: {e}"))?,

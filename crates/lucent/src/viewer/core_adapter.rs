@@ -70,9 +70,9 @@ pub fn default_mesh() -> Mesh {
     if CAPABILITIES.hierarchical { embedded::bunny() } else { generate::icosphere(2) }
 }
 
-/// Loads a mesh file (naming the file in the error).
+/// Loads a mesh file (naming the file in the error; warnings go to stderr).
 pub fn load_mesh(path: &Path) -> anyhow::Result<Mesh> {
-    Ok(lucent_core::mesh::load_mesh(path)?)
+    crate::scene::load_mesh_file(path)
 }
 
 /// Centres `mesh` at the origin and scales it to a bounding-box extent of 1, so that light

@@ -39,10 +39,9 @@ pub fn load(path: &Path) -> anyhow::Result<SceneStart> {
     if let Some(env) = &scene.environment {
         state.params.env = env_choice(&env.path).ok_or_else(|| {
             anyhow::anyhow!(
-                "{}: the viewer offers the environment maps assets/courtyard.exr and \
-                 assets/forest.exr, not {}",
+                "{}: the viewer offers the built-in environments courtyard and forest, not {}",
                 path.display(),
-                env.path.display()
+                env.path
             )
         })?;
         state.params.env_rotation_deg = env.rotation;
@@ -79,10 +78,11 @@ fn light_casts_shadows(l: &crate::scene::LightSpec) -> bool {
     }
 }
 
-/// The viewer's choice for an environment file, by file name.
-fn env_choice(path: &Path) -> Option<EnvChoice> {
-    let name = path.file_name()?.to_str()?;
-    EnvChoice::ALL.into_iter().find(|c| c.path().is_some_and(|p| p.ends_with(name)))
+/// The viewer's choice for a scene's environment: a built-in probe's name, or a file of the
+/// same name (`forest.exr`).
+fn env_choice(path: &str) -> Option<EnvChoice> {
+    let stem = Path::new(path).file_stem()?.to_str()?.to_ascii_lowercase();
+    EnvChoice::ALL.into_iter().find(|c| c.path().is_some() && c.label() == stem)
 }
 
 #[cfg(test)]
@@ -104,8 +104,8 @@ mod tests {
 
     #[test]
     fn environment_files_map_to_the_viewer_choices() {
-        assert_eq!(env_choice(Path::new("../assets/forest.exr")), Some(EnvChoice::Forest));
-        assert_eq!(env_choice(Path::new("x/courtyard.exr")), Some(EnvChoice::Courtyard));
-        assert_eq!(env_choice(Path::new("other.hdr")), None);
+        assert_eq!(env_choice("forest"), Some(EnvChoice::Forest));
+        assert_eq!(env_choice("x/courtyard.exr"), Some(EnvChoice::Courtyard));
+        assert_eq!(env_choice("other.hdr"), None);
     }
 }

@@ -1,0 +1,81 @@
+//! The accepted range of every numeric parameter, in one place: command-line flags and scene
+//! keys are checked against these before anything is loaded or solved. Values inside a range
+//! finish in bounded time; values outside are refused with a one-line error naming the value and
+//! the range.
+
+use std::fmt::Display;
+use std::ops::RangeInclusive;
+use std::str::FromStr;
+
+/// Model scale, metres (the largest side of the bounding box): 0.1 mm to 100 m.
+pub const SCALE_M: RangeInclusive<f64> = 1e-4..=100.0;
+/// Image width and height, pixels.
+pub const IMAGE_SIDE: RangeInclusive<u32> = 1..=16384;
+/// Frames of an animation.
+pub const FRAMES: RangeInclusive<u32> = 1..=100_000;
+/// Exposure multiplier.
+pub const EXPOSURE: RangeInclusive<f32> = 1e-6..=1e6;
+/// Display gamma of the tone curve.
+pub const GAMMA: RangeInclusive<f32> = 0.1..=10.0;
+/// Camera yaw and environment rotation, degrees.
+pub const ANGLE_DEG: RangeInclusive<f32> = -3600.0..=3600.0;
+/// Camera pitch, degrees.
+pub const PITCH_DEG: RangeInclusive<f32> = -89.0..=89.0;
+/// Camera distance, bounding-sphere radii.
+pub const CAMERA_DISTANCE: RangeInclusive<f32> = 1.0001..=1e4;
+/// Coordinates of a light (mesh units) and components of a direction.
+pub const COORDINATE: RangeInclusive<f32> = -1e6..=1e6;
+/// Light intensity and colour components, and environment intensity.
+pub const INTENSITY: RangeInclusive<f32> = 0.0..=1e6;
+/// HTSM: ray-cast steps per sample ray.
+pub const HTSM_STEPS: RangeInclusive<u32> = 1..=1024;
+/// HTSM: side of the light-view reference images, texels.
+pub const HTSM_SIZE: RangeInclusive<u32> = 16..=8192;
+/// HTSM: transport distance, object units.
+pub const TRANSPORT_DISTANCE: RangeInclusive<f32> = 1e-4..=1e3;
+/// HTSM: Henyey-Greenstein asymmetry.
+pub const PHASE_G: RangeInclusive<f32> = -0.99..=0.99;
+/// HTSM: extra absorption of density 1, per object unit.
+pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
+
+/// Checks `value` (named `what` in the error, e.g. `--scale`) against `range`.
+pub fn check<T: PartialOrd + Display>(what: &str, value: T, range: &RangeInclusive<T>) -> Result<T, String> {
+    // `contains` is false for NaN, so a NaN is refused too.
+    if range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{what} {value} is outside the accepted range {}..={}", range.start(), range.end()))
+    }
+}
+
+/// A clap value parser: a number of type `T` within `range`.
+pub fn parser<T>(
+    range: RangeInclusive<T>,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+{
+    move |s: &str| {
+        let value = s
+            .trim()
+            .parse::<T>()
+            .map_err(|_| format!("'{s}' is not a number in {}..={}", range.start(), range.end()))?;
+        check("value", value, &range)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_refuse_nan_and_out_of_range_with_the_range() {
+        assert_eq!(check("--scale", 0.05, &SCALE_M), Ok(0.05));
+        let e = check("--scale", -1.0, &SCALE_M).unwrap_err();
+        assert!(e.contains("-1") && e.contains("0.0001..=100"), "{e}");
+        assert!(check("--scale", f64::NAN, &SCALE_M).is_err());
+        assert!(parser(IMAGE_SIDE)("0").is_err());
+        assert_eq!(parser(IMAGE_SIDE)("640"), Ok(640));
+        assert!(parser(EXPOSURE)("abc").unwrap_err().contains("not a number"));
+    }
+}
