@@ -69,22 +69,28 @@ pub fn plausible_expansion(what: &str, decoded_bytes: u128, file_bytes: usize) -
     Ok(())
 }
 
-/// Resolves `relative`, a path a file names (a glTF buffer URI after %-decoding, a mesh or map
-/// in a scene file), against `folder`, the naming file's own folder, and refuses anything that
-/// would leave it: absolute paths, drive letters and URI schemes, `..`, and links that point
-/// outside. The file must exist. The error is the reason alone.
-pub fn resolve_inside(folder: &Path, relative: &str) -> Result<std::path::PathBuf, String> {
+/// `relative` as a path, if it is a plain relative path that stays inside its folder (no root,
+/// drive letter, URI scheme or `..`); the error is the reason alone.
+pub fn check_relative(relative: &str) -> Result<&Path, String> {
     let rel = Path::new(relative);
     let plain = !relative.is_empty()
         && !relative.contains([':', '\\'])
         && rel
             .components()
             .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
-    if !plain {
-        return Err(format!(
-            "'{relative}' is not a relative path inside the folder of the file that names it"
-        ));
+    if plain {
+        Ok(rel)
+    } else {
+        Err(format!("'{relative}' is not a relative path inside the folder of the file that names it"))
     }
+}
+
+/// Resolves `relative`, a path a file names (a glTF buffer URI after %-decoding, a mesh or map
+/// in a scene file), against `folder`, the naming file's own folder, and refuses anything that
+/// would leave it: absolute paths, drive letters and URI schemes, `..`, and links that point
+/// outside. The file must exist. The error is the reason alone.
+pub fn resolve_inside(folder: &Path, relative: &str) -> Result<std::path::PathBuf, String> {
+    let rel = check_relative(relative)?;
     let base = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
     let path = base.join(rel);
     let target = std::fs::canonicalize(&path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;

@@ -3,14 +3,14 @@
 
 mod bench;
 mod cli;
-mod ranges;
 mod render;
 mod render_htsm;
-mod scene;
 mod view;
 mod viewer;
 
 use clap::Parser;
+// Shared with the fuzz harness through the library target.
+use lucent::{ranges, scene};
 
 /// Stack of the command's thread and of rayon's workers, bytes.
 pub(crate) const STACK_BYTES: usize = 512 << 20;

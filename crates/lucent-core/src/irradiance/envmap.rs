@@ -293,8 +293,25 @@ fn decode_exr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
     // The header first: its data window sizes the texel buffer allocated below.
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| e.to_string())?;
-    let texels: u128 = meta.headers.iter().map(|h| h.layer_size.area() as u128).sum();
-    crate::limits::plausible_expansion("the image", texels * DECODED_BYTES_PER_TEXEL, bytes.len())?;
+    // Per layer: our texels, the decoder's copy of every channel, and its block buffers (a
+    // block's size comes from the tile size or scan lines, which a header may set far beyond
+    // its image).
+    let decoded: u128 = meta
+        .headers
+        .iter()
+        .map(|h| {
+            let bytes_per_pixel = h.channels.bytes_per_pixel as u128;
+            let block_pixels = match h.blocks {
+                exr::meta::BlockDescription::Tiles(t) => t.tile_size.area() as u128,
+                exr::meta::BlockDescription::ScanLines => {
+                    h.compression.scan_lines_per_block() as u128 * h.layer_size.width() as u128
+                }
+            };
+            h.layer_size.area() as u128 * (DECODED_BYTES_PER_TEXEL + bytes_per_pixel)
+                + 2 * block_pixels * bytes_per_pixel
+        })
+        .sum();
+    crate::limits::plausible_expansion("the image", decoded, bytes.len())?;
     struct Pixels {
         width: usize,
         texels: Vec<Rgb>,

@@ -569,6 +569,7 @@ fn read_buffer_uri(uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, String
         return base64::decode(payload).map_err(|e| format!("invalid base64 data: {e}"));
     }
     let relative = percent_decode(uri)?;
+    crate::limits::check_relative(&relative)?;
     let base = base_dir.ok_or("external buffers cannot be read for a model held in memory")?;
     let path = crate::limits::resolve_inside(base, &relative)?;
     crate::limits::read_input(&path).map_err(|reason| format!("{}: {reason}", path.display()))
@@ -619,6 +620,19 @@ fn check_accessor_types(mesh: usize, prim: &gltf::Primitive<'_>) -> Result<(), S
             a.data_type(),
             a.dimensions()
         ));
+    }
+    for a in prim.get(&gltf::Semantic::Positions).into_iter().chain(prim.indices()) {
+        let (Some(view), count) = (a.view(), a.count()) else { continue };
+        let stride = view.stride().unwrap_or(a.size());
+        let needed = (a.offset() as u128) + (stride as u128) * (count.max(1) as u128 - 1) + a.size() as u128;
+        if count > 0 && needed > view.length() as u128 {
+            return Err(format!(
+                "{}: accessor {} needs {needed} bytes of its buffer view, which has {}",
+                where_(),
+                a.index(),
+                view.length()
+            ));
+        }
     }
     Ok(())
 }
