@@ -118,8 +118,11 @@ pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
         values
             .split(',')
             .map(|v| match v.trim().parse::<f32>() {
-                Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-                _ => Err(format!("oracle thresholds must be positive numbers, got `{v}` in `{s}`")),
+                Ok(x) if crate::ranges::ORACLE_EPS.contains(&x) => Ok(x),
+                _ => Err(format!(
+                    "oracle thresholds must be positive numbers within {:?}, got `{v}` in `{s}`",
+                    crate::ranges::ORACLE_EPS
+                )),
             })
             .collect::<Result<_, _>>()?
     };
@@ -445,7 +448,7 @@ pub enum BenchTarget {
     xvfb-run -a lucent view --frames 20 --script \"dent:0.1,0.2,0.3;light:0,1,-2\" --screenshot out.png\n\n\
     Script actions (separated by ';'; each runs once the previous one's solution is drawn):\n  \
     dent:x,y,z  light:x,y,z  twist:k  material:NAME  scale:M  camera:YAW,PITCH,DIST\n  \
-    exposure:K  clusters:x,y,z  method:htsm|mertens  shot:PATH\n\
+    exposure:K  clusters:x,y,z  method:htsm|mertens  shot:PATH  animate:SECONDS\n\
     Positions are in normalised mesh units: the mesh is centred with a bounding-box side of 1.")]
 pub struct ViewArgs {
     /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the built-in mesh when absent.

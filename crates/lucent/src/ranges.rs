@@ -27,6 +27,9 @@ pub const CAMERA_DISTANCE: RangeInclusive<f32> = 1.0001..=1e4;
 pub const COORDINATE: RangeInclusive<f32> = -1e6..=1e6;
 /// Light intensity and colour components, and environment intensity.
 pub const INTENSITY: RangeInclusive<f32> = 0.0..=1e6;
+/// Thresholds of the refinement oracle (`--oracle`); below the lower end every pair of faces
+/// is refined to the leaves, an exact O(N^2) solve by another name.
+pub const ORACLE_EPS: RangeInclusive<f32> = 1e-6..=1e3;
 /// HTSM: ray-cast steps per sample ray.
 pub const HTSM_STEPS: RangeInclusive<u32> = 1..=1024;
 /// HTSM: side of the light-view reference images, texels.

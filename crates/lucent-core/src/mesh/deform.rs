@@ -134,6 +134,13 @@ pub fn noise(amplitude: f32, frequency: f32, offset: Vec3) -> Noise {
     Noise { amplitude, frequency, offset, seed: Noise::SEED }
 }
 
+/// The `noise` crate's 3-D Perlin noise at `p`, for any finite `p`. Its noise repeats every 256
+/// units (the hash masks each lattice coordinate with 0xff) but it panics where a lattice
+/// coordinate leaves `isize`: wrapping first gives the same value and never panics.
+pub(crate) fn perlin_periodic(perlin: &Perlin, p: [f64; 3]) -> f64 {
+    perlin.get(p.map(|x| x.rem_euclid(256.0)))
+}
+
 impl Deformer for Noise {
     fn apply(&self, rest: &Mesh, out: &mut Vec<Vec3>) {
         let perlin = Perlin::new(self.seed);
@@ -143,11 +150,8 @@ impl Deformer for Noise {
             .par_iter()
             .zip(&normals)
             .map(|(&p, &n)| {
-                // The noise crate's Perlin repeats every 256 units (its hash masks the lattice
-                // coordinate with 0xff) and panics where the lattice coordinate leaves isize:
-                // wrapping first gives the same value and never panics.
-                let q = (self.frequency * p + self.offset).as_dvec3().rem_euclid(glam::DVec3::splat(256.0));
-                p + (self.amplitude as f64 * perlin.get(q.to_array())) as f32 * n
+                let q = (self.frequency * p + self.offset).as_dvec3();
+                p + (self.amplitude as f64 * perlin_periodic(&perlin, q.to_array())) as f32 * n
             })
             .collect_into_vec(out);
     }

@@ -6,7 +6,7 @@
 
 use super::{DensityVolume, VolumeError, check_dims};
 use glam::Vec3;
-use noise::{NoiseFn, Perlin};
+use noise::Perlin;
 use rayon::prelude::*;
 
 /// Parameters of the marble/mineral vein generator: the classic marble construction, a sine
@@ -38,7 +38,7 @@ impl Veins {
         let mut freq = 1.0f64;
         for _ in 0..5 {
             let q = [p.x as f64 * freq, p.y as f64 * freq, p.z as f64 * freq];
-            sum += noise.get(q).abs() / freq;
+            sum += crate::mesh::deform::perlin_periodic(noise, q).abs() / freq;
             freq *= 2.0;
         }
         sum as f32

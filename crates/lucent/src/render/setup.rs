@@ -244,8 +244,9 @@ pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
     let usage = "expected point:x,y,z (position, mesh units) or dir:x,y,z (direction of travel)";
     let (kind, rest) = spec.split_once(':').with_context(|| format!("--light {spec:?}: {usage}"))?;
     let p = parse_three(&format!("--light {spec:?}"), rest, usage)?;
-    if !p.is_finite() {
-        bail!("--light {spec:?}: coordinates must be finite");
+    let range = crate::ranges::COORDINATE;
+    if !p.to_array().iter().all(|c| range.contains(c)) {
+        bail!("--light {spec:?}: coordinates must be within {}..={}", range.start(), range.end());
     }
     match kind.trim().to_ascii_lowercase().as_str() {
         "point" => Ok(point_light(p, center)),

@@ -84,6 +84,8 @@ pub struct App {
     stats: FrameStats,
     pending_shot: Option<PathBuf>,
     exit_after_shot: bool,
+    /// A scripted `animate:SECONDS` runs until then (noise flowing, the first light orbiting).
+    animate_until: Option<Instant>,
     /// The first error that ends the run (returned by [`super::run`]).
     pub error: Option<anyhow::Error>,
 }
@@ -106,6 +108,7 @@ impl App {
             stats: FrameStats { last_frame: Instant::now(), fps: 0.0, draw_ms: 0.0 },
             pending_shot: None,
             exit_after_shot: false,
+            animate_until: None,
             error: None,
         }
     }
@@ -182,6 +185,10 @@ impl App {
     }
 
     fn frame(&mut self) -> anyhow::Result<()> {
+        let dt = self.stats.last_frame.elapsed().as_secs_f32();
+        if let Some(until) = self.animate_until {
+            self.animate_step(until, dt);
+        }
         let Some(worker) = &self.worker else { return Ok(()) };
         self.scene.receive(worker);
         if let (Some(e), Some(_)) = (&self.scene.load_error, &self.automation) {
@@ -190,7 +197,7 @@ impl App {
         self.input.update(&mut self.scene.state);
         let d = &mut self.scene.state.deform;
         if d.noise_animated && d.noise_amplitude != 0.0 {
-            d.noise_offset += self.stats.last_frame.elapsed().as_secs_f32() * 0.5;
+            d.noise_offset += dt * 0.5;
         }
         let status = self.status();
         let Some(surface) = &mut self.surface else { return Ok(()) };
@@ -242,7 +249,26 @@ impl App {
         s.last_frame = Instant::now();
     }
 
+    /// One frame of a scripted `animate:SECONDS`: the first light turns about the vertical axis
+    /// at half a radian per second; at the end the noise stops and the script goes on.
+    fn animate_step(&mut self, until: Instant, dt: f32) {
+        let state = &mut self.scene.state;
+        if Instant::now() >= until {
+            state.deform.noise_animated = false;
+            self.animate_until = None;
+            return;
+        }
+        if let Some(light) = state.params.lights.first_mut() {
+            light.position = glam::Quat::from_rotation_y(0.5 * dt) * light.position;
+            light.direction = -light.position;
+        }
+        self.last_progress = Instant::now();
+    }
+
     fn advance_script(&mut self, event_loop: &ActiveEventLoop) {
+        if self.animate_until.is_some() {
+            return;
+        }
         let settled = self.scene.settled();
         let Some(auto) = &mut self.automation else { return };
         let step = auto.step(settled);
@@ -302,6 +328,16 @@ impl App {
             }
             Action::Htsm(on) => state.method = if on { ViewMethod::Htsm } else { ViewMethod::Mertens },
             Action::Shot(path) => self.pending_shot = Some(path),
+            Action::Animate(seconds) => {
+                if state.deform.noise_amplitude == 0.0 {
+                    state.deform.noise_amplitude = 0.02;
+                }
+                state.deform.noise_animated = true;
+                if state.params.lights.is_empty() {
+                    state.params.lights.push(super::state::LightSpec::point(glam::Vec3::new(0.0, 1.0, -2.0)));
+                }
+                self.animate_until = Some(Instant::now() + Duration::from_secs_f64(seconds));
+            }
         }
         Ok(())
     }

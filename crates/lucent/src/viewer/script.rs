@@ -17,6 +17,7 @@
 //! | `clusters:x,y,z` | figure 6.9 view for the face nearest to `(x,y,z)` |
 //! | `method:htsm` / `method:mertens` | switch the 3D view's method (HTSM: Shopf 2007) |
 //! | `shot:path` | save a screenshot now |
+//! | `animate:s` | for `s` seconds: noise deformation flowing, the first light orbiting (soak tests) |
 
 use anyhow::{Context as _, bail};
 use glam::Vec3;
@@ -46,6 +47,8 @@ pub enum Action {
     Htsm(bool),
     /// Save a screenshot.
     Shot(PathBuf),
+    /// Animate noise and the first light for this many seconds.
+    Animate(f64),
 }
 
 /// Parses a script (see the module docs); the error names the bad action.
@@ -87,6 +90,13 @@ fn parse_action(s: &str) -> anyhow::Result<Action> {
             other => bail!("unknown method {other:?}: expected htsm or mertens"),
         },
         "shot" if !arg.trim().is_empty() => Action::Shot(PathBuf::from(arg.trim())),
+        "animate" => {
+            let seconds: f64 = number(arg)?;
+            if !(0.0..=86_400.0).contains(&seconds) {
+                bail!("animate takes 0..=86400 seconds, got {seconds}");
+            }
+            Action::Animate(seconds)
+        }
         "shot" => bail!("shot needs a file name"),
         other => bail!(
             "unknown action '{other}' (known: dent, light, twist, material, scale, camera, \
