@@ -1,0 +1,154 @@
+//! Hostile input through the command line (issue "Hostile input"): every refusal is one line
+//! naming the value or file, with a non-zero exit, no panic text and no output file; what lucent
+//! repairs is one warning line with a count; nothing outside a model's or scene's folder is read.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lucent(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lucent")).args(args).output().expect("run lucent")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_hostile").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// stderr lines, without Mesa's headless-machine notice and winit's log lines.
+fn lines(out: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| !l.contains("XDG_RUNTIME_DIR") && !l.trim().is_empty())
+        .map(str::to_string)
+        .collect()
+}
+
+/// Exit `code`, exactly one stderr line, containing every needle, no panic, and no `out` file.
+fn refused(out: &Output, code: i32, needles: &[&str], not_written: &Path) {
+    let l = lines(out);
+    assert_eq!(out.status.code(), Some(code), "{l:?}");
+    assert_eq!(l.len(), 1, "want one line, got {l:?}");
+    for n in needles {
+        assert!(l[0].contains(n), "{:?} should contain {n:?}", l[0]);
+    }
+    assert!(!l[0].contains("panicked"));
+    assert!(!not_written.exists(), "{} written on error", not_written.display());
+}
+
+#[test]
+fn numbers_out_of_range_are_one_line_usage_errors() {
+    let dir = scratch("ranges");
+    let out = dir.join("x.png");
+    let o = out.to_str().unwrap();
+    for (flag, value) in [
+        ("--scale", "-1"),
+        ("--scale", "1e6"),
+        ("--width", "0"),
+        ("--frames", "0"),
+        ("--pitch", "100"),
+        ("--exposure", "nan"),
+        ("--phase-g", "1"),
+    ] {
+        let run = lucent(&["render", flag, value, "--out", o]);
+        refused(&run, 2, &[flag, value], &out);
+    }
+    // Values that parse but are absurd: refused with the range, not run for minutes.
+    let run = lucent(&["render", "--deform", "noise:1e30,1e30", "--out", o]);
+    refused(&run, 1, &["noise amplitude", "outside"], &out);
+    let run = lucent(&["render", "--deform", "twist:1e6", "--out", o]);
+    refused(&run, 1, &["twist angle", "-1080..=1080"], &out);
+    let run = lucent(&["render", "--light", "point:1e30,0,0", "--out", o]);
+    refused(&run, 1, &["--light", "within"], &out);
+}
+
+#[test]
+fn scene_errors_are_one_line_with_line_and_column() {
+    let dir = scratch("toml");
+    let out = dir.join("x.png");
+    let scene = dir.join("bad.toml");
+    std::fs::write(&scene, "mesh = \"bunny\"\nscale = [1\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    refused(&run, 1, &["bad.toml", "line 2, column"], &out);
+    std::fs::write(&scene, "material = { sigma_s_prime = [1, 1, 1], sigma_a = [1e300, 1, 1] }\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    refused(&run, 1, &["sigma_a", "10000"], &out);
+}
+
+#[test]
+fn files_outside_the_model_or_scene_folder_are_never_read() {
+    let dir = scratch("escape");
+    let out = dir.join("x.png");
+    let o = out.to_str().unwrap();
+    for uri in ["/etc/passwd", "../../../etc/passwd", "/dev/zero", "file:///etc/passwd"] {
+        let gltf = dir.join("m.gltf");
+        std::fs::write(
+            &gltf,
+            format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{uri}","byteLength":36}}],"bufferViews":[{{"buffer":0,"byteLength":36}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}]}}"#
+            ),
+        )
+        .unwrap();
+        let run = lucent(&["render", "--mesh", gltf.to_str().unwrap(), "--out", o]);
+        refused(&run, 1, &["m.gltf", uri, "not a relative path inside"], &out);
+    }
+    let scene = dir.join("s.toml");
+    std::fs::write(&scene, "mesh = \"../../../../etc/passwd.obj\"\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", o]);
+    refused(&run, 1, &["s.toml", "not a relative path inside"], &out);
+}
+
+#[test]
+#[cfg(unix)]
+fn devices_are_not_read() {
+    let dir = scratch("devices");
+    let out = dir.join("x.png");
+    let link = dir.join("zero.obj");
+    std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+    let run = lucent(&["render", "--mesh", link.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    refused(&run, 1, &["zero.obj", "not a regular file"], &out);
+    let link = dir.join("zero.exr");
+    std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+    let run = lucent(&["render", "--env", link.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    refused(&run, 1, &["zero.exr", "not a regular file"], &out);
+}
+
+/// The EXR whose header made lucent ask for 333 GB and abort: one line, at once.
+#[test]
+fn corrupt_exr_header_is_refused_before_allocating() {
+    let dir = scratch("exr");
+    let out = dir.join("x.png");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../lucent-fuzz/regressions/exr/huge-data-window");
+    let env = dir.join("bad.exr");
+    std::fs::copy(src, &env).unwrap();
+    let run = lucent(&["render", "--env", env.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    refused(&run, 1, &["bad.exr"], &out);
+}
+
+#[test]
+fn repairs_are_one_warning_line_each_with_a_count() {
+    let dir = scratch("repairs");
+    let out = dir.join("x.png");
+    // A tetrahedron with one degenerate face (a repeated vertex), cut mid-line at the end.
+    let obj = dir.join("cut.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\nf 1 1 2")
+        .unwrap();
+    let run = lucent(&[
+        "render",
+        "--mesh",
+        obj.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let l = lines(&run);
+    assert!(run.status.success(), "{l:?}");
+    let warnings: Vec<_> = l.iter().filter(|l| l.starts_with("lucent: warning: ")).collect();
+    assert!(warnings.iter().any(|w| w.contains("cut.obj") && w.contains("cut short")), "{l:?}");
+    assert!(warnings.iter().any(|w| w.contains("removed 1 degenerate faces")), "{l:?}");
+    assert!(out.exists());
+}
