@@ -96,6 +96,18 @@ pub fn parse_profile(s: &str) -> Result<ProfileKind, String> {
 }
 
 /// `on`/`off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
+/// Three comma-separated finite numbers, `R,G,B`.
+pub fn parse_rgb(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("'{x}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [r, g, b] if v.iter().all(|x| x.is_finite()) => Ok([r, g, b]),
+        _ => Err(format!("expected three finite numbers R,G,B, got '{s}'")),
+    }
+}
+
 pub fn parse_on_off(s: &str) -> Result<bool, String> {
     match s.trim().to_ascii_lowercase().as_str() {
         "on" | "true" | "yes" | "1" => Ok(true),
@@ -164,6 +176,16 @@ pub struct RenderArgs {
     /// potato, skimmilk, skin1, skin2, wholemilk, wax. Default: the scene's, else skimmilk.
     #[arg(long)]
     pub material: Option<String>,
+    /// Material by colour: the albedo R,G,B a flat, thick slab of it shows under uniform light
+    /// (each about 0.0065..0.999), with --mfp; lucent finds sigma_s' and sigma_a by inverting
+    /// the pbd profile's effective albedo (eta 1.3) and prints them. Scene key:
+    /// `material = { albedo = [..], mfp = [..] }`.
+    #[arg(long, value_parser = parse_rgb, requires = "mfp", conflicts_with = "material")]
+    pub albedo: Option<[f64; 3]>,
+    /// Material by distance: the reduced mean free path R,G,B (1 / sigma_t', mm) that goes with
+    /// --albedo.
+    #[arg(long, value_parser = parse_rgb, requires = "albedo")]
+    pub mfp: Option<[f64; 3]>,
     /// Model scale: the largest side of the mesh's bounding box, in metres. Default: the
     /// scene's, else 0.05.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true)]
@@ -427,6 +449,9 @@ pub struct BenchArgs {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchTarget {
+    /// Colour materials: for requested slab albedos (0.05..0.99) and mean free paths (0.1, 1,
+    /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders, and the error.
+    Albedo,
     /// Energy under uniform irradiance 1: the largest B per face with and without the energy
     /// bound (`max_b_uniform` must not exceed 1) on `--mesh`.
     Energy,

@@ -55,9 +55,15 @@ fn exit_on_usage_error(e: clap::Error) -> ! {
     {
         e.exit();
     }
+    // clap's message, without its usage block and hint, on one line.
     let text = e.render().to_string();
-    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
-    eprintln!("lucent: {} (see lucent --help)", first.trim());
+    let message: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
+        .collect();
+    eprintln!("lucent: {} (see lucent --help)", message.join(" "));
     std::process::exit(2);
 }
 

@@ -3,8 +3,9 @@
 //! `examples/scenes/*.toml` for complete examples.
 //!
 //! ```toml
-//! mesh = "bunny"              # a built-in name, or a file path relative to this file
-//! material = "marble"         # a preset, or { sigma_s_prime = [..], sigma_a = [..], eta = 1.3 }
+//! mesh = "bunny"              # a built-in name, or a file path relative to this file (inside its folder)
+//! material = "marble"         # a preset, { sigma_s_prime = [..], sigma_a = [..], eta = 1.3 }
+//!                             # or { albedo = [0.9, 0.7, 0.5], mfp = [1.0, 0.5, 0.25] } (mm)
 //! scale = 0.05                # largest bounding-box side, metres
 //! exposure = 1.0
 //! surface = true             # false: subsurface term only (no reflection, no highlight)
@@ -23,7 +24,7 @@
 //! shadows = true
 //!
 //! [environment]
-//! path = "../../assets/courtyard.exr"
+//! path = "courtyard"          # built-in probe (courtyard, forest) or an .hdr/.exr file beside this one
 //! rotation = 90.0             # degrees about +Y
 //! intensity = 1.0
 //!
@@ -33,6 +34,10 @@
 //! distance = 3.0              # bounding-sphere radii (optional: frame the object)
 //! fov = 35.0                  # vertical, degrees
 //! ```
+//!
+//! Files a scene names must lie inside the scene file's folder (no absolute paths, no `..`, no
+//! links leading out), so a scene from elsewhere cannot make lucent read other files. Every
+//! number is checked against its range in [`crate::ranges`].
 
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
@@ -140,20 +145,41 @@ impl Default for MaterialSpec {
     }
 }
 
-/// Custom material coefficients (see [`Material`]).
+/// A custom material: either coefficients (`sigma_s_prime` and `sigma_a`) or what an artist
+/// gives (`albedo` and `mfp`, see [`Material::from_albedo_mfp`]).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CustomMaterial {
     /// Display name. Default `"custom"`.
     #[serde(default = "custom_name")]
     pub name: String,
-    /// Reduced scattering coefficient per RGB channel, mm^-1 (> 0).
-    pub sigma_s_prime: [f64; 3],
-    /// Absorption coefficient per RGB channel, mm^-1 (> 0).
-    pub sigma_a: [f64; 3],
+    /// Reduced scattering coefficient per RGB channel, mm^-1 (1e-12..=1e4).
+    pub sigma_s_prime: Option<[f64; 3]>,
+    /// Absorption coefficient per RGB channel, mm^-1 (1e-12..=1e4).
+    pub sigma_a: Option<[f64; 3]>,
+    /// Slab albedo per RGB channel (about 0.0065..=0.999 at eta 1.3).
+    pub albedo: Option<[f64; 3]>,
+    /// Reduced mean free path `1 / sigma_t'` per RGB channel, mm.
+    pub mfp: Option<[f64; 3]>,
     /// Relative index of refraction (1..3). Default 1.3.
     #[serde(default = "default_eta")]
     pub eta: f64,
+}
+
+impl CustomMaterial {
+    /// The material, validated; exactly one of the two pairs must be given, both of its keys.
+    pub fn resolve(&self) -> Result<Material> {
+        Ok(match (self.sigma_s_prime, self.sigma_a, self.albedo, self.mfp) {
+            (Some(s), Some(a), None, None) => Material::custom(&self.name, s, a, self.eta)?,
+            (None, None, Some(albedo), Some(mfp)) => {
+                Material::from_albedo_mfp(&self.name, albedo, mfp, self.eta)?
+            }
+            _ => bail!(
+                "material '{}': give either sigma_s_prime and sigma_a (mm^-1) or albedo and mfp (mm), both keys of one pair",
+                self.name
+            ),
+        })
+    }
 }
 
 fn custom_name() -> String {
@@ -171,7 +197,9 @@ impl<'de> Deserialize<'de> for MaterialSpec {
         impl<'de> Visitor<'de> for V {
             type Value = MaterialSpec;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a material preset name or a table with sigma_s_prime and sigma_a")
+                f.write_str(
+                    "a material preset name or a table with sigma_s_prime and sigma_a, or albedo and mfp",
+                )
             }
             fn visit_str<E: de::Error>(self, s: &str) -> Result<MaterialSpec, E> {
                 Ok(MaterialSpec::Preset(s.to_string()))
@@ -375,7 +403,7 @@ impl Scene {
     pub fn material(&self) -> Result<Material> {
         Ok(match &self.material {
             MaterialSpec::Preset(name) => Material::by_name(name)?,
-            MaterialSpec::Custom(c) => Material::custom(&c.name, c.sigma_s_prime, c.sigma_a, c.eta)?,
+            MaterialSpec::Custom(c) => c.resolve()?,
         })
     }
 
@@ -399,30 +427,15 @@ impl Scene {
     /// (embedded Stanford bunny), `candle`, `cube` (32 x 32 squares per side), `sphere`
     /// (icosphere, 5 subdivisions). Errors name the file or list the known names.
     pub fn load_mesh(&self) -> Result<Mesh> {
-        Ok(match self.mesh_source() {
+        match self.mesh_source() {
             MeshSource::File(_) => {
                 // Only files inside the scene's folder: a scene from elsewhere may not read others.
                 let path = lucent_core::limits::resolve_inside(&self.dir, &self.mesh)
                     .map_err(|reason| anyhow::anyhow!("mesh: {reason}"))?;
-                load_mesh_file(&path)?
+                load_mesh_file(&path)
             }
-            MeshSource::Builtin(name) => match name.as_str() {
-                "bunny" => embedded::bunny(),
-                // Finer than the generator's default, so Gouraud shading shows no bands along the side
-                // and a twist bends the side visibly.
-                "candle" => generate::candle(&generate::CandleParams {
-                    segments: 64,
-                    side_rings: 32,
-                    ..Default::default()
-                }),
-                "cube" => generate::cube(32),
-                "sphere" | "icosphere" => generate::icosphere(5),
-                other => bail!(
-                    "unknown built-in mesh {other:?} (known: {}); a file path needs an extension",
-                    BUILTIN_MESHES.join(", ")
-                ),
-            },
-        })
+            MeshSource::Builtin(name) => builtin_mesh(&name),
+        }
     }
 
     /// The camera as the renderer's orbit camera.
@@ -500,6 +513,36 @@ impl Scene {
             reflection: map.downsampled(256, 128).rotated(spec.rotation),
         }))
     }
+}
+
+/// A mesh named on the command line: a built-in name, or a file path (any path: the user chose
+/// it, unlike a path inside a scene file).
+pub fn load_named_mesh(name: &str) -> Result<Mesh> {
+    let p = Path::new(name);
+    if p.extension().is_some() || name.contains(['/', '\\']) {
+        load_mesh_file(p)
+    } else {
+        builtin_mesh(&name.trim().to_ascii_lowercase())
+    }
+}
+
+/// A built-in mesh by its lower-case name: `bunny` (embedded Stanford bunny), `candle`, `cube`
+/// (32 x 32 squares per side), `sphere` (icosphere, 5 subdivisions).
+fn builtin_mesh(name: &str) -> Result<Mesh> {
+    Ok(match name {
+        "bunny" => embedded::bunny(),
+        // Finer than the generator's default, so Gouraud shading shows no bands along the side
+        // and a twist bends the side visibly.
+        "candle" => {
+            generate::candle(&generate::CandleParams { segments: 64, side_rings: 32, ..Default::default() })
+        }
+        "cube" => generate::cube(32),
+        "sphere" | "icosphere" => generate::icosphere(5),
+        other => bail!(
+            "unknown built-in mesh {other:?} (known: {}); a file path needs an extension",
+            BUILTIN_MESHES.join(", ")
+        ),
+    })
 }
 
 /// Loads a mesh file and prints one warning line per repair or problem the loader found

@@ -32,9 +32,6 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     {
         anyhow::bail!("--mesh {}: no such file", path.display());
     }
-    if !(args.scale.is_finite() && args.scale > 0.0) {
-        anyhow::bail!("--scale must be a positive number of metres, got {}", args.scale);
-    }
     if args.width < 200 || args.height < 150 {
         anyhow::bail!("--width/--height must be at least 200x150, got {}x{}", args.width, args.height);
     }

@@ -152,3 +152,57 @@ fn repairs_are_one_warning_line_each_with_a_count() {
     assert!(warnings.iter().any(|w| w.contains("removed 1 degenerate faces")), "{l:?}");
     assert!(out.exists());
 }
+
+/// Colour-and-distance materials: one flag without the other is a usage error; values outside
+/// their ranges are one line naming the value and the range; a scene's `{ albedo, mfp }` renders.
+#[test]
+fn albedo_and_mfp_materials() {
+    let dir = scratch("albedo");
+    let out = dir.join("x.png");
+    let o = out.to_str().unwrap();
+    refused(&lucent(&["render", "--albedo", "0.8,0.6,0.4", "--out", o]), 2, &["--mfp"], &out);
+    refused(
+        &lucent(&["render", "--albedo", "0.8,0.6", "--mfp", "1,1,1", "--out", o]),
+        2,
+        &["--albedo", "R,G,B"],
+        &out,
+    );
+    let run = lucent(&["render", "--albedo", "1.2,0.6,0.4", "--mfp", "1,1,1", "--out", o]);
+    refused(&run, 1, &["albedo 1.2", "..="], &out);
+    let run = lucent(&["render", "--albedo", "0.8,0.6,0.4", "--mfp", "1,0,1", "--out", o]);
+    refused(&run, 1, &["mean free path 0"], &out);
+    let scene = dir.join("a.toml");
+    std::fs::write(&scene, "material = { albedo = [0.8, 0.6, 0.4], mfp = [1.0, 0.5, 0.25] }\n").unwrap();
+    let run = lucent(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        o,
+    ]);
+    assert!(run.status.success(), "{:?}", lines(&run));
+    std::fs::remove_file(&out).unwrap();
+    std::fs::write(&scene, "material = { albedo = [0.8, 0.6, 0.4] }\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", o]);
+    refused(&run, 1, &["a.toml", "albedo and mfp"], &out);
+    // The flags print what they chose.
+    let run = lucent(&[
+        "render",
+        "--albedo",
+        "0.8,0.6,0.4",
+        "--mfp",
+        "1,0.5,0.25",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        o,
+    ]);
+    assert!(run.status.success(), "{:?}", lines(&run));
+    assert!(String::from_utf8_lossy(&run.stdout).contains("sigma_s'"));
+}

@@ -1,6 +1,8 @@
 //! Measured scattering materials (Jensen et al. 2001, table in lucent's REFERENCE notes; the
 //! same numbers as pbrt-v4's `media.cpp`) and user-defined ones.
 
+use super::beam_diffusion::EffectiveAlbedo;
+
 /// A homogeneous scattering material for the dipole model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -26,6 +28,12 @@ pub enum MaterialError {
     NonPositive { name: String, what: &'static str, values: [f64; 3] },
     #[error("material '{name}': eta must be finite and within 1.0..=3.0, got {eta}")]
     BadEta { name: String, eta: f64 },
+    #[error(
+        "material '{name}': albedo {value} is outside the range {min:.4}..={max:.4} the pbd profile reaches at eta {eta}"
+    )]
+    Albedo { name: String, value: f64, min: f64, max: f64, eta: f64 },
+    #[error("material '{name}': mean free path {value} mm is outside {min:e}..={max:e} mm")]
+    MeanFreePath { name: String, value: f64, min: f64, max: f64 },
 }
 
 /// The smallest coefficient accepted, mm^-1 (a mean free path of a million km: no absorption
@@ -88,6 +96,69 @@ impl Material {
         Ok(m)
     }
 
+    /// A material from what an artist gives (Blender's Principled BSDF, Unreal, Arnold): the
+    /// colour a flat, thick slab of it shows under uniform light, and how far light goes in it.
+    ///
+    /// - `albedo`: per channel, the slab's subsurface albedo, exitant radiosity over the
+    ///   irradiance that entered (the surface's own Fresnel reflection excluded), in the range
+    ///   [`albedo_range`] (0.0065..=0.999 at eta 1.3).
+    /// - `mfp_mm`: per channel, the reduced mean free path `1 / sigma_t'`, mm (1e-4..1e12).
+    ///
+    /// Each channel's single-scattering albedo `rho' = sigma_s' / sigma_t'` is the one whose
+    /// photon-beam-diffusion effective albedo (multiple plus single scattering, the default
+    /// profile's, [`super::beam_diffusion::EffectiveAlbedo`]) is `albedo`; then
+    /// `sigma_s' = rho' / mfp` and `sigma_a = (1 - rho') / mfp`. (pbrt-v3's
+    /// `SubsurfaceFromDiffuse` does the same with its own table.)
+    pub fn from_albedo_mfp(
+        name: &str,
+        albedo: [f64; 3],
+        mfp_mm: [f64; 3],
+        eta: f64,
+    ) -> Result<Material, MaterialError> {
+        if !eta.is_finite() || !(1.0..=3.0).contains(&eta) {
+            return Err(MaterialError::BadEta { name: name.to_string(), eta });
+        }
+        let (min, max) = (1.0 / MAX_SIGMA, 1.0 / MIN_SIGMA);
+        if let Some(&value) = mfp_mm.iter().find(|d| !(min..=max).contains(*d)) {
+            return Err(MaterialError::MeanFreePath { name: name.to_string(), value, min, max });
+        }
+        let table = effective_albedo_table(eta);
+        let (lo, hi) = albedo_range_of(&table);
+        let mut sigma_s_prime = [0.0; 3];
+        let mut sigma_a = [0.0; 3];
+        for c in 0..3 {
+            let rho = Some(albedo[c])
+                .filter(|a| (lo..=hi).contains(a))
+                .and_then(|a| table.invert_exact(a))
+                .ok_or_else(|| MaterialError::Albedo {
+                name: name.to_string(),
+                value: albedo[c],
+                min: lo,
+                max: hi,
+                eta,
+            })?;
+            // Keep both coefficients inside the accepted range at albedos next to 0 and 1.
+            let rho = rho.clamp(MIN_SIGMA * mfp_mm[c], 1.0 - MIN_SIGMA * mfp_mm[c]);
+            sigma_s_prime[c] = rho / mfp_mm[c];
+            sigma_a[c] = (1.0 - rho) / mfp_mm[c];
+        }
+        Material::custom(name, sigma_s_prime, sigma_a, eta)
+    }
+
+    /// The artist's view of this material (see [`Material::from_albedo_mfp`]): per channel the
+    /// slab albedo under the default profile, and the reduced mean free path `1 / sigma_t'` in mm.
+    pub fn albedo_mfp(&self) -> ([f64; 3], [f64; 3]) {
+        let mut albedo = [0.0; 3];
+        let mut mfp = [0.0; 3];
+        for c in 0..3 {
+            let sigma_t = self.sigma_s_prime[c] + self.sigma_a[c];
+            albedo[c] =
+                super::beam_diffusion::effective_albedo(self.sigma_s_prime[c] / sigma_t, self.eta).total();
+            mfp[c] = 1.0 / sigma_t;
+        }
+        (albedo, mfp)
+    }
+
     /// Checks that every coefficient is finite and positive and `eta` is in range.
     pub fn validate(&self) -> Result<(), MaterialError> {
         let bad = |v: &[f64; 3]| v.iter().any(|x| !(MIN_SIGMA..=MAX_SIGMA).contains(x));
@@ -110,4 +181,30 @@ impl Material {
         }
         Ok(())
     }
+}
+
+/// The slab albedos [`Material::from_albedo_mfp`] can reach at `eta` (the effective albedo of the
+/// table's second row and of its last).
+pub fn albedo_range(eta: f64) -> (f64, f64) {
+    albedo_range_of(&effective_albedo_table(eta))
+}
+
+fn albedo_range_of(table: &EffectiveAlbedo) -> (f64, f64) {
+    // Photon beam diffusion overestimates a half-space's albedo near rho = 1 (past 1 at eta = 1,
+    // see the README's known limitations); no slab gives back more than it receives.
+    (table.rho_eff[1], table.rho_eff.last().copied().unwrap_or(0.0).min(0.999))
+}
+
+/// The effective-albedo table for `eta`, built once per `eta` (about 100 profile integrals).
+fn effective_albedo_table(eta: f64) -> std::sync::Arc<EffectiveAlbedo> {
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    static TABLES: OnceLock<Mutex<HashMap<u64, Arc<EffectiveAlbedo>>>> = OnceLock::new();
+    let tables = TABLES.get_or_init(Default::default);
+    if let Some(t) = tables.lock().unwrap_or_else(|e| e.into_inner()).get(&eta.to_bits()) {
+        return t.clone();
+    }
+    let table = Arc::new(EffectiveAlbedo::new(eta));
+    tables.lock().unwrap_or_else(|e| e.into_inner()).insert(eta.to_bits(), table.clone());
+    table
 }

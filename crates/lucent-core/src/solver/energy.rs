@@ -61,3 +61,57 @@ pub fn uniform_report(
         links: raw.stats.links,
     }
 }
+
+/// What [`slab_albedo`] measured.
+#[derive(Clone, Copy, Debug)]
+pub struct SlabAlbedo {
+    /// Mean `B` of the top faces within a tenth of the side of the centre, under transmitted
+    /// irradiance 1 on the top: the albedo lucent renders.
+    pub rendered: Rgb,
+    /// The slab's side, mm.
+    pub side_mm: f64,
+    /// Triangles of the slab mesh.
+    pub triangles: usize,
+}
+
+/// The albedo lucent renders for `material` on a flat slab (issue "Materials the way artists
+/// give them"): a square slab, its side 40 diffusion lengths `1 / sigma_tr` of the slowest
+/// channel and at least 200 mean free paths, a quarter as thick, `subdivisions^2` squares per
+/// side, lit with transmitted irradiance 1 on its top, solved hierarchically with the default
+/// profile ([`crate::bssrdf::ProfileKind::default`]) and its oracle.
+pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32) -> SlabAlbedo {
+    use crate::bssrdf::{Dipole, ProfileKind};
+    let mut mesh = crate::mesh::generate::cube(subdivisions);
+    for p in &mut mesh.positions {
+        p.y *= 0.25;
+    }
+    let reach_mm = (0..3)
+        .map(|c| {
+            let (s, a) = (material.sigma_s_prime[c], material.sigma_a[c]);
+            let sigma_tr = (3.0 * a * (s + a)).sqrt();
+            (40.0 / sigma_tr).max(200.0 / (s + a))
+        })
+        .fold(0.0, f64::max);
+    let kind = ProfileKind::default();
+    let dipole = Dipole::profile_for_model_scale(
+        material,
+        mesh.extent() as f64,
+        reach_mm / 1000.0,
+        kind,
+        kind.single_scattering_by_default(),
+    );
+    let top: Vec<bool> = (0..mesh.triangles.len()).map(|f| mesh.face_normal(f).y > 0.99).collect();
+    let irradiance: Vec<Rgb> = top.iter().map(|&t| if t { Rgb::ONE } else { Rgb::ZERO }).collect();
+    let h = crate::hierarchy::face_cluster::build(&mesh);
+    let solver = super::HierarchicalSolver::new(mesh.clone(), h, dipole, super::Oracle::for_profile(kind));
+    let b = solver.solve_on_the_fly(&irradiance).face_b;
+    let (mut sum, mut n) = (Rgb::ZERO, 0);
+    for (f, &t) in top.iter().enumerate() {
+        let c = mesh.face_centroid(f);
+        if t && c.x.abs() < 0.1 && c.z.abs() < 0.1 {
+            sum += b[f];
+            n += 1;
+        }
+    }
+    SlabAlbedo { rendered: sum / n.max(1) as f32, side_mm: reach_mm, triangles: mesh.triangles.len() }
+}

@@ -136,8 +136,11 @@ impl FromStr for VolumeSpec {
                     Some(s) => parse_num(spec, "scale", s)?,
                     None => d.scale,
                 };
-                if !(scale.is_finite() && scale > 0.0) {
-                    return Err(spec_err(spec, "scale must be a positive number"));
+                if !(scale > 0.0 && scale <= 1e4) {
+                    return Err(spec_err(
+                        spec,
+                        "scale must be a number in (0, 10000] (veins per volume side)",
+                    ));
                 }
                 Ok(VolumeSpec::Veins { seed, scale })
             }

@@ -3,20 +3,15 @@
 //! Prints `max_b_uniform` (after the energy bound) and the profile's own maximum before it.
 
 use crate::cli::BenchArgs;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use lucent_core::bssrdf::{Dipole, Material};
 use lucent_core::solver::{Oracle, energy};
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let name = args.mesh.clone().unwrap_or_else(|| "bunny".into());
-    let spec: crate::scene::Scene =
-        toml::from_str(&format!("mesh = {name:?}")).context("--mesh: not a mesh name or path")?;
-    let mesh = spec.load_mesh().with_context(|| format!("--mesh {name}"))?;
+    let mesh = crate::scene::load_named_mesh(&name).with_context(|| format!("--mesh {name}"))?;
     let material = Material::by_name(args.material.as_deref().unwrap_or("marble"))?;
     let scale = args.scale.unwrap_or(0.1);
-    if !(scale.is_finite() && scale > 0.0) {
-        bail!("--scale must be a positive number of metres, got {scale}");
-    }
     let kind = args.profile.unwrap_or_default();
     let dipole = Dipole::profile_for_model_scale(
         &material,

@@ -2,6 +2,7 @@
 
 use crate::cli::{BenchArgs, BenchTarget};
 
+mod albedo;
 mod energy;
 mod formfactor;
 mod htsm;
@@ -9,6 +10,7 @@ mod solver;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
+        BenchTarget::Albedo => albedo::run(args.json),
         BenchTarget::Energy => energy::run(args),
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),

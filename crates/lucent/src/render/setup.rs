@@ -96,11 +96,27 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         }
         (None, None) => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny(), None),
     };
-    let material = match (&args.material, &file) {
-        (Some(name), _) => Material::by_name(name)?,
-        (None, Some(f)) => f.material()?,
-        (None, None) => Material::by_name("skimmilk")?,
+    let material = match (&args.material, args.albedo.zip(args.mfp), &file) {
+        (Some(name), _, _) => Material::by_name(name)?,
+        (None, Some((albedo, mfp)), _) => Material::from_albedo_mfp("custom", albedo, mfp, 1.3)?,
+        (None, None, Some(f)) => f.material()?,
+        (None, None, None) => Material::by_name("skimmilk")?,
     };
+    if args.albedo.is_some() {
+        let (s, a) = (material.sigma_s_prime, material.sigma_a);
+        println!(
+            "lucent: material: albedo {:?}, mfp {:?} mm -> sigma_s' [{:.4}, {:.4}, {:.4}], sigma_a [{:.4e}, {:.4e}, {:.4e}] mm^-1 (eta {})",
+            args.albedo.unwrap_or_default(),
+            args.mfp.unwrap_or_default(),
+            s[0],
+            s[1],
+            s[2],
+            a[0],
+            a[1],
+            a[2],
+            material.eta
+        );
+    }
     // Flags and scene keys were range-checked where they were read (`crate::ranges`).
     let scale = args.scale.or(file.as_ref().map(|f| f.scale)).unwrap_or(0.05);
     let exposure = args.exposure.or(file.as_ref().map(|f| f.exposure)).unwrap_or(1.0);
