@@ -193,7 +193,7 @@ fn gltf_json(uri: Option<String>) -> (String, Vec<u8>) {
 
 fn gltf_seeds() -> Vec<Vec<u8>> {
     let (_, bin) = gltf_json(None);
-    let data = format!("data:application/octet-stream;base64,{}", base64_encode(&bin));
+    let data = format!("data:application/octet-stream;base64,{}", base64::encode(&bin));
     vec![gltf_json(Some(data)).0.into_bytes()]
 }
 
@@ -217,18 +217,6 @@ fn glb_seeds() -> Vec<Vec<u8>> {
     b.extend(b"BIN\0");
     b.extend(&bin);
     vec![b]
-}
-
-fn base64_encode(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (k, &b)| n | (u32::from(b) << (16 - 8 * k)));
-        for k in 0..4 {
-            s.push(if k <= chunk.len() { A[(n >> (18 - 6 * k)) as usize & 63] as char } else { '=' });
-        }
-    }
-    s
 }
 
 /// A small sky-like gradient, `w x h`.
