@@ -34,7 +34,10 @@ fn presets_show_their_colour_and_distance() {
     // The README's table of presets as colour and distance (`--nocapture`).
     for (name, _, _) in lucent_core::bssrdf::PRESETS {
         let (a, d) = Material::by_name(name).unwrap().albedo_mfp();
-        println!("| {name} | {:.3}, {:.3}, {:.3} | {:.3}, {:.3}, {:.3} |", a[0], a[1], a[2], d[0], d[1], d[2]);
+        println!(
+            "| {name} | {:.3}, {:.3}, {:.3} | {:.3}, {:.3}, {:.3} |",
+            a[0], a[1], a[2], d[0], d[1], d[2]
+        );
         // Photon beam diffusion's effective albedo passes 1 at single-scattering albedos within
         // about 1e-4 of 1 (cream's red: 1.012); the energy bound keeps what is rendered <= 1.
         assert!(a.iter().all(|x| (0.0..1.02).contains(x)), "{name}: {a:?}");

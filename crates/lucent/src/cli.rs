@@ -473,7 +473,8 @@ pub enum BenchTarget {
     xvfb-run -a lucent view --frames 20 --script \"dent:0.1,0.2,0.3;light:0,1,-2\" --screenshot out.png\n\n\
     Script actions (separated by ';'; each runs once the previous one's solution is drawn):\n  \
     dent:x,y,z  light:x,y,z  twist:k  material:NAME  scale:M  camera:YAW,PITCH,DIST\n  \
-    exposure:K  clusters:x,y,z  method:htsm|mertens  shot:PATH  animate:SECONDS\n\
+    exposure:K  clusters:x,y,z  method:htsm|mertens  shot:PATH  animate:SECONDS\n  \
+    albedo:R,G,B,MFP_R,MFP_G,MFP_B (slab albedo, mean free paths in mm)\n\
     Positions are in normalised mesh units: the mesh is centred with a bounding-box side of 1.")]
 pub struct ViewArgs {
     /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the built-in mesh when absent.

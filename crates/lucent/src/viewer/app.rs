@@ -328,6 +328,11 @@ impl App {
             }
             Action::Htsm(on) => state.method = if on { ViewMethod::Htsm } else { ViewMethod::Mertens },
             Action::Shot(path) => self.pending_shot = Some(path),
+            Action::Albedo(albedo, mfp) => {
+                let (a, d) = (albedo.map(f64::from), mfp.map(f64::from));
+                state.params.material = Material::from_albedo_mfp("colour", a, d, state.params.material.eta)?;
+                state.by_colour = super::state::ByColour { albedo, mfp_mm: mfp, error: None };
+            }
             Action::Animate(seconds) => {
                 if state.deform.noise_amplitude == 0.0 {
                     state.deform.noise_amplitude = 0.02;

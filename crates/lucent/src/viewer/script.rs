@@ -17,6 +17,7 @@
 //! | `clusters:x,y,z` | figure 6.9 view for the face nearest to `(x,y,z)` |
 //! | `method:htsm` / `method:mertens` | switch the 3D view's method (HTSM: Shopf 2007) |
 //! | `shot:path` | save a screenshot now |
+//! | `albedo:r,g,b,mr,mg,mb` | material by slab albedo and mean free paths (mm), as the panel's "apply" |
 //! | `animate:s` | for `s` seconds: noise deformation flowing, the first light orbiting (soak tests) |
 
 use anyhow::{Context as _, bail};
@@ -49,6 +50,8 @@ pub enum Action {
     Shot(PathBuf),
     /// Animate noise and the first light for this many seconds.
     Animate(f64),
+    /// Material by colour and distance: slab albedo, then mean free paths in mm.
+    Albedo([f32; 3], [f32; 3]),
 }
 
 /// Parses a script (see the module docs); the error names the bad action.
@@ -90,6 +93,10 @@ fn parse_action(s: &str) -> anyhow::Result<Action> {
             other => bail!("unknown method {other:?}: expected htsm or mertens"),
         },
         "shot" if !arg.trim().is_empty() => Action::Shot(PathBuf::from(arg.trim())),
+        "albedo" => {
+            let v = numbers::<6>(arg)?;
+            Action::Albedo([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+        }
         "animate" => {
             let seconds: f64 = number(arg)?;
             if !(0.0..=86_400.0).contains(&seconds) {

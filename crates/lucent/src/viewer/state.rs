@@ -223,6 +223,25 @@ pub struct ViewState {
     pub method: ViewMethod,
     /// Settings of the HTSM method.
     pub htsm: super::htsm::HtsmSettings,
+    /// The panel's colour-and-distance material editor.
+    pub by_colour: ByColour,
+}
+
+/// A material as colour and distance, being edited (`Material::from_albedo_mfp`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ByColour {
+    /// Slab albedo per channel, linear RGB (0.0065..0.999 at eta 1.3). Default 0.8, 0.6, 0.4.
+    pub albedo: [f32; 3],
+    /// Reduced mean free path per channel, mm. Default 1, 0.5, 0.25.
+    pub mfp_mm: [f32; 3],
+    /// Why the last "apply" was refused.
+    pub error: Option<String>,
+}
+
+impl Default for ByColour {
+    fn default() -> Self {
+        ByColour { albedo: [0.8, 0.6, 0.4], mfp_mm: [1.0, 0.5, 0.25], error: None }
+    }
 }
 
 /// The rendering method of the 3D view.
@@ -277,6 +296,7 @@ impl ViewState {
             tool: Tool::Orbit,
             method: ViewMethod::Mertens,
             htsm: Default::default(),
+            by_colour: ByColour::default(),
         }
     }
 }

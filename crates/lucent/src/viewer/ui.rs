@@ -135,8 +135,38 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
     if *m != before && !m.name.ends_with(" (edited)") {
         m.name = format!("{} (edited)", m.name);
     }
+    by_colour(ui, state);
     ui.add(Slider::new(&mut state.params.scale_m, 0.001..=2.0).logarithmic(true).text("scale (m)"));
     ui.add(Slider::new(&mut state.exposure, 0.05..=50.0).logarithmic(true).text("exposure"));
+}
+
+/// The material by colour and distance: a colour picker for the slab albedo, distance sliders,
+/// and "apply", which inverts the pbd profile's albedo (a fraction of a second) at the current η.
+fn by_colour(ui: &mut Ui, state: &mut ViewState) {
+    ui.collapsing("by colour and distance", |ui| {
+        let c = &mut state.by_colour;
+        ui.horizontal(|ui| {
+            ui.color_edit_button_rgb(&mut c.albedo);
+            ui.label("slab albedo");
+        });
+        ui.label("mean free path (mm)");
+        for (v, name) in c.mfp_mm.iter_mut().zip(["R", "G", "B"]) {
+            ui.add(Slider::new(v, 0.01..=100.0).logarithmic(true).text(name));
+        }
+        if ui.button("apply").clicked() {
+            let (albedo, mfp) = (c.albedo.map(f64::from), c.mfp_mm.map(f64::from));
+            match Material::from_albedo_mfp("colour", albedo, mfp, state.params.material.eta) {
+                Ok(m) => {
+                    state.params.material = m;
+                    c.error = None;
+                }
+                Err(e) => c.error = Some(e.to_string()),
+            }
+        }
+        if let Some(e) = &c.error {
+            ui.colored_label(Color32::LIGHT_RED, e);
+        }
+    });
 }
 
 fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>) {
