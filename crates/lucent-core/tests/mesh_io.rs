@@ -389,7 +389,7 @@ fn rejects_unknown_extension_and_missing_file() {
     assert!(e.reason().contains("extension"), "{e}");
     let missing = Path::new("/nonexistent/dir/bunny.ply");
     let e = load_mesh(missing).unwrap_err();
-    assert!(e.to_string().starts_with("/nonexistent/dir/bunny.ply: cannot read file"), "{e}");
+    assert!(e.to_string().starts_with("/nonexistent/dir/bunny.ply: cannot open"), "{e}");
 }
 
 #[test]
