@@ -8,10 +8,14 @@ fn examples() -> PathBuf {
 
 #[test]
 fn example_scenes_parse() {
-    for name in ["candle.toml", "bunny_courtyard.toml", "bunny_spot.toml"] {
+    for name in ["candle.toml", "bunny_courtyard.toml", "bunny_spot.toml", "bunny_jade.toml"] {
         let s = Scene::load(&examples().join(name)).unwrap_or_else(|e| panic!("{e:#}"));
         assert!(!s.lights.is_empty() || s.environment.is_some(), "{name}");
     }
+    let jade = Scene::load(&examples().join("bunny_jade.toml")).unwrap();
+    assert_eq!(jade.material.by_colour(), Some(([0.55, 0.8, 0.6], [1.5, 3.0, 2.0])));
+    let (albedo, _) = jade.material().unwrap().albedo_mfp();
+    assert!((albedo[1] - 0.8).abs() < 1e-3, "{albedo:?}");
     let s = Scene::load(&examples().join("bunny_courtyard.toml")).unwrap();
     let env = s.environment().unwrap().expect("has an environment");
     assert_eq!((env.reflection.width, env.reflection.height), (256, 128));
