@@ -470,7 +470,8 @@ pub struct BenchArgs {
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchTarget {
     /// Colour materials: for requested slab albedos (0.05..0.99) and mean free paths (0.1, 1,
-    /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders, and the error.
+    /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders (hierarchical solve, and
+    /// the exact solve beside it), and the relative errors.
     Albedo,
     /// Energy under uniform irradiance 1: the largest B per face with and without the energy
     /// bound (`max_b_uniform` must not exceed 1) on `--mesh`.
