@@ -86,16 +86,11 @@ pub fn parse_hierarchy(s: &str) -> Result<HierarchyChoice, String> {
     }
 }
 
-/// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
-/// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
-/// steradians). Every threshold must be a positive, finite number; the rest stay at their
-/// defaults ([`Oracle::default`]).
 /// `--profile NAME`: one of the diffusion profiles, case-insensitive.
 pub fn parse_profile(s: &str) -> Result<ProfileKind, String> {
     s.parse::<ProfileKind>().map_err(|e| e.to_string())
 }
 
-/// `on`/`off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
 /// Three comma-separated finite numbers, `R,G,B`.
 pub fn parse_rgb(s: &str) -> Result<[f64; 3], String> {
     let v: Vec<f64> = s
@@ -108,6 +103,27 @@ pub fn parse_rgb(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
+/// `--albedo R,G,B`: slab albedos, each within [`crate::ranges::ALBEDO`] (the range at eta 1.3,
+/// the eta of `--albedo` materials), so that a bad one is a usage error.
+pub fn parse_albedo(s: &str) -> Result<[f64; 3], String> {
+    rgb_within("--albedo", s, &crate::ranges::ALBEDO)
+}
+
+/// `--mfp R,G,B`: reduced mean free paths in mm, each within
+/// [`crate::ranges::MEAN_FREE_PATH_MM`].
+pub fn parse_mfp(s: &str) -> Result<[f64; 3], String> {
+    rgb_within("--mfp", s, &crate::ranges::MEAN_FREE_PATH_MM)
+}
+
+fn rgb_within(flag: &str, s: &str, range: &std::ops::RangeInclusive<f64>) -> Result<[f64; 3], String> {
+    let rgb = parse_rgb(s)?;
+    for v in rgb {
+        crate::ranges::check(flag, v, range)?;
+    }
+    Ok(rgb)
+}
+
+/// `on`/`off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
 pub fn parse_on_off(s: &str) -> Result<bool, String> {
     match s.trim().to_ascii_lowercase().as_str() {
         "on" | "true" | "yes" | "1" => Ok(true),
@@ -116,6 +132,10 @@ pub fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
+/// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
+/// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
+/// steradians). Every threshold must be a positive, finite number; the rest stay at their
+/// defaults ([`Oracle::default`]).
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
@@ -177,14 +197,14 @@ pub struct RenderArgs {
     #[arg(long)]
     pub material: Option<String>,
     /// Material by colour: the albedo R,G,B a flat, thick slab of it shows under uniform light
-    /// (each about 0.0065..0.999), with --mfp; lucent finds sigma_s' and sigma_a by inverting
+    /// (linear, each 0.001..=0.999), with --mfp; lucent finds sigma_s' and sigma_a by inverting
     /// the pbd profile's effective albedo (eta 1.3) and prints them. Scene key:
-    /// `material = { albedo = [..], mfp = [..] }`.
-    #[arg(long, value_parser = parse_rgb, requires = "mfp", conflicts_with = "material")]
+    /// `material = { albedo = [..], mfp = [..], eta = 1.3 }`.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_albedo, requires = "mfp", conflicts_with = "material")]
     pub albedo: Option<[f64; 3]>,
-    /// Material by distance: the reduced mean free path R,G,B (1 / sigma_t', mm) that goes with
-    /// --albedo.
-    #[arg(long, value_parser = parse_rgb, requires = "albedo")]
+    /// Material by distance: the reduced mean free path R,G,B (scatter distance 1 / sigma_t',
+    /// mm, each 0.0001..=1e6) that goes with --albedo.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_mfp, requires = "albedo")]
     pub mfp: Option<[f64; 3]>,
     /// Model scale: the largest side of the mesh's bounding box, in metres. Default: the
     /// scene's, else 0.05.
@@ -450,7 +470,8 @@ pub struct BenchArgs {
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchTarget {
     /// Colour materials: for requested slab albedos (0.05..0.99) and mean free paths (0.1, 1,
-    /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders, and the error.
+    /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders (hierarchical solve, and
+    /// the exact solve beside it), and the relative errors.
     Albedo,
     /// Energy under uniform irradiance 1: the largest B per face with and without the energy
     /// bound (`max_b_uniform` must not exceed 1) on `--mesh`.

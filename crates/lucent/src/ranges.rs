@@ -41,6 +41,12 @@ pub const PHASE_G: RangeInclusive<f32> = -0.99..=0.99;
 /// HTSM: extra absorption of density 1, per object unit.
 pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
 
+/// Slab albedo of a colour material (`--albedo`, scene key `albedo`), unitless; lucent-core's
+/// range (the top is lower at eta above about 1.85, see `albedo_range`).
+pub const ALBEDO: RangeInclusive<f64> = lucent_core::bssrdf::ALBEDO;
+/// Reduced mean free path of a colour material (`--mfp`, scene key `mfp`), mm.
+pub const MEAN_FREE_PATH_MM: RangeInclusive<f64> = lucent_core::bssrdf::MEAN_FREE_PATH_MM;
+
 /// Checks `value` (named `what` in the error, e.g. `--scale`) against `range`.
 pub fn check<T: PartialOrd + Display>(what: &str, value: T, range: &RangeInclusive<T>) -> Result<T, String> {
     // `contains` is false for NaN, so a NaN is refused too.

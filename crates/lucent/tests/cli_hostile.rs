@@ -167,10 +167,18 @@ fn albedo_and_mfp_materials() {
         &["--albedo", "R,G,B"],
         &out,
     );
-    let run = lucent(&["render", "--albedo", "1.2,0.6,0.4", "--mfp", "1,1,1", "--out", o]);
-    refused(&run, 1, &["albedo 1.2", "..="], &out);
-    let run = lucent(&["render", "--albedo", "0.8,0.6,0.4", "--mfp", "1,0,1", "--out", o]);
-    refused(&run, 1, &["mean free path 0"], &out);
+    refused(&lucent(&["render", "--mfp", "1,1,1", "--out", o]), 2, &["--albedo"], &out);
+    // Out of range: a usage error (exit 2) naming the value and the accepted range.
+    for (albedo, mfp, needles) in [
+        ("1.2,0.6,0.4", "1,1,1", ["--albedo 1.2", "0.001..=0.999"]),
+        ("0.8,0,0.4", "1,1,1", ["--albedo 0 ", "0.001..=0.999"]),
+        ("0.8,0.6,0.4", "1,0,1", ["--mfp 0 ", "0.0001..=1000000"]),
+        ("0.8,0.6,0.4", "1,1,1e12", ["--mfp 1000000000000", "0.0001..=1000000"]),
+        ("0.8,0.6,0.4", "1,inf,1", ["--mfp", "finite"]),
+    ] {
+        let run = lucent(&["render", "--albedo", albedo, "--mfp", mfp, "--out", o]);
+        refused(&run, 2, &needles, &out);
+    }
     let scene = dir.join("a.toml");
     std::fs::write(&scene, "material = { albedo = [0.8, 0.6, 0.4], mfp = [1.0, 0.5, 0.25] }\n").unwrap();
     let run = lucent(&[
@@ -185,10 +193,15 @@ fn albedo_and_mfp_materials() {
         o,
     ]);
     assert!(run.status.success(), "{:?}", lines(&run));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(stdout.contains("material: albedo 0.800,0.600,0.400 mfp 1,0.5,0.25 mm -> sigma_s'"), "{stdout}");
     std::fs::remove_file(&out).unwrap();
     std::fs::write(&scene, "material = { albedo = [0.8, 0.6, 0.4] }\n").unwrap();
     let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", o]);
     refused(&run, 1, &["a.toml", "albedo and mfp"], &out);
+    std::fs::write(&scene, "material = { albedo = [0.8, 1.5, 0.4], mfp = [1, 1, 1] }\n").unwrap();
+    let run = lucent(&["render", "--scene", scene.to_str().unwrap(), "--out", o]);
+    refused(&run, 1, &["a.toml", "albedo 1.5 is outside the accepted range 0.001..=0.999"], &out);
     // The flags print what they chose.
     let run = lucent(&[
         "render",
@@ -204,5 +217,12 @@ fn albedo_and_mfp_materials() {
         o,
     ]);
     assert!(run.status.success(), "{:?}", lines(&run));
-    assert!(String::from_utf8_lossy(&run.stdout).contains("sigma_s'"));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let said: Vec<&str> = stdout.lines().filter(|l| l.contains("material: albedo")).collect();
+    assert_eq!(said.len(), 1, "{stdout}");
+    assert!(
+        said[0].contains("mfp 1,0.5,0.25 mm -> sigma_s' ") && said[0].contains(" sigma_a "),
+        "{}",
+        said[0]
+    );
 }

@@ -28,13 +28,20 @@ pub enum MaterialError {
     NonPositive { name: String, what: &'static str, values: [f64; 3] },
     #[error("material '{name}': eta must be finite and within 1.0..=3.0, got {eta}")]
     BadEta { name: String, eta: f64 },
-    #[error(
-        "material '{name}': albedo {value} is outside the range {min:.4}..={max:.4} the pbd profile reaches at eta {eta}"
-    )]
+    #[error("material '{name}': albedo {value} is outside the accepted range {min}..={max} at eta {eta}")]
     Albedo { name: String, value: f64, min: f64, max: f64, eta: f64 },
-    #[error("material '{name}': mean free path {value} mm is outside {min:e}..={max:e} mm")]
+    #[error("material '{name}': mean free path {value} mm is outside the accepted range {min}..={max} mm")]
     MeanFreePath { name: String, value: f64, min: f64, max: f64 },
 }
+
+/// Slab albedos [`Material::from_albedo_mfp`] accepts (unitless). Below 0.001 a channel is
+/// black to any display; 0.999 is as white as a slab that absorbs gets (and at `eta` above
+/// about 1.85 the pbd profile stops short of it: [`albedo_range`]).
+pub const ALBEDO: std::ops::RangeInclusive<f64> = 1e-3..=0.999;
+/// Reduced mean free paths [`Material::from_albedo_mfp`] accepts, mm: from 0.1 micrometre
+/// (`sigma_t' =` [`MAX_SIGMA`]) to a kilometre, where both coefficients of any accepted albedo
+/// stay at or above [`MIN_SIGMA`] for `eta` up to about 1.8.
+pub const MEAN_FREE_PATH_MM: std::ops::RangeInclusive<f64> = 1e-4..=1e6;
 
 /// The smallest coefficient accepted, mm^-1 (a mean free path of a million km: no absorption
 /// or scattering, for any object lucent renders).
@@ -100,9 +107,11 @@ impl Material {
     /// colour a flat, thick slab of it shows under uniform light, and how far light goes in it.
     ///
     /// - `albedo`: per channel, the slab's subsurface albedo, exitant radiosity over the
-    ///   irradiance that entered (the surface's own Fresnel reflection excluded), in the range
-    ///   [`albedo_range`] (0.0065..=0.999 at eta 1.3).
-    /// - `mfp_mm`: per channel, the reduced mean free path `1 / sigma_t'`, mm (1e-4..1e12).
+    ///   irradiance that entered (the surface's own Fresnel reflection excluded), unitless, in
+    ///   [`albedo_range`]`(eta)` ([`ALBEDO`], 0.001..=0.999, for `eta` up to about 1.85).
+    /// - `mfp_mm`: per channel, the reduced mean free path `1 / sigma_t'`, mm, in
+    ///   [`MEAN_FREE_PATH_MM`] (0.0001..=1e6).
+    /// - `eta`: relative index of refraction, 1..=3 (1.3 for the presets).
     ///
     /// Each channel's single-scattering albedo `rho' = sigma_s' / sigma_t'` is the one whose
     /// photon-beam-diffusion effective albedo (multiple plus single scattering, the default
@@ -118,8 +127,8 @@ impl Material {
         if !eta.is_finite() || !(1.0..=3.0).contains(&eta) {
             return Err(MaterialError::BadEta { name: name.to_string(), eta });
         }
-        let (min, max) = (1.0 / MAX_SIGMA, 1.0 / MIN_SIGMA);
-        if let Some(&value) = mfp_mm.iter().find(|d| !(min..=max).contains(*d)) {
+        if let Some(&value) = mfp_mm.iter().find(|d| !MEAN_FREE_PATH_MM.contains(*d)) {
+            let (min, max) = (*MEAN_FREE_PATH_MM.start(), *MEAN_FREE_PATH_MM.end());
             return Err(MaterialError::MeanFreePath { name: name.to_string(), value, min, max });
         }
         let table = effective_albedo_table(eta);
@@ -137,8 +146,11 @@ impl Material {
                 max: hi,
                 eta,
             })?;
-            // Keep both coefficients inside the accepted range at albedos next to 0 and 1.
-            let rho = rho.clamp(MIN_SIGMA * mfp_mm[c], 1.0 - MIN_SIGMA * mfp_mm[c]);
+            // Keep both coefficients at or above MIN_SIGMA where the profile needs a single-
+            // scattering albedo within 1e-6 of 1 (eta near 1.8 and above); `max`/`min`, unlike
+            // `clamp`, cannot panic, and `validate` has the last word.
+            let floor = MIN_SIGMA * mfp_mm[c];
+            let rho = rho.min(1.0 - floor).max(floor);
             sigma_s_prime[c] = rho / mfp_mm[c];
             sigma_a[c] = (1.0 - rho) / mfp_mm[c];
         }
@@ -183,16 +195,19 @@ impl Material {
     }
 }
 
-/// The slab albedos [`Material::from_albedo_mfp`] can reach at `eta` (the effective albedo of the
-/// table's second row and of its last).
+/// The slab albedos [`Material::from_albedo_mfp`] accepts at `eta`: [`ALBEDO`], its top lowered
+/// (to three decimals) where the pbd profile's effective albedo at `rho' = 1` stays below 0.999
+/// (0.994 at eta 2, 0.961 at eta 3).
 pub fn albedo_range(eta: f64) -> (f64, f64) {
     albedo_range_of(&effective_albedo_table(eta))
 }
 
 fn albedo_range_of(table: &EffectiveAlbedo) -> (f64, f64) {
     // Photon beam diffusion overestimates a half-space's albedo near rho = 1 (past 1 at eta = 1,
-    // see the README's known limitations); no slab gives back more than it receives.
-    (table.rho_eff[1], table.rho_eff.last().copied().unwrap_or(0.0).min(0.999))
+    // see the README's known limitations); no slab gives back more than it receives, hence the
+    // cap. Below the table's second row the inversion brackets between rho = 0 and that row.
+    let reach = (table.rho_eff.last().copied().unwrap_or(0.0) * 1e3).floor() / 1e3;
+    (*ALBEDO.start(), ALBEDO.end().min(reach))
 }
 
 /// The effective-albedo table for `eta`, built once per `eta` (about 100 profile integrals).

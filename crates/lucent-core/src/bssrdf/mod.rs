@@ -14,7 +14,7 @@ pub mod profile;
 pub use fresnel::{
     fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2, fresnel_transmittance,
 };
-pub use material::{Material, MaterialError, PRESETS, albedo_range};
+pub use material::{ALBEDO, MEAN_FREE_PATH_MM, Material, MaterialError, PRESETS, albedo_range};
 pub use profile::{ProfileKind, RadialTable, UnknownProfile};
 
 /// The diffusion profile of one material at one model scale, per colour channel, with every

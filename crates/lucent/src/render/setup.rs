@@ -102,20 +102,13 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         (None, None, Some(f)) => f.material()?,
         (None, None, None) => Material::by_name("skimmilk")?,
     };
-    if args.albedo.is_some() {
-        let (s, a) = (material.sigma_s_prime, material.sigma_a);
-        println!(
-            "lucent: material: albedo {:?}, mfp {:?} mm -> sigma_s' [{:.4}, {:.4}, {:.4}], sigma_a [{:.4e}, {:.4e}, {:.4e}] mm^-1 (eta {})",
-            args.albedo.unwrap_or_default(),
-            args.mfp.unwrap_or_default(),
-            s[0],
-            s[1],
-            s[2],
-            a[0],
-            a[1],
-            a[2],
-            material.eta
-        );
+    // A colour-and-distance material (flags, else scene keys) says what it became.
+    let by_colour = match &args.material {
+        Some(_) => None,
+        None => args.albedo.zip(args.mfp).or_else(|| file.as_ref().and_then(|f| f.material.by_colour())),
+    };
+    if let Some((albedo, mfp)) = by_colour {
+        println!("lucent: {}", colour_material_line(albedo, mfp, &material));
     }
     // Flags and scene keys were range-checked where they were read (`crate::ranges`).
     let scale = args.scale.or(file.as_ref().map(|f| f.scale)).unwrap_or(0.05);
@@ -239,6 +232,28 @@ fn default_lights(mesh: &Mesh) -> [Light; 2] {
 fn point_light(position: Vec3, center: Vec3) -> Light {
     let d2 = position.distance_squared(center).max(1e-12);
     Light::Point { position, intensity: Vec3::splat(d2) }
+}
+
+/// What a colour-and-distance material became, on one line: `material: albedo 0.800,0.600,0.400
+/// mfp 1,0.5,0.25 mm -> sigma_s' 0.9794,1.979,3.979 sigma_a 0.02065,0.02111,0.02089 mm^-1 (eta 1.3)`.
+fn colour_material_line(albedo: [f64; 3], mfp_mm: [f64; 3], m: &Material) -> String {
+    let join = |v: [f64; 3], f: &dyn Fn(f64) -> String| v.map(f).join(",");
+    // Four significant figures, with an exponent only outside 0.001..10000.
+    let sig4 = |x: f64| match x.abs() {
+        a if (1e-3..1e4).contains(&a) => {
+            let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+            format!("{x:.decimals$}")
+        }
+        _ => format!("{x:.3e}"),
+    };
+    format!(
+        "material: albedo {} mfp {} mm -> sigma_s' {} sigma_a {} mm^-1 (eta {})",
+        join(albedo, &|x| format!("{x:.3}")),
+        join(mfp_mm, &|x| format!("{x}")),
+        join(m.sigma_s_prime, &sig4),
+        join(m.sigma_a, &sig4),
+        m.eta
+    )
 }
 
 /// Parses three comma-separated numbers; errors start with `label` and end with `usage`.
@@ -371,6 +386,22 @@ mod tests {
         assert_eq!(s.lights.len(), 1);
         assert!(!s.lights[0].shadows);
         assert_eq!(s.deform, vec![Deformation::Twist { degrees: 10.0 }]);
+    }
+
+    /// `--albedo`/`--mfp` invert to a material at eta 1.3, said on one line.
+    #[test]
+    fn colour_flags_make_the_material_and_say_so() {
+        let s = load_scene(&args(&["--albedo", "0.8,0.6,0.4", "--mfp", "1,0.5,0.25"])).unwrap();
+        let m = &s.material;
+        assert_eq!(*m, Material::from_albedo_mfp("custom", [0.8, 0.6, 0.4], [1.0, 0.5, 0.25], 1.3).unwrap());
+        let line = colour_material_line([0.8, 0.6, 0.4], [1.0, 0.5, 0.25], m);
+        assert!(
+            line.starts_with("material: albedo 0.800,0.600,0.400 mfp 1,0.5,0.25 mm -> sigma_s' "),
+            "{line}"
+        );
+        assert!(line.ends_with(" mm^-1 (eta 1.3)") && !line.contains('\n'), "{line}");
+        let tiny = Material::from_albedo_mfp("t", [0.001; 3], [1e6; 3], 1.3).unwrap();
+        assert!(colour_material_line([0.001; 3], [1e6; 3], &tiny).contains("sigma_s' 1.300e-8,"));
     }
 
     #[test]

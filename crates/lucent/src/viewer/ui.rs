@@ -141,7 +141,8 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
 }
 
 /// The material by colour and distance: a colour picker for the slab albedo, distance sliders,
-/// and "apply", which inverts the pbd profile's albedo (a fraction of a second) at the current η.
+/// and "apply", which inverts the pbd profile's albedo at the current η (about a second the first
+/// time at an η, while its effective-albedo table is built; instant after).
 fn by_colour(ui: &mut Ui, state: &mut ViewState) {
     ui.collapsing("by colour and distance", |ui| {
         let c = &mut state.by_colour;
