@@ -9,7 +9,6 @@ use super::io::{MeshError, guard};
 use glam::{Mat4, Vec3};
 use std::path::Path;
 
-
 /// All triangle-mode primitives of the default scene (or the first scene; or every mesh
 /// untransformed when there is no scene), with each node's world transform applied.
 /// Primitives of other modes (points, lines, strips, fans) are skipped.

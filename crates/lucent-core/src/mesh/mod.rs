@@ -6,12 +6,12 @@ use glam::Vec3;
 pub mod deform;
 pub mod embedded;
 pub mod generate;
-mod io_gltf;
 pub mod io;
+mod io_gltf;
 pub mod validate;
 
-pub use io_gltf::load_gltf_volume_params;
 pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report};
+pub use io_gltf::load_gltf_volume_params;
 pub use validate::MeshReport;
 
 /// An indexed triangle mesh. Faces are counter-clockwise seen from outside.
