@@ -101,6 +101,29 @@ pub fn resolve_inside(folder: &Path, relative: &str) -> Result<std::path::PathBu
     Ok(path)
 }
 
+/// Checks `value` (named `what` in the error, e.g. `--scale` or `twist angle (degrees)`) against
+/// `range`; NaN is outside every range. The error is one line naming the value and the range.
+pub fn check_range<T: PartialOrd + std::fmt::Display>(
+    what: &str,
+    value: T,
+    range: &std::ops::RangeInclusive<T>,
+) -> Result<T, String> {
+    if range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{what} {value} is outside the accepted range {}..={}", range.start(), range.end()))
+    }
+}
+
+/// The message a panic carried (`&str` or `String` payloads), else `"unknown"`.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown".into())
+}
+
 thread_local! {
     static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
@@ -121,13 +144,7 @@ pub fn catch_quietly<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     let was = QUIET.with(|q| q.replace(true));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     QUIET.with(|q| q.set(was));
-    result.map_err(|payload| {
-        payload
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| payload.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown".into())
-    })
+    result.map_err(|payload| panic_message(payload.as_ref()))
 }
 
 #[cfg(test)]

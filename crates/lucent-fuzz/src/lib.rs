@@ -44,11 +44,7 @@ pub struct Crash {
 pub fn run_one(target: &Target, input: &[u8]) -> Result<Result<String, String>, Crash> {
     std::panic::catch_unwind(|| (target.run)(input)).map_err(|payload| Crash {
         input: input.to_vec(),
-        message: payload
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| payload.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "non-string panic".into()),
+        message: lucent_core::limits::panic_message(payload.as_ref()),
     })
 }
 

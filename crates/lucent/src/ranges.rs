@@ -47,15 +47,7 @@ pub const ALBEDO: RangeInclusive<f64> = lucent_core::bssrdf::ALBEDO;
 /// Reduced mean free path of a colour material (`--mfp`, scene key `mfp`), mm.
 pub const MEAN_FREE_PATH_MM: RangeInclusive<f64> = lucent_core::bssrdf::MEAN_FREE_PATH_MM;
 
-/// Checks `value` (named `what` in the error, e.g. `--scale`) against `range`.
-pub fn check<T: PartialOrd + Display>(what: &str, value: T, range: &RangeInclusive<T>) -> Result<T, String> {
-    // `contains` is false for NaN, so a NaN is refused too.
-    if range.contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!("{what} {value} is outside the accepted range {}..={}", range.start(), range.end()))
-    }
-}
+pub use lucent_core::limits::check_range as check;
 
 /// A clap value parser: a number of type `T` within `range`.
 pub fn parser<T>(

@@ -25,7 +25,7 @@ pub enum MaterialError {
     #[error(
         "material '{name}': {what} must be within {MIN_SIGMA}..={MAX_SIGMA} mm^-1 in every channel, got {values:?}"
     )]
-    NonPositive { name: String, what: &'static str, values: [f64; 3] },
+    OutOfRange { name: String, what: &'static str, values: [f64; 3] },
     #[error("material '{name}': eta must be finite and within 1.0..=3.0, got {eta}")]
     BadEta { name: String, eta: f64 },
     #[error("material '{name}': albedo {value} is outside the accepted range {min}..={max} at eta {eta}")]
@@ -171,18 +171,18 @@ impl Material {
         (albedo, mfp)
     }
 
-    /// Checks that every coefficient is finite and positive and `eta` is in range.
+    /// Checks that every coefficient is within `MIN_SIGMA..=MAX_SIGMA` mm^-1 and `eta` in 1..=3.
     pub fn validate(&self) -> Result<(), MaterialError> {
         let bad = |v: &[f64; 3]| v.iter().any(|x| !(MIN_SIGMA..=MAX_SIGMA).contains(x));
         if bad(&self.sigma_s_prime) {
-            return Err(MaterialError::NonPositive {
+            return Err(MaterialError::OutOfRange {
                 name: self.name.clone(),
                 what: "sigma_s'",
                 values: self.sigma_s_prime,
             });
         }
         if bad(&self.sigma_a) {
-            return Err(MaterialError::NonPositive {
+            return Err(MaterialError::OutOfRange {
                 name: self.name.clone(),
                 what: "sigma_a",
                 values: self.sigma_a,

@@ -343,9 +343,8 @@ fn decode_hdr(bytes: &[u8]) -> Result<(usize, usize, Vec<Rgb>), String> {
     let meta = header.metadata();
     let texels = meta.width as u128 * meta.height as u128;
     crate::limits::plausible_expansion("the image", texels * DECODED_BYTES_PER_TEXEL, bytes.len())?;
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)
-        .map_err(|e| e.to_string())?
-        .into_rgb32f();
+    // Decode with the header already read rather than parsing the file again.
+    let img = image::DynamicImage::from_decoder(header).map_err(|e| e.to_string())?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let texels = img.pixels().map(|p| Rgb::new(p.0[0], p.0[1], p.0[2])).collect();
     Ok((w, h, texels))

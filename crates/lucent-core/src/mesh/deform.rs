@@ -251,11 +251,7 @@ impl FromStr for Deformation {
             }
         };
         let within = |what: &str, v: f32, range: std::ops::RangeInclusive<f32>| {
-            if range.contains(&v) {
-                Ok(())
-            } else {
-                Err(err(format!("{what} {v} is outside {}..={}", range.start(), range.end())))
-            }
+            crate::limits::check_range(what, v, &range).map_err(err)
         };
         match kind.trim().to_ascii_lowercase().as_str() {
             "twist" => {
@@ -268,11 +264,8 @@ impl FromStr for Deformation {
                 if values[3] <= 0.0 {
                     return Err(err(format!("bump radius must be > 0, got {}", values[3])));
                 }
-                for (what, v) in
-                    [("bump centre", values[0]), ("bump centre", values[1]), ("bump centre", values[2])]
-                        .into_iter()
-                        .chain([("bump radius", values[3]), ("bump height", values[4])])
-                {
+                let names = ["bump centre", "bump centre", "bump centre", "bump radius", "bump height"];
+                for (what, &v) in names.into_iter().zip(&values) {
                     within(what, v, -MAX_DEFORM_LENGTH..=MAX_DEFORM_LENGTH)?;
                 }
                 Ok(Deformation::Bump(bump(Vec3::new(values[0], values[1], values[2]), values[3], values[4])))

@@ -20,8 +20,8 @@
 //!   [`MeshReport`].
 //! - glTF and GLB are read in [`super::io_gltf`].
 //! - No input panics the loader: malformed files are errors naming the file and the reason.
-//!   The third-party parsers are additionally run under `catch_unwind` as a last line of
-//!   defence.
+//!   The third-party parsers are additionally run under `limits::catch_quietly` as a last line
+//!   of defence, so their panic text never reaches the user.
 
 use super::Mesh;
 use super::validate::{MeshReport, validate, weld_exact_duplicates};

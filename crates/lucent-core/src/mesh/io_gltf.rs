@@ -128,8 +128,11 @@ fn read_buffer_uri(uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, String
         return base64::decode(payload).map_err(|e| format!("invalid base64 data: {e}"));
     }
     let relative = percent_decode(uri)?;
-    crate::limits::check_relative(&relative)?;
-    let base = base_dir.ok_or("external buffers cannot be read for a model held in memory")?;
+    // In memory there is no folder: refuse a path that would leave one first, by that rule.
+    let Some(base) = base_dir else {
+        crate::limits::check_relative(&relative)?;
+        return Err("external buffers cannot be read for a model held in memory".into());
+    };
     let path = crate::limits::resolve_inside(base, &relative)?;
     crate::limits::read_input(&path).map_err(|reason| format!("{}: {reason}", path.display()))
 }

@@ -96,7 +96,8 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         }
         (None, None) => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny(), None),
     };
-    let material = match (&args.material, args.albedo.zip(args.mfp), &file) {
+    let colour_flags = args.albedo.zip(args.mfp);
+    let material = match (&args.material, colour_flags, &file) {
         (Some(name), _, _) => Material::by_name(name)?,
         (None, Some((albedo, mfp)), _) => Material::from_albedo_mfp("custom", albedo, mfp, 1.3)?,
         (None, None, Some(f)) => f.material()?,
@@ -105,7 +106,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     // A colour-and-distance material (flags, else scene keys) says what it became.
     let by_colour = match &args.material {
         Some(_) => None,
-        None => args.albedo.zip(args.mfp).or_else(|| file.as_ref().and_then(|f| f.material.by_colour())),
+        None => colour_flags.or_else(|| file.as_ref().and_then(|f| f.material.by_colour())),
     };
     if let Some((albedo, mfp)) = by_colour {
         println!("lucent: {}", colour_material_line(albedo, mfp, &material));
