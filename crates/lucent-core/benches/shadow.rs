@@ -82,11 +82,12 @@ fn shadow(c: &mut Criterion) {
             })
         });
         let caster = ShadowCaster::new(mesh);
+        let entry = lucent_core::bssrdf::Entry::fresnel(1.3);
         group.bench_function(BenchmarkId::new("irradiance_unshadowed", name), |b| {
-            b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, 1.3, None)))
+            b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, &entry, None)))
         });
         group.bench_function(BenchmarkId::new("irradiance_shadowed", name), |b| {
-            b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, 1.3, Some(&caster))))
+            b.iter(|| black_box(face_irradiance_shadowed(mesh, &[light], None, &entry, Some(&caster))))
         });
     }
     group.finish();

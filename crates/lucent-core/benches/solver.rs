@@ -15,7 +15,7 @@ fn bench(c: &mut Criterion) {
     let mesh = sub.mesh;
     let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.025);
     let light = [Light::Point { position: Vec3::new(2.0, 3.0, 1.6), intensity: Vec3::splat(10.0) }];
-    let e = face_irradiance(&mesh, &light, d.eta);
+    let e = face_irradiance(&mesh, &light, &d.entry);
     let mut s = HierarchicalSolver::new(mesh, sub.hierarchy, d, Oracle::default());
     let mut g = c.benchmark_group("solver_2048");
     g.sample_size(10);

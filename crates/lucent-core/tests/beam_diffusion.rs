@@ -1,9 +1,12 @@
 //! Photon beam diffusion (`bssrdf::beam_diffusion`) against references nobody here derived for
 //! it: a closed form for single scattering, pbrt-v3's polynomial fits of the Fresnel moments,
-//! and an analog Monte Carlo random walk in a half-space.
+//! and an analog Monte Carlo random walk in a half-space, with and without a refracting
+//! boundary, which also checks the exact half-space albedo the `pbd` profile is calibrated to.
 
-use lucent_core::bssrdf::beam_diffusion::{EffectiveAlbedo, effective_albedo};
-use lucent_core::bssrdf::{fresnel_moment1, fresnel_moment2};
+use lucent_core::bssrdf::beam_diffusion::{EffectiveAlbedo, calibrated_albedo, effective_albedo};
+use lucent_core::bssrdf::halfspace::HalfSpace;
+use lucent_core::bssrdf::profile::channel_tables;
+use lucent_core::bssrdf::{fresnel_dielectric, fresnel_moment1, fresnel_moment2};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -43,24 +46,30 @@ fn single_scattering_total_matches_the_closed_form() {
     }
 }
 
-/// Analog random walk: normal incidence into an index-matched half-space (σ_t = 1), isotropic
-/// scattering with albedo `rho`. Returns (escaped after one scattering, escaped after more).
-fn random_walk(rho: f64, photons: usize, seed: u64) -> (f64, f64) {
+/// Analog random walk into a half-space (σ_t = 1) with isotropic scattering of albedo `rho`,
+/// entering with refracted direction cosine `mu_t`, below a smooth boundary of relative index
+/// `eta` (light reaching it from inside is reflected with Fresnel's probability, then collides
+/// where its flight ends). Returns (escaped after one scattering, escaped after more).
+fn random_walk(rho: f64, eta: f64, mu_t: f64, photons: usize, seed: u64) -> (f64, f64) {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let (mut single, mut multiple) = (0usize, 0usize);
     for _ in 0..photons {
-        let (mut z, mut dz) = (0.0f64, 1.0f64);
+        let (mut z, mut dz) = (0.0f64, mu_t);
         let mut bounces = 0;
         loop {
             let s = -(1.0 - rng.random::<f64>()).ln();
             z += s * dz;
             if z < 0.0 {
-                if bounces == 1 {
-                    single += 1;
-                } else if bounces > 1 {
-                    multiple += 1;
+                if rng.random::<f64>() < fresnel_dielectric(-dz, 1.0 / eta) {
+                    (z, dz) = (-z, -dz);
+                } else {
+                    if bounces == 1 {
+                        single += 1;
+                    } else if bounces > 1 {
+                        multiple += 1;
+                    }
+                    break;
                 }
-                break;
             }
             if rng.random::<f64>() >= rho {
                 break;
@@ -72,11 +81,54 @@ fn random_walk(rho: f64, photons: usize, seed: u64) -> (f64, f64) {
     (single as f64 / photons as f64, multiple as f64 / photons as f64)
 }
 
+/// The exact half-space albedo (Chandrasekhar's H function with all orders of internal
+/// reflection) against the random walk, at oblique incidence and through a refracting boundary.
+#[test]
+fn half_space_albedo_matches_a_random_walk() {
+    let photons = 200_000;
+    let mut seed = 100;
+    for (rho, eta, mu_t) in
+        [(0.8, 1.0, 1.0), (0.99, 1.0, 0.6), (0.9, 1.3, 1.0), (0.99, 1.3, 0.8), (0.95, 1.6, 1.0)]
+    {
+        seed += 1;
+        let (s, m) = random_walk(rho, eta, mu_t, photons, seed);
+        let mc = s + m;
+        let noise = (mc * (1.0 - mc) / photons as f64).sqrt();
+        let exact = HalfSpace::new(rho, eta).albedo(mu_t);
+        println!("rho {rho} eta {eta} mu_t {mu_t}: exact {exact:.4}, random walk {mc:.4} ± {noise:.4}");
+        assert!((exact - mc).abs() < 4.0 * noise, "rho {rho} eta {eta} mu_t {mu_t}: {exact} vs {mc}");
+    }
+}
+
+/// The calibrated `pbd` tables integrate to the exact half-space albedo, single scattering kept
+/// as photon beam diffusion computes it (exact for a half-space).
+#[test]
+fn calibrated_tables_integrate_to_the_exact_albedo() {
+    for eta in [1.0, 1.3, 2.0] {
+        let rho = [0.3, 0.9, 0.999];
+        let tables = channel_tables(&rho, &[1.0; 3], eta, true, true);
+        for c in 0..3 {
+            let (total, exact) = (tables.channels[c].total(), HalfSpace::new(rho[c], eta).albedo(1.0));
+            let raw = effective_albedo(rho[c], eta).total();
+            println!(
+                "eta {eta} rho {}: calibrated {total:.5}, exact {exact:.5}, uncalibrated {raw:.5}",
+                rho[c]
+            );
+            assert!((total - exact).abs() < 1e-6, "eta {eta} rho {}: {total} vs {exact}", rho[c]);
+            // Diffusion overestimates at eta up to 1.3; at eta 2 it can fall short (0.125 against
+            // 0.133 at rho 0.9): the error is not one factor, hence a calibration per material.
+            if eta <= 1.3 {
+                assert!(raw > exact, "diffusion overestimates: {raw} vs {exact}");
+            }
+        }
+    }
+}
+
 #[test]
 fn effective_albedo_near_a_random_walk() {
     let photons = 400_000;
     for (k, rho) in [0.3, 0.8, 0.99].into_iter().enumerate() {
-        let (mc_single, mc_multiple) = random_walk(rho, photons, 7 + k as u64);
+        let (mc_single, mc_multiple) = random_walk(rho, 1.0, 1.0, photons, 7 + k as u64);
         let mc = mc_single + mc_multiple;
         let noise = (mc * (1.0 - mc) / photons as f64).sqrt();
         let pbd = effective_albedo(rho, 1.0);
@@ -93,7 +145,8 @@ fn effective_albedo_near_a_random_walk() {
         // Diffusion is an approximation. Measured (400K photons): PBD in pbrt-v3's form gives
         // 8.7%, 14% and 12% more than the walk at rho = 0.3, 0.8, 0.99 (its multiple part is
         // 15-40% high, single scattering exact); the classic dipole's multiple scattering alone
-        // is 24% high at 0.99. The bound pins that figure, so a change that worsens it fails.
+        // is 24% high at 0.99. This is why the profile lucent renders with is calibrated
+        // (`calibrated_tables_integrate_to_the_exact_albedo`); the bound pins the raw figure.
         assert!(
             pbd.total() > mc && pbd.total() < 1.15 * mc + 5.0 * noise,
             "rho {rho}: {} vs {mc}",
@@ -106,12 +159,12 @@ fn effective_albedo_near_a_random_walk() {
 fn effective_albedo_table_is_monotone_and_inverts() {
     let t = EffectiveAlbedo::new(1.3);
     assert!(t.rho_eff.windows(2).all(|w| w[0] <= w[1]), "{:?}", t.rho_eff);
-    // Measured: PBD's effective albedo passes 1 for rho above ~0.9999 at eta = 1.3 (1.029 at
-    // the last row), one more sign that it overestimates; the energy bound caps what it renders.
-    assert!(t.rho_eff[0] == 0.0 && t.rho_eff[90] < 1.0, "{:?}", &t.rho_eff[90..]);
+    // The calibrated albedo stays below 1 and reaches it at rho = 1 (the last row, rho = 1 - 1e-9).
+    assert!(t.rho_eff[0] == 0.0 && t.rho_eff.iter().all(|&a| a < 1.0), "{:?}", &t.rho_eff[90..]);
+    assert!(t.rho_eff[99] > 0.9998, "{}", t.rho_eff[99]);
     for target in [0.1, 0.5, 0.8] {
         let rho = t.invert(target).unwrap();
-        let back = effective_albedo(rho, 1.3).total();
+        let back = calibrated_albedo(rho, 1.3);
         assert!((back - target).abs() < 0.01, "{target}: rho {rho} gives {back}");
     }
     assert!(t.invert(1.5).is_none());

@@ -6,6 +6,7 @@ mod irradiance_util;
 use glam::Vec3;
 use irradiance_util::{plane, uv_sphere};
 use lucent_core::Rgb;
+use lucent_core::bssrdf::Entry;
 use lucent_core::bssrdf::fresnel_transmittance;
 use lucent_core::irradiance::{
     BandWeights, EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance,
@@ -49,8 +50,8 @@ fn spot_light_lights_a_disc_and_matches_a_point_light_inside_its_cone() {
     let intensity = Rgb::new(3.0, 2.0, 1.0);
     let spot = Light::Spot { position, direction: -Vec3::Y, intensity, cone_angle: cone, soft_edge: 0.0 };
     let point = Light::Point { position, intensity };
-    let e_spot = face_irradiance(&mesh, &[spot], ETA);
-    let e_point = face_irradiance(&mesh, &[point], ETA);
+    let e_spot = face_irradiance(&mesh, &[spot], &Entry::fresnel(ETA));
+    let e_point = face_irradiance(&mesh, &[point], &Entry::fresnel(ETA));
     // The cone meets the plane in a disc of radius h tan(cone).
     let radius = h * cone.tan();
     for f in 0..mesh.triangles.len() {
@@ -63,7 +64,7 @@ fn spot_light_lights_a_disc_and_matches_a_point_light_inside_its_cone() {
         }
     }
     // Directly below: E = I / h² times F_t at normal incidence.
-    let below = light_irradiance(&spot, Vec3::ZERO, Vec3::Y, ETA);
+    let below = light_irradiance(&spot, Vec3::ZERO, Vec3::Y, &Entry::fresnel(ETA));
     let want = intensity / (h * h) * fresnel_transmittance(1.0, ETA) as f32;
     assert!((below - want).abs().max_element() < 1e-6, "{below} vs {want}");
 }
@@ -82,13 +83,13 @@ fn shadowed_entry_point_without_caster_equals_the_plain_one() {
             soft_edge: 0.3,
         },
     ];
-    let plain = face_irradiance(&mesh, &lights, ETA);
+    let plain = face_irradiance(&mesh, &lights, &Entry::fresnel(ETA));
     let scene: Vec<SceneLight> = lights.iter().map(|&l| l.into()).collect();
-    let same = face_irradiance_shadowed(&mesh, &scene, None, ETA, None);
+    let same = face_irradiance_shadowed(&mesh, &scene, None, &Entry::fresnel(ETA), None);
     assert_eq!(plain, same);
     // A convex mesh does not shadow itself: with a caster, nothing changes either.
     let caster = ShadowCaster::new(&mesh);
-    let shadowed = face_irradiance_shadowed(&mesh, &scene, None, ETA, Some(&caster));
+    let shadowed = face_irradiance_shadowed(&mesh, &scene, None, &Entry::fresnel(ETA), Some(&caster));
     assert_eq!(plain, shadowed);
 }
 
@@ -99,7 +100,7 @@ fn constant_environment_gives_the_hemispherical_fresnel_average_on_every_face() 
     let l = Rgb::new(0.5, 1.0, 2.0);
     let env = Environment::from_map(&EnvMap::from_fn(128, 64, |_| l));
     let want = l * BandWeights::fresnel_cosine(ETA).0[0];
-    let e = face_irradiance_shadowed(&mesh, &[], Some(&env), ETA, None);
+    let e = face_irradiance_shadowed(&mesh, &[], Some(&env), &Entry::fresnel(ETA), None);
     for v in e {
         assert!((v - want).abs().max_element() < 2e-3 * want.max_element(), "{v} vs {want}");
     }

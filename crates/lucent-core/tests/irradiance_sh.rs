@@ -200,11 +200,11 @@ struct ShError {
 
 fn sh_error(map: &EnvMap, kernel: impl Fn(f32) -> f32 + Copy, eta: Option<f64>) -> ShError {
     let env = Environment::from_map(map);
-    let weights = eta.map(BandWeights::fresnel_cosine);
+    let entry = eta.map(lucent_core::bssrdf::Entry::fresnel);
     let pairs: Vec<(Rgb, Rgb)> = normals(64)
         .into_iter()
         .map(|n| {
-            let sh = match &weights {
+            let sh = match &entry {
                 Some(w) => env.transmitted_irradiance(n, w),
                 None => env.irradiance(n),
             };

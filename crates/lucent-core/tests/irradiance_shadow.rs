@@ -5,6 +5,7 @@ mod irradiance_util;
 
 use glam::Vec3;
 use irradiance_util::{merge, plane, torus, twist, uv_sphere};
+use lucent_core::bssrdf::Entry;
 use lucent_core::irradiance::{
     Bvh, Light, SceneLight, ShadowCaster, Update, face_irradiance, face_irradiance_shadowed,
 };
@@ -42,8 +43,9 @@ fn check_disc(
     disc_radius: f32,
     band: f32,
 ) -> (usize, f32) {
-    let lit = face_irradiance_shadowed(mesh, &[SceneLight::from(light)], None, ETA, Some(caster));
-    let unshadowed = face_irradiance(mesh, &[light], ETA);
+    let lit =
+        face_irradiance_shadowed(mesh, &[SceneLight::from(light)], None, &Entry::fresnel(ETA), Some(caster));
+    let unshadowed = face_irradiance(mesh, &[light], &Entry::fresnel(ETA));
     let (mut shadowed, mut reach) = (0, 0.0f32);
     for f in 0..plane_faces {
         assert!(unshadowed[f].x > 0.0, "every plane face faces the light");
@@ -123,7 +125,13 @@ fn shadow_follows_the_mesh_after_a_refit() {
         // A tilted parallel light: the shadow is an ellipse around where the axis through the
         // centre meets the plane. Check membership exactly with the ray-sphere test instead.
         let hit = center - dir * (center.y / -dir.y);
-        let lit = face_irradiance_shadowed(&mesh, &[SceneLight::from(light)], None, ETA, Some(&caster));
+        let lit = face_irradiance_shadowed(
+            &mesh,
+            &[SceneLight::from(light)],
+            None,
+            &Entry::fresnel(ETA),
+            Some(&caster),
+        );
         let mut shadowed = 0;
         for (f, e) in lit.iter().enumerate().take(n) {
             let c = mesh.face_centroid(f);

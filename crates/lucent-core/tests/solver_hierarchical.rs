@@ -80,7 +80,7 @@ fn render_mode_equals_on_the_fly() {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
     let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
-    let e = face_irradiance(&mesh, &point_light(), d.eta);
+    let e = face_irradiance(&mesh, &point_light(), &d.entry);
     let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::default());
     let otf = s.solve_on_the_fly(&e);
     let link_stats = s.link();
@@ -157,7 +157,7 @@ fn accuracy_against_exact() {
     for name in ["marble", "skimmilk", "ketchup"] {
         for scale in [0.01, 0.1, 1.0] {
             let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale);
-            let e = face_irradiance(&mesh, &lights, d.eta);
+            let e = face_irradiance(&mesh, &lights, &d.entry);
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
             let s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             let sol = s.solve_on_the_fly(&e);
@@ -189,7 +189,7 @@ fn incremental_matches_on_the_fly_after_deformation() {
         .collect();
     let mut moved = mesh.clone();
     moved.positions = deformed.clone();
-    let e = face_irradiance(&moved, &point_light(), d.eta);
+    let e = face_irradiance(&moved, &point_light(), &d.entry);
 
     let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     inc.link();
@@ -255,7 +255,7 @@ fn bunny_accuracy(kind: ProfileKind, single: bool) {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
             let d = Dipole::profile_for_model_scale(&material, mesh.extent() as f64, scale, kind, single);
-            let e = face_irradiance(&mesh, &lights, d.eta);
+            let e = face_irradiance(&mesh, &lights, &d.entry);
             let t = std::time::Instant::now();
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
             let t_exact = t.elapsed().as_secs_f64();
@@ -296,7 +296,7 @@ fn bunny_incremental_matches_on_the_fly_after_deformation() {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
             let d = Dipole::for_model_scale(&material, ext as f64, scale);
-            let e = face_irradiance(&moved, &lights, d.eta);
+            let e = face_irradiance(&moved, &lights, &d.entry);
             let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             inc.link();
             inc.update_incremental(&moved.positions, None);
@@ -328,7 +328,7 @@ fn bunny_local_incremental_update_equals_fresh_links() {
     let lights = light_for(&mesh);
     for (name, scale) in [("skimmilk", 0.1), ("ketchup", 0.01)] {
         let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), ext as f64, scale);
-        let e = face_irradiance(&bumped, &lights, d.eta);
+        let e = face_irradiance(&bumped, &lights, &d.entry);
         let mut fresh = HierarchicalSolver::new(bumped.clone(), h.clone(), d.clone(), Oracle::default());
         let want_links = fresh.link().links;
         let want = fresh.solve_render(&e).face_b;

@@ -234,8 +234,8 @@ mod solved {
         let material = Material::by_name("marble").unwrap();
         let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, 0.4);
         let caster = ShadowCaster::new(&mesh);
-        let e = face_irradiance_shadowed(&mesh, &lights, None, material.eta, Some(&caster));
-        let e_open = face_irradiance_shadowed(&mesh, &lights, None, material.eta, None);
+        let e = face_irradiance_shadowed(&mesh, &lights, None, &dipole.entry, Some(&caster));
+        let e_open = face_irradiance_shadowed(&mesh, &lights, None, &dipole.entry, None);
 
         // The shadow is where a ray to the light meets the block (slab tops only; a closed-form
         // box test, independent of the BVH).
@@ -300,7 +300,7 @@ mod solved {
         let material = Material::by_name("marble").unwrap();
         // 20 cm across: radius over 10 diffusion lengths in every channel.
         let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, 0.2);
-        let e = face_irradiance_shadowed(&mesh, &[], Some(&env), material.eta, None);
+        let e = face_irradiance_shadowed(&mesh, &[], Some(&env), &dipole.entry, None);
         let b = solver::exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default());
 
         let area: f32 = (0..mesh.triangles.len()).map(|f| mesh.face_area(f)).sum();

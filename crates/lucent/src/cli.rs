@@ -203,7 +203,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "R,G,B", value_parser = parse_albedo, requires = "mfp", conflicts_with = "material")]
     pub albedo: Option<[f64; 3]>,
     /// Material by distance: the reduced mean free path R,G,B (scatter distance 1 / sigma_t',
-    /// mm, each 0.0001..=1e6) that goes with --albedo.
+    /// mm, each 0.0001..=1e3) that goes with --albedo.
     #[arg(long, value_name = "R,G,B", value_parser = parse_mfp, requires = "albedo")]
     pub mfp: Option<[f64; 3]>,
     /// Model scale: the largest side of the mesh's bounding box, in metres. Default: the

@@ -42,7 +42,7 @@ pub const PHASE_G: RangeInclusive<f32> = -0.99..=0.99;
 pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
 
 /// Slab albedo of a colour material (`--albedo`, scene key `albedo`), unitless; lucent-core's
-/// range (the top is lower at eta above about 1.85, see `albedo_range`).
+/// range (the same at every eta, see `albedo_range`).
 pub const ALBEDO: RangeInclusive<f64> = lucent_core::bssrdf::ALBEDO;
 /// Reduced mean free path of a colour material (`--mfp`, scene key `mfp`), mm.
 pub const MEAN_FREE_PATH_MM: RangeInclusive<f64> = lucent_core::bssrdf::MEAN_FREE_PATH_MM;

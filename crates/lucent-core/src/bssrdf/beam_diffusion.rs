@@ -20,8 +20,11 @@
 //! 1,025-point radial grid of [`super::RadialTable`] instead (about 10 ms for three channels):
 //! there is no interpolation across albedo, and the depth integrals use composite
 //! Gauss-Legendre on geometric panels, which resolves the `1/r` peak of single scattering near
-//! the entry point that 100 exponential samples miss. [`EffectiveAlbedo`] tabulates the
-//! effective albedo over albedo (the table's per-row integral), for materials given by colour.
+//! the entry point that 100 exponential samples miss.
+//!
+//! Photon beam diffusion's multiple scattering is then calibrated to the exact half-space albedo
+//! ([`super::halfspace`], [`super::profile::channel_tables`]); [`EffectiveAlbedo`] tabulates
+//! the calibrated total over albedo, for materials given by colour.
 
 use super::fresnel::{fresnel_dielectric, fresnel_moment1, fresnel_moment2};
 use std::f64::consts::PI;
@@ -50,7 +53,13 @@ const GL8_W: [f64; 4] =
 
 /// `∫_a^b f` on geometric panels from `a > 0` (each `ratio` times the last) up to `b`, 8-point
 /// Gauss-Legendre per panel, plus one panel on `[0, a]` when `from_zero`.
-fn integrate_geometric(a: f64, b: f64, ratio: f64, from_zero: bool, f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn integrate_geometric(
+    a: f64,
+    b: f64,
+    ratio: f64,
+    from_zero: bool,
+    f: impl Fn(f64) -> f64,
+) -> f64 {
     let panel = |lo: f64, hi: f64| {
         let (m, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
         (0..4).map(|k| GL8_W[k] * (f(m - h * GL8_X[k]) + f(m + h * GL8_X[k]))).sum::<f64>() * h
@@ -131,7 +140,14 @@ pub fn effective_albedo(rho: f64, eta: f64) -> Split {
     }
 }
 
-/// The effective albedo over albedo at one `eta`, on pbrt-v3's grid `ρ_i = (1 - e^{-8i/99}) /
+/// The albedo of the calibrated `pbd` profile, which is the exact half-space albedo at normal
+/// incidence ([`super::halfspace`]; see [`super::profile::channel_tables`]), of one channel
+/// with reduced albedo `rho` (0..=1) at relative index `eta`.
+pub fn calibrated_albedo(rho: f64, eta: f64) -> f64 {
+    super::halfspace::HalfSpace::new(rho.min(1.0 - 1e-9), eta).albedo(1.0)
+}
+
+/// The calibrated profile's effective albedo over albedo at one `eta`, on pbrt-v3's grid `ρ_i = (1 - e^{-8i/99}) /
 /// (1 - e^{-8})`, `i = 0..100` (dense near 1, where translucent materials live), for finding the
 /// albedo that gives a colour.
 #[derive(Clone, Debug, PartialEq)]
@@ -140,7 +156,8 @@ pub struct EffectiveAlbedo {
     pub eta: f64,
     /// Albedos of the rows (0..=1, increasing).
     pub rho: Vec<f64>,
-    /// Total (multiple + single) effective albedo per row (0..1, increasing).
+    /// Total (multiple + single) effective albedo of the calibrated profile per row
+    /// ([`calibrated_albedo`], 0..1, increasing).
     pub rho_eff: Vec<f64>,
 }
 
@@ -148,16 +165,14 @@ impl EffectiveAlbedo {
     /// Rows of the table.
     pub const ROWS: usize = 100;
 
-    /// The table for `eta` (100 profile integrals, in parallel: about a second on two cores).
+    /// The table for `eta` (100 half-space albedos, in parallel: about 50 ms on two cores).
     pub fn new(eta: f64) -> Self {
         use rayon::prelude::*;
         let rho: Vec<f64> = (0..Self::ROWS)
             .map(|i| (1.0 - (-8.0 * i as f64 / (Self::ROWS - 1) as f64).exp()) / (1.0 - (-8.0f64).exp()))
             .collect();
-        let rho_eff = rho
-            .par_iter()
-            .map(|&r| if r > 0.0 { effective_albedo(r.min(1.0 - 1e-9), eta).total() } else { 0.0 })
-            .collect();
+        let rho_eff =
+            rho.par_iter().map(|&r| if r > 0.0 { calibrated_albedo(r, eta) } else { 0.0 }).collect();
         EffectiveAlbedo { eta, rho, rho_eff }
     }
 
@@ -170,12 +185,12 @@ impl EffectiveAlbedo {
         Some(self.rho[k] + t * (self.rho[k + 1] - self.rho[k]))
     }
 
-    /// Like [`EffectiveAlbedo::invert`], then refined on the profile integral itself (Illinois
+    /// Like [`EffectiveAlbedo::invert`], then refined on [`calibrated_albedo`] itself (Illinois
     /// false position between the bracketing rows) to a relative 1e-6: linear interpolation
     /// alone is 1% off at albedos near 0.02, where rows are sparse.
     pub fn invert_exact(&self, target: f64) -> Option<f64> {
         let k = self.bracket(target)?;
-        let f = |rho: f64| effective_albedo(rho.min(1.0 - 1e-9), self.eta).total() - target;
+        let f = |rho: f64| calibrated_albedo(rho, self.eta) - target;
         let (mut a, mut b) = (self.rho[k], self.rho[k + 1]);
         let (mut fa, mut fb) = (self.rho_eff[k] - target, self.rho_eff[k + 1] - target);
         let mut x = self.invert(target)?;

@@ -35,13 +35,13 @@ pub enum MaterialError {
 }
 
 /// Slab albedos [`Material::from_albedo_mfp`] accepts (unitless). Below 0.001 a channel is
-/// black to any display; 0.999 is as white as a slab that absorbs gets (and at `eta` above
-/// about 1.85 the pbd profile stops short of it: [`albedo_range`]).
+/// black to any display; 0.999 is as white as a slab that absorbs gets.
 pub const ALBEDO: std::ops::RangeInclusive<f64> = 1e-3..=0.999;
 /// Reduced mean free paths [`Material::from_albedo_mfp`] accepts, mm: from 0.1 micrometre
-/// (`sigma_t' =` [`MAX_SIGMA`]) to a kilometre, where both coefficients of any accepted albedo
-/// stay at or above [`MIN_SIGMA`] for `eta` up to about 1.8.
-pub const MEAN_FREE_PATH_MM: std::ops::RangeInclusive<f64> = 1e-4..=1e6;
+/// (`sigma_t' =` [`MAX_SIGMA`]) to a metre, where both coefficients of any accepted albedo stay
+/// at or above [`MIN_SIGMA`] for every `eta` up to 3 (albedo 0.999 at eta 3 needs
+/// `1 - rho' = 1e-9`).
+pub const MEAN_FREE_PATH_MM: std::ops::RangeInclusive<f64> = 1e-4..=1e3;
 
 /// The smallest coefficient accepted, mm^-1 (a mean free path of a million km: no absorption
 /// or scattering, for any object lucent renders).
@@ -110,12 +110,13 @@ impl Material {
     ///   irradiance that entered (the surface's own Fresnel reflection excluded), unitless, in
     ///   [`albedo_range`]`(eta)` ([`ALBEDO`], 0.001..=0.999, for `eta` up to about 1.85).
     /// - `mfp_mm`: per channel, the reduced mean free path `1 / sigma_t'`, mm, in
-    ///   [`MEAN_FREE_PATH_MM`] (0.0001..=1e6).
+    ///   [`MEAN_FREE_PATH_MM`] (0.0001..=1e3).
     /// - `eta`: relative index of refraction, 1..=3 (1.3 for the presets).
     ///
     /// Each channel's single-scattering albedo `rho' = sigma_s' / sigma_t'` is the one whose
-    /// photon-beam-diffusion effective albedo (multiple plus single scattering, the default
-    /// profile's, [`super::beam_diffusion::EffectiveAlbedo`]) is `albedo`; then
+    /// effective albedo under the default profile (calibrated photon beam diffusion, multiple
+    /// plus single scattering: the exact half-space albedo at normal incidence,
+    /// [`super::beam_diffusion::EffectiveAlbedo`]) is `albedo`; then
     /// `sigma_s' = rho' / mfp` and `sigma_a = (1 - rho') / mfp`. (pbrt-v3's
     /// `SubsurfaceFromDiffuse` does the same with its own table.)
     pub fn from_albedo_mfp(
@@ -164,8 +165,7 @@ impl Material {
         let mut mfp = [0.0; 3];
         for c in 0..3 {
             let sigma_t = self.sigma_s_prime[c] + self.sigma_a[c];
-            albedo[c] =
-                super::beam_diffusion::effective_albedo(self.sigma_s_prime[c] / sigma_t, self.eta).total();
+            albedo[c] = super::beam_diffusion::calibrated_albedo(self.sigma_s_prime[c] / sigma_t, self.eta);
             mfp[c] = 1.0 / sigma_t;
         }
         (albedo, mfp)
@@ -196,21 +196,21 @@ impl Material {
 }
 
 /// The slab albedos [`Material::from_albedo_mfp`] accepts at `eta`: [`ALBEDO`], its top lowered
-/// (to three decimals) where the pbd profile's effective albedo at `rho' = 1` stays below 0.999
-/// (0.994 at eta 2, 0.961 at eta 3).
+/// (to three decimals) where the profile's effective albedo at `rho' = 1` stays below 0.999.
+/// The calibrated profile conserves energy at `rho' = 1` for every `eta`, so this is [`ALBEDO`]
+/// itself; the check stays for tables that do not.
 pub fn albedo_range(eta: f64) -> (f64, f64) {
     albedo_range_of(&effective_albedo_table(eta))
 }
 
 fn albedo_range_of(table: &EffectiveAlbedo) -> (f64, f64) {
-    // Photon beam diffusion overestimates a half-space's albedo near rho = 1 (past 1 at eta = 1,
-    // see the README's known limitations); no slab gives back more than it receives, hence the
-    // cap. Below the table's second row the inversion brackets between rho = 0 and that row.
+    // No slab gives back more than it receives, hence the cap. Below the table's second row the
+    // inversion brackets between rho = 0 and that row.
     let reach = (table.rho_eff.last().copied().unwrap_or(0.0) * 1e3).floor() / 1e3;
     (*ALBEDO.start(), ALBEDO.end().min(reach))
 }
 
-/// The effective-albedo table for `eta`, built once per `eta` (about 100 profile integrals).
+/// The effective-albedo table for `eta`, built once per `eta` (100 half-space albedos).
 fn effective_albedo_table(eta: f64) -> std::sync::Arc<EffectiveAlbedo> {
     use std::collections::HashMap;
     use std::sync::{Arc, Mutex, OnceLock};

@@ -7,10 +7,13 @@
 //! a sign typo).
 
 pub mod beam_diffusion;
+mod entry;
 mod fresnel;
+pub mod halfspace;
 mod material;
 pub mod profile;
 
+pub use entry::{Entry, zonal_band_weights};
 pub use fresnel::{
     fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2, fresnel_transmittance,
 };
@@ -50,6 +53,10 @@ pub struct Dipole {
     /// ([`crate::solver::energy`]). Default: on for every profile but Mertens', which is kept
     /// as published to reproduce the paper's tables.
     pub energy_bound: bool,
+    /// How much of the light arriving from each direction enters and is carried by the profile:
+    /// Fresnel's transmittance for [`ProfileKind::Mertens`] (the paper's), times the exact
+    /// half-space albedo ratio `A(μ_t) / A(1)` for the others ([`Entry`]). Shared.
+    pub entry: std::sync::Arc<Entry>,
 }
 
 impl Dipole {
@@ -82,6 +89,7 @@ impl Dipole {
             sigma_t: [0.0; 3],
             tables: None,
             energy_bound: kind != ProfileKind::Mertens,
+            entry: std::sync::Arc::new(Entry::fresnel(material.eta)),
         };
         for c in 0..3 {
             let sigma_a = material.sigma_a[c] * mm_per_unit;
@@ -102,6 +110,9 @@ impl Dipole {
                 multiple,
                 d.single_scattering,
             ));
+        }
+        if kind != ProfileKind::Mertens {
+            d.entry = std::sync::Arc::new(Entry::half_space(&d.alpha_prime, d.eta));
         }
         d
     }

@@ -2,7 +2,7 @@
 //! figure 6.5), and the light a face midpoint receives from one of them before shadowing.
 
 use crate::Rgb;
-use crate::bssrdf::fresnel_transmittance;
+use crate::bssrdf::Entry;
 use glam::Vec3;
 
 /// A light source. Radiometric units are arbitrary but consistent (think W and W/m^2); positions
@@ -103,8 +103,8 @@ impl Light {
 }
 
 /// Irradiance transmitted into the surface at `p` with unit normal `n` from one light, without
-/// shadows: `E F_t(eta, cos) cos`.
-pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, eta: f64) -> Rgb {
+/// shadows: `E entry(cos) cos` (see [`Entry`]).
+pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, entry: &Entry) -> Rgb {
     let Some(inc) = light.incident(p) else {
         return Rgb::ZERO;
     };
@@ -112,5 +112,5 @@ pub fn light_irradiance(light: &Light, p: Vec3, n: Vec3, eta: f64) -> Rgb {
     if cos <= 0.0 {
         return Rgb::ZERO;
     }
-    inc.irradiance * cos * fresnel_transmittance(cos as f64, eta) as f32
+    inc.irradiance * cos * entry.at(cos)
 }

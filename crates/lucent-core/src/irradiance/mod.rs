@@ -1,5 +1,6 @@
 //! Irradiance at the leaves (Mertens §5.3): light arriving at each face's midpoint and
-//! transmitted through the smooth dielectric boundary, `E = ∫ L_i F_t(eta, w_i) cos dω`.
+//! transmitted through the smooth dielectric boundary, `E = ∫ L_i entry(w_i) cos dω`
+//! (Fresnel's `F_t(eta, w_i)`, times the half-space albedo ratio of [`crate::bssrdf::Entry`]).
 //!
 //! Sources: point, directional and spot lights ([`lights`]), optionally shadowed by ray casting
 //! against a refitted BVH of the (deforming) mesh ([`shadow`]), and a distant environment given
@@ -17,7 +18,7 @@ pub use sh::{BandWeights, Sh9};
 pub use shadow::{Bvh, ShadowCaster, Update};
 
 use crate::Rgb;
-use crate::bssrdf::fresnel_transmittance;
+use crate::bssrdf::Entry;
 use crate::mesh::Mesh;
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
@@ -53,47 +54,50 @@ impl Environment {
         self.sh.irradiance(self.to_map_frame(n)) * self.intensity
     }
 
-    /// Fresnel-transmitted irradiance `∫ L(ω) F_t(eta, n·ω) max(0, n·ω) dω` with `weights` from
-    /// [`BandWeights::fresnel_cosine`] for the material's `eta` (computed once per frame, not per
-    /// face). Exact for the 9-coefficient radiance: the kernel is zonal (see [`sh`]). Clamped at
-    /// zero, where ringing of the truncated expansion could dip below it.
-    pub fn transmitted_irradiance(&self, n: Vec3, weights: &BandWeights) -> Rgb {
-        (self.sh.convolve(self.to_map_frame(n), weights) * self.intensity).max(Rgb::ZERO)
+    /// Transmitted irradiance `∫ L(ω) entry(n·ω) max(0, n·ω) dω` with the material's
+    /// [`Entry`] term (Fresnel's transmittance, and for the bounded profiles the half-space
+    /// albedo ratio), per channel. Exact for the 9-coefficient radiance: the kernel is zonal
+    /// (see [`sh`]). Clamped at zero, where ringing of the truncated expansion could dip below it.
+    pub fn transmitted_irradiance(&self, n: Vec3, entry: &Entry) -> Rgb {
+        let d = self.to_map_frame(n);
+        let e = Rgb::new(
+            self.sh.convolve(d, &BandWeights(entry.band_weights(0))).x,
+            self.sh.convolve(d, &BandWeights(entry.band_weights(1))).y,
+            self.sh.convolve(d, &BandWeights(entry.band_weights(2))).z,
+        );
+        (e * self.intensity).max(Rgb::ZERO)
     }
 }
 
-/// Fresnel-transmitted irradiance at every face centroid from `lights`, without shadows.
-pub fn face_irradiance(mesh: &Mesh, lights: &[Light], eta: f64) -> Vec<Rgb> {
+/// Transmitted irradiance at every face centroid from `lights`, without shadows, through the
+/// material's `entry` term ([`crate::bssrdf::Dipole::entry`]).
+pub fn face_irradiance(mesh: &Mesh, lights: &[Light], entry: &Entry) -> Vec<Rgb> {
     (0..mesh.triangles.len())
         .into_par_iter()
         .map(|f| {
             let p = mesh.face_centroid(f);
             let n = mesh.face_normal(f);
-            lights.iter().map(|l| light_irradiance(l, p, n, eta)).sum()
+            lights.iter().map(|l| light_irradiance(l, p, n, entry)).sum()
         })
         .collect()
 }
 
 /// Fresnel-transmitted irradiance at every face centroid from `lights` (shadowed where
 /// `SceneLight::shadows` is set and a `caster` is given; call [`ShadowCaster::update`] after
-/// the mesh moved) plus the `environment` (unshadowed), for a material of relative index `eta`.
+/// the mesh moved) plus the `environment` (unshadowed), through the material's `entry` term.
 pub fn face_irradiance_shadowed(
     mesh: &Mesh,
     lights: &[SceneLight],
     environment: Option<&Environment>,
-    eta: f64,
+    entry: &Entry,
     caster: Option<&ShadowCaster>,
 ) -> Vec<Rgb> {
-    let weights = environment.map(|_| BandWeights::fresnel_cosine(eta));
     (0..mesh.triangles.len())
         .into_par_iter()
         .map(|f| {
             let p = mesh.face_centroid(f);
             let n = mesh.face_normal(f);
-            let mut e = match (environment, &weights) {
-                (Some(env), Some(w)) => env.transmitted_irradiance(n, w),
-                _ => Rgb::ZERO,
-            };
+            let mut e = environment.map_or(Rgb::ZERO, |env| env.transmitted_irradiance(n, entry));
             for sl in lights {
                 let Some(inc) = sl.light.incident(p) else {
                     continue;
@@ -105,7 +109,7 @@ pub fn face_irradiance_shadowed(
                 if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
                     continue;
                 }
-                e += inc.irradiance * cos * fresnel_transmittance(cos as f64, eta) as f32;
+                e += inc.irradiance * cos * entry.at(cos);
             }
             e
         })

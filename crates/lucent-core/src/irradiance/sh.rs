@@ -16,7 +16,7 @@
 //! basis.
 
 use crate::Rgb;
-use crate::bssrdf::fresnel_transmittance;
+use crate::bssrdf::{fresnel_transmittance, zonal_band_weights};
 use glam::Vec3;
 
 /// Number of coefficients per colour channel (bands l = 0, 1, 2).
@@ -133,24 +133,7 @@ impl BandWeights {
     /// Computed by composite Simpson quadrature in `f64` (1024 intervals; `F_t` is smooth for
     /// `eta >= 1`, so the error is far below `f32` precision).
     pub fn fresnel_cosine(eta: f64) -> BandWeights {
-        const N: usize = 1024;
-        let mut a = [0.0f64; 3];
-        for i in 0..=N {
-            let mu = i as f64 / N as f64;
-            let s = if i == 0 || i == N {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            let k = fresnel_transmittance(mu, eta) * mu * s;
-            a[0] += k;
-            a[1] += k * mu;
-            a[2] += k * 0.5 * (3.0 * mu * mu - 1.0);
-        }
-        let h = 1.0 / N as f64;
-        BandWeights(a.map(|v| (2.0 * std::f64::consts::PI * v * h / 3.0) as f32))
+        BandWeights(zonal_band_weights(|mu| fresnel_transmittance(mu, eta) * mu))
     }
 }
 

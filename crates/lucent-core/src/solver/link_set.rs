@@ -544,7 +544,7 @@ mod tests {
                 }
                 other => panic!("update {k}: unexpected storage {other:?}"),
             }
-            let e = face_irradiance(&shape, &light, d.eta);
+            let e = face_irradiance(&shape, &light, &d.entry);
             let mut fresh = HierarchicalSolver::new(shape.clone(), h.clone(), d.clone(), Oracle::default());
             let want_links = fresh.link().links;
             let want = fresh.solve_render(&e).face_b;

@@ -150,7 +150,7 @@ fn run_table3(json: bool, oracle: Oracle) -> anyhow::Result<()> {
         let sub = butterfly(&base, levels).context("subdividing the octahedron")?;
         let mesh = sub.mesh;
         let dipole = Dipole::for_model_scale(&marble, mesh.extent() as f64, 0.025);
-        let e = face_irradiance(&mesh, &light_for(&mesh), dipole.eta);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
         let mut solver = HierarchicalSolver::new(mesh.clone(), sub.hierarchy, dipole.clone(), oracle);
         let runs = if mesh.triangles.len() > 40_000 { 3 } else { 5 };
         let otf = median_ms(runs, || solver.solve_on_the_fly(&e).stats.total_ms);
@@ -220,7 +220,7 @@ fn run_sweep(json: bool) -> anyhow::Result<()> {
     for (mat, scale) in [("marble", 0.025), ("skimmilk", 0.1)] {
         let material = Material::by_name(mat).context("preset")?;
         let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, scale);
-        let e = face_irradiance(&mesh, &light_for(&mesh), dipole.eta);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
         let want = mesh.face_to_vertex(&exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default()));
         let mut oracles = Vec::new();
         for (e1, e2) in [(0.005, 0.01), (0.02, 0.05), (0.05, 0.1), (0.1, 0.3)] {
@@ -306,7 +306,7 @@ fn run_table5(json: bool) -> anyhow::Result<()> {
     let marble = Material::by_name("marble").context("marble preset")?;
     for scale in [0.05, 0.1, 0.2, 0.4, 0.8] {
         let dipole = Dipole::for_model_scale(&marble, mesh.extent() as f64, scale);
-        let e = face_irradiance(&mesh, &light_for(&mesh), dipole.eta);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
         let want = mesh.face_to_vertex(&exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default()));
         let mut solver =
             HierarchicalSolver::new(mesh.clone(), sub.hierarchy.clone(), dipole, Oracle::default());

@@ -89,8 +89,7 @@ impl<'a> FrameSolver<'a> {
             self.caster_positions.clone_from(&mesh.positions);
         }
         let env = self.scene.environment.as_ref().map(|e| &e.environment);
-        let eta = self.scene.material.eta;
-        let e = face_irradiance_shadowed(mesh, lights, env, eta, self.caster.as_ref());
+        let e = face_irradiance_shadowed(mesh, lights, env, &self.scene.dipole.entry, self.caster.as_ref());
         let irradiance_ms = ms_since(t);
 
         let t = Instant::now();

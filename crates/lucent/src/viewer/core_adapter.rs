@@ -175,24 +175,7 @@ impl SolverSession {
     /// from scratch after a geometry, material or threshold change; incremental re-evaluates
     /// only the links that the change touched.
     fn solve_hierarchical(&mut self, mesh: &Mesh, params: &SolveParams, e: &[Rgb]) -> Solution {
-        let key = ProfileKey {
-            material: params.material.clone(),
-            extent: mesh.extent(),
-            scale_m: params.scale_m,
-            kind: params.profile,
-            single_scattering: params.single_scattering,
-        };
-        if self.profile.as_ref().is_none_or(|(k, _)| *k != key) {
-            let d = Dipole::profile_for_model_scale(
-                &key.material,
-                key.extent as f64,
-                key.scale_m,
-                key.kind,
-                key.single_scattering,
-            );
-            self.profile = Some((key, d));
-        }
-        let dipole = self.profile.as_ref().expect("made above").1.clone();
+        let dipole = self.dipole_for(mesh, params);
         let eps = (params.epsilon1, params.epsilon2);
         let h = self.hierarchy_for(mesh, dipole.clone(), eps);
         let moved = h.solver.mesh.positions != mesh.positions;
@@ -242,6 +225,28 @@ impl SolverSession {
         }
     }
 
+    /// The profile for `params` on `mesh`, made when the material, scale or profile changed.
+    fn dipole_for(&mut self, mesh: &Mesh, params: &SolveParams) -> Dipole {
+        let key = ProfileKey {
+            material: params.material.clone(),
+            extent: mesh.extent(),
+            scale_m: params.scale_m,
+            kind: params.profile,
+            single_scattering: params.single_scattering,
+        };
+        if self.profile.as_ref().is_none_or(|(k, _)| *k != key) {
+            let d = Dipole::profile_for_model_scale(
+                &key.material,
+                key.extent as f64,
+                key.scale_m,
+                key.kind,
+                key.single_scattering,
+            );
+            self.profile = Some((key, d));
+        }
+        self.profile.as_ref().expect("made above").1.clone()
+    }
+
     /// The solver for `mesh`'s topology, built (hierarchy and all) when the topology changed.
     fn hierarchy_for(&mut self, mesh: &Mesh, dipole: Dipole, eps: (f64, f64)) -> &mut Hierarchical {
         let kind = dipole.profile;
@@ -272,8 +277,9 @@ impl SolverSession {
             intensity: params.env_strength,
             ..env
         });
+        let entry = self.dipole_for(mesh, params).entry;
         let caster = params.shadows.then(|| self.shadow_caster(mesh));
-        face_irradiance_shadowed(mesh, &lights, environment.as_ref(), params.material.eta, caster)
+        face_irradiance_shadowed(mesh, &lights, environment.as_ref(), &entry, caster)
     }
 
     fn shadow_caster(&mut self, mesh: &Mesh) -> &ShadowCaster {

@@ -230,7 +230,7 @@ pub struct ViewState {
 /// A material as colour and distance, being edited (`Material::from_albedo_mfp`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ByColour {
-    /// Slab albedo per channel, linear RGB (0.001..=0.999 up to eta about 1.85). Default 0.8,
+    /// Slab albedo per channel, linear RGB (0.001..=0.999). Default 0.8,
     /// 0.6, 0.4.
     pub albedo: [f32; 3],
     /// Reduced mean free path per channel, mm. Default 1, 0.5, 0.25.
