@@ -4,11 +4,13 @@
 //!
 //! Sources: point, directional and spot lights ([`lights`]), optionally shadowed by ray casting
 //! against a refitted BVH of the (deforming) mesh ([`shadow`]), and a distant environment given
-//! by nine spherical-harmonic coefficients ([`sh`], [`envmap`]; unshadowed, as in Mertens §5.3:
-//! "shadows cannot be taken into account, unless we assume rigid objects").
+//! by nine spherical-harmonic coefficients ([`sh`], [`envmap`]), shadowed by the same BVH
+//! ([`occlusion`]; Mertens §5.3 leaves it unshadowed: "shadows cannot be taken into account,
+//! unless we assume rigid objects").
 
 pub mod envmap;
 pub mod lights;
+pub mod occlusion;
 pub mod sh;
 pub mod shadow;
 
@@ -82,9 +84,10 @@ pub fn face_irradiance(mesh: &Mesh, lights: &[Light], entry: &Entry) -> Vec<Rgb>
         .collect()
 }
 
-/// Fresnel-transmitted irradiance at every face centroid from `lights` (shadowed where
+/// Transmitted irradiance at every face centroid from `lights` (shadowed where
 /// `SceneLight::shadows` is set and a `caster` is given; call [`ShadowCaster::update`] after
-/// the mesh moved) plus the `environment` (unshadowed), through the material's `entry` term.
+/// the mesh moved) plus the `environment` (shadowed when a `caster` is given:
+/// [`occlusion::blocked_environment`]), through the material's `entry` term.
 pub fn face_irradiance_shadowed(
     mesh: &Mesh,
     lights: &[SceneLight],
@@ -97,7 +100,13 @@ pub fn face_irradiance_shadowed(
         .map(|f| {
             let p = mesh.face_centroid(f);
             let n = mesh.face_normal(f);
-            let mut e = environment.map_or(Rgb::ZERO, |env| env.transmitted_irradiance(n, entry));
+            let mut e = environment.map_or(Rgb::ZERO, |env| {
+                let open = env.transmitted_irradiance(n, entry);
+                match caster {
+                    Some(c) => (open - occlusion::blocked_environment(env, entry, c, p, n, f)).max(Rgb::ZERO),
+                    None => open,
+                }
+            });
             for sl in lights {
                 let Some(inc) = sl.light.incident(p) else {
                     continue;

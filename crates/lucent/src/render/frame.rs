@@ -67,7 +67,8 @@ impl<'a> FrameSolver<'a> {
             s.ff_opts = FormFactorOptions::default();
             s
         });
-        let any_shadows = scene.lights.iter().any(|l| l.shadows);
+        let any_shadows = scene.lights.iter().any(|l| l.shadows)
+            || (scene.environment.is_some() && scene.environment_shadows);
         Ok(FrameSolver {
             scene,
             method,

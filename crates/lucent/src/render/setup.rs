@@ -36,6 +36,9 @@ pub struct Scene {
     pub lights: Vec<SceneLight>,
     /// Distant environment: SH for the solve, a small map for the GPU reflection.
     pub environment: Option<LoadedEnvironment>,
+    /// Whether the mesh shadows the environment (ray cast per face,
+    /// `lucent_core::irradiance::occlusion`); false with `--no-shadows`.
+    pub environment_shadows: bool,
     /// Deformations applied in order to the rest mesh (empty: none).
     pub deform: Vec<Deformation>,
     /// The camera around the rest mesh's bounding sphere.
@@ -191,6 +194,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         dipole,
         lights,
         environment,
+        environment_shadows: !args.no_shadows,
         deform,
         camera,
         exposure,
