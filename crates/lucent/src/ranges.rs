@@ -38,6 +38,8 @@ pub const HTSM_SIZE: RangeInclusive<u32> = 16..=8192;
 pub const TRANSPORT_DISTANCE: RangeInclusive<f32> = 1e-4..=1e3;
 /// HTSM: Henyey-Greenstein asymmetry.
 pub const PHASE_G: RangeInclusive<f32> = -0.99..=0.99;
+/// Bounces of subsurface light between parts (`--bounces`, scene key `bounces`).
+pub const BOUNCES: RangeInclusive<u32> = 0..=4;
 /// HTSM: extra absorption of density 1, per object unit.
 pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
 

@@ -80,6 +80,11 @@ pub struct Scene {
     /// `lucent render --no-surface`). Default true.
     #[serde(default = "yes")]
     pub surface: bool,
+    /// Bounces of subsurface light between facing parts through the air (0..=4; 0 switches
+    /// them off), as `lucent render --bounces`. Default 0 (see the README's path-tracer
+    /// comparison for why).
+    #[serde(default = "default_bounces")]
+    pub bounces: u32,
     /// Diffusion profile: `"pbd"` (photon beam diffusion, the default), `"dipole"` (Jensen's
     /// distance form) or `"mertens"` (the paper's dipole on the receiver's normal), as
     /// `lucent render --profile`.
@@ -114,6 +119,9 @@ fn default_mesh() -> String {
 }
 fn default_scale() -> f64 {
     0.05
+}
+fn default_bounces() -> u32 {
+    0
 }
 fn one() -> f32 {
     1.0
@@ -296,6 +304,7 @@ impl Scene {
         let ok = |e: String| anyhow::anyhow!(e);
         check("scale (metres)", self.scale, &r::SCALE_M).map_err(ok)?;
         check("exposure", self.exposure, &r::EXPOSURE).map_err(ok)?;
+        check("bounces", self.bounces, &r::BOUNCES).map_err(ok)?;
         self.material()?;
         for (i, l) in self.lights.iter().enumerate() {
             validate_light(l).with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;

@@ -403,3 +403,38 @@ fn oracle_flag_trades_links_for_accuracy() {
     assert!(err.contains("--oracle") && err.contains("solid-angle:0.1"), "{err}");
     assert!(!never.exists());
 }
+
+/// `--bounces 1` adds the light facing parts send each other (the bunny has crevices), so the
+/// object gets brighter and never darker; out of range is a usage error (exit 2).
+#[test]
+fn bounces_add_light_between_parts() {
+    let dir = scratch("bounces");
+    let render = |bounces: &str| {
+        let out = dir.join(format!("b{bounces}.png"));
+        let run = lucent(
+            &[
+                "render",
+                "--material",
+                "marble",
+                "--scale",
+                "0.1",
+                "--bounces",
+                bounces,
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[],
+        );
+        assert!(run.status.success(), "{:?}", stderr_lines(&run));
+        image::open(&out).unwrap().to_rgba8()
+    };
+    let (none, one) = (render("0"), render("1"));
+    let brighter = none.pixels().zip(one.pixels()).filter(|(a, b)| luminance(b) > luminance(a) + 0.5).count();
+    let darker = none.pixels().zip(one.pixels()).filter(|(a, b)| luminance(b) + 0.5 < luminance(a)).count();
+    assert!(brighter > 500 && darker == 0, "brighter {brighter}, darker {darker}");
+    assert!(object_luminance(&one) > object_luminance(&none));
+    let never = dir.join("never.png");
+    let run = lucent(&["render", "--bounces", "9", "--out", never.to_str().unwrap()], &[]);
+    assert_eq!(run.status.code(), Some(2), "{:?}", stderr_lines(&run));
+    assert!(!never.exists());
+}

@@ -9,6 +9,7 @@
 //! unless we assume rigid objects").
 
 pub mod envmap;
+pub mod interreflection;
 pub mod lights;
 pub mod occlusion;
 pub mod sh;

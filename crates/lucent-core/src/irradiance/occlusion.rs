@@ -32,17 +32,8 @@ pub fn blocked_environment(
     n: Vec3,
     face: usize,
 ) -> Rgb {
-    let (t, b) = n.any_orthonormal_pair();
     let mut blocked = Rgb::ZERO;
-    for k in 0..ENVIRONMENT_SHADOW_RAYS {
-        let (i, j) = (k % STRATA, k / STRATA);
-        let (ju, jv) = jitter(face as u32, k as u32);
-        let u = (i as f32 + ju) / STRATA as f32;
-        let v = (j as f32 + jv) / STRATA as f32;
-        // Malley's method: a uniform disk sample lifted to the hemisphere is cosine-weighted.
-        let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
-        let cos = (1.0 - u).max(0.0).sqrt();
-        let dir = t * (r * phi.cos()) + b * (r * phi.sin()) + n * cos;
+    for (dir, cos) in cosine_rays(n, face) {
         let ray = Incident { to_light: dir, distance: f32::INFINITY, irradiance: Rgb::ZERO };
         if !caster.visible(p, n, &ray) {
             let radiance = env.sh.radiance(env.to_map_frame(dir)).max(Rgb::ZERO) * env.intensity;
@@ -50,6 +41,23 @@ pub fn blocked_environment(
         }
     }
     blocked * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
+}
+
+/// [`ENVIRONMENT_SHADOW_RAYS`] cosine-weighted directions about the unit normal `n`, stratified
+/// 8 × 8 and jittered by a hash of `face` (the same every run): `(direction, cosine to n)`.
+/// With `N` of them, `(π/N) Σ f(ω_k)` estimates `∫ f(ω) cos dω` over the hemisphere.
+pub fn cosine_rays(n: Vec3, face: usize) -> impl Iterator<Item = (Vec3, f32)> {
+    let (t, b) = n.any_orthonormal_pair();
+    (0..ENVIRONMENT_SHADOW_RAYS).map(move |k| {
+        let (i, j) = (k % STRATA, k / STRATA);
+        let (ju, jv) = jitter(face as u32, k as u32);
+        let u = (i as f32 + ju) / STRATA as f32;
+        let v = (j as f32 + jv) / STRATA as f32;
+        // Malley's method: a uniform disk sample lifted to the hemisphere is cosine-weighted.
+        let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
+        let cos = (1.0 - u).max(0.0).sqrt();
+        (t * (r * phi.cos()) + b * (r * phi.sin()) + n * cos, cos)
+    })
 }
 
 /// Two numbers in `[0, 1)` from a face and a stratum (a 32-bit integer hash, PCG's output

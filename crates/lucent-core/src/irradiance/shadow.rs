@@ -317,6 +317,26 @@ impl Bvh {
 }
 
 impl Bvh {
+    /// The nearest intersection of the ray `origin + t dir` with the mesh (either side) for
+    /// `t_min < t < t_max`: `(t, mesh face)`, or `None` if it hits nothing.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, u32)> {
+        let mut best: Option<(f32, u32)> = None;
+        let mut nearest = |range: Range<usize>, _: &mut f32| {
+            for (slot, t) in range.clone().zip(&self.tris[range]) {
+                let upper = best.map_or(t_max, |b| b.0);
+                if let Some(th) = ray_triangle_t(origin, dir, t, t_min, upper) {
+                    best = Some((th, self.faces[slot]));
+                }
+            }
+            false
+        };
+        if let RayWalk::TooDeep = self.ray_leaves(origin, dir, t_min, t_max, &mut nearest) {
+            let mut lo = t_min;
+            nearest(0..self.tris.len(), &mut lo);
+        }
+        best
+    }
+
     /// How many triangles (either side) the ray `origin + t dir` hits for `t_min < t < t_max`
     /// (an inside/outside test for a closed mesh: odd inside).
     pub fn hit_count(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> usize {

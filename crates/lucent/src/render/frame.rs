@@ -9,7 +9,7 @@ use crate::cli::{ImageFormat, Method, SolveMode};
 use anyhow::{Result, bail};
 use lucent_core::Rgb;
 use lucent_core::formfactor::FormFactorOptions;
-use lucent_core::irradiance::{SceneLight, ShadowCaster, face_irradiance_shadowed};
+use lucent_core::irradiance::{SceneLight, ShadowCaster, face_irradiance_shadowed, interreflection};
 use lucent_core::mesh::Mesh;
 use lucent_core::shading;
 use lucent_core::solver::{self, HierarchicalSolver, Oracle};
@@ -49,6 +49,8 @@ pub struct FrameSolver<'a> {
     caster: Option<ShadowCaster>,
     caster_positions: Vec<glam::Vec3>,
     hierarchical: Option<HierarchicalSolver>,
+    /// Whether the caster shadows lights and the environment (it may exist for bounces alone).
+    shadows: bool,
 }
 
 impl<'a> FrameSolver<'a> {
@@ -67,15 +69,16 @@ impl<'a> FrameSolver<'a> {
             s.ff_opts = FormFactorOptions::default();
             s
         });
-        let any_shadows = scene.lights.iter().any(|l| l.shadows)
+        let shadows = scene.lights.iter().any(|l| l.shadows)
             || (scene.environment.is_some() && scene.environment_shadows);
         Ok(FrameSolver {
             scene,
             method,
             mode,
-            caster: any_shadows.then(|| ShadowCaster::new(&scene.mesh)),
+            caster: (shadows || scene.bounces > 0).then(|| ShadowCaster::new(&scene.mesh)),
             caster_positions: scene.mesh.positions.clone(),
             hierarchical,
+            shadows,
         })
     }
 
@@ -90,20 +93,35 @@ impl<'a> FrameSolver<'a> {
             self.caster_positions.clone_from(&mesh.positions);
         }
         let env = self.scene.environment.as_ref().map(|e| &e.environment);
-        let e = face_irradiance_shadowed(mesh, lights, env, &self.scene.dipole.entry, self.caster.as_ref());
+        let caster = self.caster.as_ref().filter(|_| self.shadows);
+        let e = face_irradiance_shadowed(mesh, lights, env, &self.scene.dipole.entry, caster);
         let irradiance_ms = ms_since(t);
 
         let t = Instant::now();
-        let (b, link_ms, links) = match (self.method, &mut self.hierarchical) {
-            (Method::Hierarchical, Some(s)) => solve_hierarchical(s, self.mode, mesh, &e),
-            _ => {
-                let opts = FormFactorOptions::default();
-                (solver::exact::solve(mesh, &self.scene.dipole, &e, &opts), 0.0, None)
-            }
-        };
+        let (mut b, link_ms, links) = self.solve_once(mesh, &e);
+        // Each bounce: the light the last solve sent out, caught by facing parts, solved again
+        // (the solve is linear in the irradiance; render and incremental modes reuse the links).
+        let mut last = b.clone();
+        for _ in 0..self.scene.bounces {
+            let Some(c) = &self.caster else { break };
+            let e2 = interreflection::bounced_irradiance(mesh, c, &last, &self.scene.dipole);
+            last = self.solve_once(mesh, &e2).0;
+            b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
+        }
         let vertex_radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b), &self.scene.dipole);
         let solve_ms = (ms_since(t) - link_ms).max(0.0);
         Ok(Solved { vertex_radiance, irradiance_ms, link_ms, solve_ms, links })
+    }
+
+    /// `B` per face for irradiance `e` by the scene's method: `(B, link ms, links)`.
+    fn solve_once(&mut self, mesh: &Mesh, e: &[Rgb]) -> (Vec<Rgb>, f64, Option<usize>) {
+        match (self.method, &mut self.hierarchical) {
+            (Method::Hierarchical, Some(s)) => solve_hierarchical(s, self.mode, mesh, e),
+            _ => {
+                let opts = FormFactorOptions::default();
+                (solver::exact::solve(mesh, &self.scene.dipole, e, &opts), 0.0, None)
+            }
+        }
     }
 }
 

@@ -39,6 +39,9 @@ pub struct Scene {
     /// Whether the mesh shadows the environment (ray cast per face,
     /// `lucent_core::irradiance::occlusion`); false with `--no-shadows`.
     pub environment_shadows: bool,
+    /// Bounces of subsurface light between facing parts through the air
+    /// (`lucent_core::irradiance::interreflection`; 0..=4, default 0).
+    pub bounces: u32,
     /// Deformations applied in order to the rest mesh (empty: none).
     pub deform: Vec<Deformation>,
     /// The camera around the rest mesh's bounding sphere.
@@ -195,6 +198,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         lights,
         environment,
         environment_shadows: !args.no_shadows,
+        bounces: args.bounces.or(file.as_ref().map(|f| f.bounces)).unwrap_or(0),
         deform,
         camera,
         exposure,
