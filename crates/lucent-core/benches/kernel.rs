@@ -2,11 +2,12 @@
 //! receiver, three channels each, per profile. Criterion reports the time per call of
 //! `point_samples` over 1,024 emitter batches; divide by 4,096 for one three-channel estimate.
 
-use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
 use lucent_core::solver::point_sample::{DipoleF32, ReceiverSources};
 use rand::{Rng, SeedableRng};
+use std::hint::black_box;
 
 const BATCHES: usize = 1024;
 
