@@ -7,6 +7,7 @@
 //! ```text
 //! mesh ──► hierarchy ──► irradiance ──► solver ──► shading ──► (lucent-gpu) image
 //!            (§5.1)        (§5.3)      (§3, §5.2, §5.5)  (§5.4)
+//!   └──────────────── session: one frame after another (§5.5) ────────────────┘
 //! ```
 //!
 //! * [`bssrdf`]: the dipole diffusion model (Jensen et al. 2001; Mertens table 1), the measured
@@ -19,6 +20,9 @@
 //! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
 //! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes.
+//! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
+//!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
+//!   for what changed (§5.5).
 //! * [`shading`]: exitant radiance `L = F_t B / pi` and the final per-vertex colour (§5.4).
 //! * [`volume`]: density volumes for the heterogeneous method (Shopf 2007, §4.2).
 //!
@@ -33,6 +37,7 @@ pub mod hierarchy;
 pub mod irradiance;
 pub mod limits;
 pub mod mesh;
+pub mod session;
 pub mod shading;
 pub mod solver;
 pub mod volume;

@@ -2,6 +2,7 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lucent_core::bssrdf::ProfileKind;
+pub use lucent_core::session::{Method, SolveMode};
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
 use std::path::{Path, PathBuf};
@@ -45,18 +46,6 @@ impl Default for Command {
     }
 }
 
-/// How the subsurface integral is solved.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Method {
-    /// Hierarchical boundary elements over a mesh hierarchy (Mertens 2003).
-    #[default]
-    Hierarchical,
-    /// Every face against every face, O(N^2): the reference.
-    Exact,
-    /// Heterogeneous Translucent Shadow Maps on the GPU (Shopf 2007).
-    Htsm,
-}
-
 /// The mesh hierarchy of `lucent render --hierarchy`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HierarchyChoice {
@@ -84,6 +73,17 @@ pub fn parse_hierarchy(s: &str) -> Result<HierarchyChoice, String> {
             "shrink-wrap LEVELS must be a whole number from 0 to {MAX_LEVELS} (20 x 4^LEVELS triangles), got `{levels}`"
         )),
     }
+}
+
+/// A parser accepting exactly `names` (listed in `--help` and in errors), parsed by `T`'s
+/// `FromStr`.
+fn names<T>(names: &[&'static str]) -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = String> + Clone + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(names.to_vec())
+        .map(|s| s.parse::<T>().expect("one of the possible values"))
 }
 
 /// `--profile NAME`: one of the diffusion profiles, case-insensitive.
@@ -269,8 +269,10 @@ pub struct RenderArgs {
     /// has none). Scene key `single_scattering`.
     #[arg(long, value_parser = parse_on_off)]
     pub single_scattering: Option<bool>,
-    /// Solver.
-    #[arg(long, value_enum, default_value_t = Method::Hierarchical)]
+    /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
+    /// (every face against every face, O(N^2): the reference) or `htsm` (Heterogeneous
+    /// Translucent Shadow Maps on the GPU, Shopf 2007).
+    #[arg(long, default_value = "hierarchical", value_parser = names::<Method>(&Method::ALL.map(Method::name)))]
     pub method: Method,
     /// Mesh hierarchy of the hierarchical solve (Mertens §5.1): `face-cluster` (§5.1.1, over the
     /// input mesh) or `shrink-wrap:LEVELS` (§5.1.2: the input, which must be closed and genus 0,
@@ -286,9 +288,11 @@ pub struct RenderArgs {
     /// accurate (`lucent bench solver --sweep` measures the trade).
     #[arg(long, default_value = "transport", value_parser = parse_oracle)]
     pub oracle: Oracle,
-    /// Mode of the hierarchical solve (Mertens §5.5). Default on-the-fly for one image,
-    /// incremental for an animation (links made once, updated per frame).
-    #[arg(long, value_enum)]
+    /// Mode of the hierarchical solve (Mertens §5.5): `on-the-fly` (refine and gather from
+    /// scratch, no stored links), `render` (store the links, then pull, gather and push over
+    /// them) or `incremental` (link on the rest mesh, then update the links to the deformed
+    /// one). Default on-the-fly for one image, incremental for an animation.
+    #[arg(long, value_parser = names::<SolveMode>(&SolveMode::ALL.map(SolveMode::name)))]
     pub mode: Option<SolveMode>,
     /// Deform the mesh before solving: `twist:DEGREES`, `bump:x,y,z,radius,height` (mesh
     /// units) or `noise:amplitude,frequency`; replaces the scene's deformations. With `--mode
@@ -331,6 +335,36 @@ pub struct RenderArgs {
     /// HTSM options (`--method htsm`, Shopf 2007).
     #[command(flatten)]
     pub htsm: HtsmArgs,
+}
+
+impl RenderArgs {
+    /// What these flags say about the scene (the rest are about the image and its output).
+    pub fn overrides(&self) -> lucent::scene::Overrides {
+        lucent::scene::Overrides {
+            scene: self.scene.clone(),
+            mesh: self.mesh.clone(),
+            material: self.material.clone(),
+            colour: self.albedo.zip(self.mfp),
+            scale: self.scale,
+            exposure: self.exposure,
+            profile: self.profile,
+            single_scattering: self.single_scattering,
+            lights: self.light.clone(),
+            no_shadows: self.no_shadows,
+            bounces: self.bounces,
+            env: self.env.clone(),
+            env_rotation: self.env_rotation,
+            deform: self.deform.clone(),
+            yaw: self.yaw,
+            pitch: self.pitch,
+            distance: self.distance,
+            no_surface: self.no_surface,
+            method: Some(self.method),
+            mode: self.mode,
+            // Plain `transport` means the profile's own thresholds.
+            oracle: (self.oracle != Oracle::default()).then_some(self.oracle),
+        }
+    }
 }
 
 /// Options of `--method htsm` (Heterogeneous Translucent Shadow Maps, Shopf 2007). Lengths are in
@@ -425,18 +459,6 @@ pub enum ToneCurve {
     Gamma,
     /// Exposure, Narkowicz's ACES filmic fit, gamma curve.
     Aces,
-}
-
-/// How the hierarchical solver runs (Mertens §5.5).
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SolveMode {
-    /// Refine and gather from scratch, storing no links.
-    #[default]
-    OnTheFly,
-    /// Store the links, then pull, gather and push over them.
-    Render,
-    /// Link on the rest mesh, then update the links to the deformed mesh (`--deform`).
-    Incremental,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -104,7 +104,7 @@ fn is_gltf(path: &Path) -> bool {
 
 /// Parses `r,g,b`.
 pub fn parse_rgb(flag: &str, s: &str) -> Result<Vec3> {
-    crate::render::setup::parse_three(&format!("{flag} {s:?}"), s, "expected r,g,b")
+    lucent::scene::parse_three(&format!("{flag} {s:?}"), s, "expected r,g,b")
 }
 
 /// The HTSM parameters from the flags, falling back on the glTF material's

@@ -1,5 +1,7 @@
-//! Scene files (TOML): mesh, material, scale, lights, environment, camera, deformations and
-//! exposure in one file, for `lucent render --scene` and the viewer. See
+//! Scenes: the file format ([`SceneFile`], TOML: mesh, material, scale, lights, environment,
+//! camera, deformations and exposure in one file) and the one resolved [`Scene`] that the
+//! command line's flags and a scene file resolve into (defaults and validation in one place),
+//! for `lucent render`, the benches and the viewer. See
 //! `examples/scenes/*.toml` for complete examples.
 //!
 //! ```toml
@@ -51,15 +53,17 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 mod material;
+mod resolve;
 pub use material::{CustomMaterial, MaterialSpec};
+pub use resolve::{Overrides, Scene, default_lights, orbit_lights, parse_light, parse_three};
 
-/// A scene as read from a TOML file. Every field has a default, so an empty file is the default
+/// A scene as read from a TOML file (what [`Scene::resolve`] reads beside the flags). Every field has a default, so an empty file is the default
 /// scene (the bunny in skim milk with one light).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Scene {
+pub struct SceneFile {
     /// The mesh: a built-in name (`"bunny"`, `"candle"`, `"cube"`, `"sphere"`; see
-    /// [`Scene::load_mesh`]) or a file path (OBJ, PLY, OFF, glTF/GLB) relative to the
+    /// [`SceneFile::load_mesh`]) or a file path (OBJ, PLY, OFF, glTF/GLB) relative to the
     /// scene file's folder. A string with a file extension or a path separator is a path.
     /// Default `"bunny"`.
     #[serde(default = "default_mesh")]
@@ -245,7 +249,7 @@ impl Default for CameraSpec {
     }
 }
 
-/// Names accepted by [`Scene::load_mesh`] for built-in meshes.
+/// Names accepted by [`SceneFile::load_mesh`] for built-in meshes.
 pub const BUILTIN_MESHES: &[&str] = &["bunny", "candle", "cube", "sphere"];
 
 /// Where the mesh comes from.
@@ -277,21 +281,21 @@ impl LoadedEnvironment {
     }
 }
 
-impl Scene {
+impl SceneFile {
     /// Reads and validates a scene file. Errors name the file and, for syntax and type errors,
     /// the line and column.
-    pub fn load(path: &Path) -> Result<Scene> {
+    pub fn load(path: &Path) -> Result<SceneFile> {
         let bytes = lucent_core::limits::read_input(path)
             .map_err(|reason| anyhow::anyhow!("cannot read scene file {}: {reason}", path.display()))?;
         let text = String::from_utf8(bytes)
             .map_err(|_| anyhow::anyhow!("scene file {}: not UTF-8 text", path.display()))?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::parse(&text, dir).with_context(|| format!("scene file {}", path.display()))
+        SceneFile::parse(&text, dir).with_context(|| format!("scene file {}", path.display()))
     }
 
     /// Parses and validates scene text; relative paths resolve against `dir`.
-    pub fn parse(text: &str, dir: PathBuf) -> Result<Scene> {
-        let mut scene: Scene =
+    pub fn parse(text: &str, dir: PathBuf) -> Result<SceneFile> {
+        let mut scene: SceneFile =
             toml::from_str(text).map_err(|e| anyhow::anyhow!(toml_error_line(text, &e)))?;
         scene.dir = dir;
         scene.validate()?;

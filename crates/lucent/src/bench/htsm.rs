@@ -9,7 +9,7 @@
 //! with mips.
 
 use crate::cli::{BenchArgs, Cli, Command, RenderArgs};
-use crate::render::load_scene;
+use crate::render::Scene;
 use crate::render_htsm::{build_volume, htsm_params};
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -34,7 +34,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Some(Command::Render(a)) => a,
         _ => unreachable!("render is a subcommand"),
     };
-    let scene = load_scene(&render_args)?;
+    let scene = Scene::resolve(&render_args.overrides())?;
     let light = scene.lights.first().context("the default scene has a light")?.light;
     let base = htsm_params(&render_args.htsm, &scene.mesh, None, &render_args)?;
     let volume = build_volume(&render_args.htsm, &scene.mesh)?;

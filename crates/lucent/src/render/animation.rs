@@ -4,12 +4,13 @@
 //! turn about the vertical axis through the object. The hierarchical solver keeps its links
 //! across frames (Mertens §5.5: incremental mode by default, render mode for lighting alone).
 
-use super::frame::{FrameSolver, GpuFrame};
-use super::setup::{Scene, orbit_lights};
-use super::{image_format, method_name, tone_map};
+use super::frame::GpuFrame;
+use super::{image_format, tone_map};
 use crate::cli::{ImageFormat, Method, RenderArgs, SolveMode};
+use crate::scene::{Scene, orbit_lights};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use lucent_core::session::Solved;
 use lucent_gpu::GpuContext;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -49,7 +50,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let format = image_format(args);
     let mut ctx = Some(GpuContext::new()?);
     let started = Instant::now();
-    let mut solver = FrameSolver::new(scene, args.method, mode, scene.oracle(args.oracle))?;
+    let mut session = scene.session(SolveMode::Incremental);
     let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
@@ -72,7 +73,9 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let mut first_links = None;
     for i in 0..frames {
         let (mesh, lights) = frame_at(i);
-        let solved = solver.solve(&mesh, &lights)?;
+        session.set_positions(&mesh.positions);
+        session.set_lights(lights.clone());
+        let solved = session.solve();
         first_links = first_links.or(solved.links);
         let t = Instant::now();
         let image = match &mut gpu {
@@ -102,7 +105,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         }
         image.write(&out.join(frame_name(i, format)))?;
         times.push(&solved, render_ms, ms_since(t));
-        bar.set_message(format!("solve {:.0} ms", solved.total_ms()));
+        bar.set_message(format!("solve {:.0} ms", solved.timings.total_ms()));
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -111,10 +114,10 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         "lucent: {}: {} triangles, {} at {} m, {}{}, {} frames in {:.1} s on {} -> {}",
         scene.source,
         scene.mesh.triangles.len(),
-        scene.material.name,
-        scene.scale,
-        method_name(args.method),
-        if args.method == Method::Hierarchical { format!(" ({})", mode_name(mode)) } else { String::new() },
+        scene.material().name,
+        scene.scale(),
+        args.method.name(),
+        if args.method == Method::Hierarchical { format!(" ({})", mode.name()) } else { String::new() },
         frames,
         started.elapsed().as_secs_f64(),
         adapter,
@@ -141,14 +144,6 @@ pub fn default_out() -> PathBuf {
     PathBuf::from("frames")
 }
 
-fn mode_name(m: SolveMode) -> &'static str {
-    match m {
-        SolveMode::OnTheFly => "on-the-fly",
-        SolveMode::Render => "render mode",
-        SolveMode::Incremental => "incremental",
-    }
-}
-
 /// Per-frame times, milliseconds, in frame order.
 #[derive(Default)]
 struct Times {
@@ -160,10 +155,11 @@ struct Times {
 }
 
 impl Times {
-    fn push(&mut self, s: &super::frame::Solved, render_ms: f64, write_ms: f64) {
-        self.irradiance.push(s.irradiance_ms);
-        self.link.push(s.link_ms);
-        self.solve.push(s.solve_ms);
+    fn push(&mut self, s: &Solved, render_ms: f64, write_ms: f64) {
+        let t = &s.timings;
+        self.irradiance.push(t.irradiance_ms);
+        self.link.push(t.link_ms);
+        self.solve.push(t.pull_ms + t.gather_ms + t.push_ms);
         self.render.push(render_ms);
         self.write.push(write_ms);
     }

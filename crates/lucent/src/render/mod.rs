@@ -4,8 +4,9 @@
 //! environment reflection, tone mapped (§5.4) ─► PNG, or the HDR frame as OpenEXR, written
 //! atomically ([`output`]).
 //!
-//! * [`setup`]: the scene from the flags and an optional scene file (flags win).
-//! * [`frame`]: the solve and the GPU frame, reusable across frames.
+//! * [`crate::scene::Scene`]: the scene from the flags and an optional scene file (flags win).
+//! * `lucent_core::session::FrameSession`: the solve, reusable across frames; [`frame`]: the
+//!   GPU frame, likewise.
 //! * [`animation`]: `--frames N`, a deformation ramp or an orbiting light.
 //!
 //! `--method htsm` takes a separate path ([`render_htsm`]): Shopf 2007 renders on the GPU from
@@ -14,13 +15,12 @@
 pub mod animation;
 pub mod frame;
 pub mod output;
-pub mod setup;
 
-pub use setup::{Scene, load_scene};
+pub use crate::scene::Scene;
 
 use crate::cli::{HierarchyChoice, ImageFormat, Method, RenderArgs, SolveMode, ToneCurve};
 use anyhow::{Context, Result, bail};
-use frame::{FrameSolver, GpuFrame};
+use frame::GpuFrame;
 use lucent_gpu::GpuContext;
 use lucent_gpu::tonemap::{ToneMap, ToneOperator};
 use output::{Frame, output_dir};
@@ -29,7 +29,7 @@ use std::time::Instant;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
-    let scene = shrink_wrap_scene(load_scene(args)?, args)?;
+    let scene = shrink_wrap_scene(Scene::resolve(&args.overrides())?, args)?;
     if let Some(frames) = args.frames {
         if args.method == Method::Htsm {
             bail!("--frames works with --method hierarchical or exact, not htsm");
@@ -49,9 +49,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms{}, render {:.0} ms on {}, total {:.0} ms -> {}",
         scene.source,
         scene.mesh.triangles.len(),
-        scene.material.name,
-        scene.scale,
-        method_name(args.method),
+        scene.material().name,
+        scene.scale(),
+        args.method.name(),
         timings.solve_ms,
         timings.links.map(|l| format!(" ({l} links)")).unwrap_or_default(),
         timings.render_ms,
@@ -103,14 +103,6 @@ pub struct Timings {
     pub links: Option<usize>,
 }
 
-pub(crate) fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Hierarchical => "hierarchical",
-        Method::Exact => "exact",
-        Method::Htsm => "htsm",
-    }
-}
-
 /// The output format: `--format`, else by `--out`'s extension.
 pub(crate) fn image_format(args: &RenderArgs) -> ImageFormat {
     ImageFormat::resolve(args.format, args.out.as_deref(), args.frames.is_some())
@@ -151,15 +143,19 @@ fn render_mertens(
     let ctx = GpuContext::new()?;
     let mesh = scene.deformed(1.0);
     let t = Instant::now();
-    let mut solver =
-        FrameSolver::new(scene, method, args.mode.unwrap_or(SolveMode::OnTheFly), scene.oracle(args.oracle))?;
-    let solved = solver.solve(&mesh, &scene.lights)?;
+    debug_assert_eq!(scene.settings.method, method);
+    let mut session = scene.session(SolveMode::OnTheFly);
+    session.set_positions(&mesh.positions);
+    let solved = session.solve();
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
+    let st = &solved.timings;
     log::info!(
-        "irradiance {:.1} ms, link {:.1} ms, solve {:.1} ms",
-        solved.irradiance_ms,
-        solved.link_ms,
-        solved.solve_ms
+        "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms",
+        st.irradiance_ms,
+        st.link_ms,
+        st.pull_ms,
+        st.gather_ms,
+        st.push_ms
     );
 
     let t = Instant::now();

@@ -9,14 +9,14 @@ fn examples() -> PathBuf {
 #[test]
 fn example_scenes_parse() {
     for name in ["candle.toml", "bunny_courtyard.toml", "bunny_spot.toml", "bunny_jade.toml"] {
-        let s = Scene::load(&examples().join(name)).unwrap_or_else(|e| panic!("{e:#}"));
+        let s = SceneFile::load(&examples().join(name)).unwrap_or_else(|e| panic!("{e:#}"));
         assert!(!s.lights.is_empty() || s.environment.is_some(), "{name}");
     }
-    let jade = Scene::load(&examples().join("bunny_jade.toml")).unwrap();
+    let jade = SceneFile::load(&examples().join("bunny_jade.toml")).unwrap();
     assert_eq!(jade.material.by_colour(), Some(([0.55, 0.8, 0.6], [1.5, 3.0, 2.0])));
     let (albedo, _) = jade.material().unwrap().albedo_mfp();
     assert!((albedo[1] - 0.8).abs() < 1e-3, "{albedo:?}");
-    let s = Scene::load(&examples().join("bunny_courtyard.toml")).unwrap();
+    let s = SceneFile::load(&examples().join("bunny_courtyard.toml")).unwrap();
     let env = s.environment().unwrap().expect("has an environment");
     assert_eq!((env.reflection.width, env.reflection.height), (256, 128));
     assert_eq!(env.reflection_rgba().len(), 256 * 128);
@@ -25,7 +25,7 @@ fn example_scenes_parse() {
 
 #[test]
 fn empty_file_is_the_default_scene() {
-    let s = Scene::parse("", PathBuf::new()).unwrap();
+    let s = SceneFile::parse("", PathBuf::new()).unwrap();
     assert_eq!(s.mesh_source(), MeshSource::Builtin("bunny".into()));
     assert_eq!(s.material().unwrap().name, "Skimmilk");
     assert_eq!(s.scale, 0.05);
@@ -34,7 +34,7 @@ fn empty_file_is_the_default_scene() {
 
 #[test]
 fn lights_convert_with_intensity_at_the_centre() {
-    let s = Scene::parse(
+    let s = SceneFile::parse(
         r#"
         [[light]]
         type = "point"
@@ -76,7 +76,7 @@ fn lights_convert_with_intensity_at_the_centre() {
 
 #[test]
 fn custom_material_and_paths() {
-    let s = Scene::parse(
+    let s = SceneFile::parse(
         r#"
         mesh = "models/thing.obj"
         material = { sigma_s_prime = [1.0, 1.0, 1.0], sigma_a = [0.01, 0.02, 0.03] }
@@ -90,7 +90,7 @@ fn custom_material_and_paths() {
 }
 
 fn error(text: &str) -> String {
-    format!("{:#}", Scene::parse(text, PathBuf::new()).unwrap_err())
+    format!("{:#}", SceneFile::parse(text, PathBuf::new()).unwrap_err())
 }
 
 #[test]
@@ -118,26 +118,26 @@ fn bad_scenes_give_clear_errors() {
 
 #[test]
 fn meshes_and_deformations_resolve() {
-    let s = Scene::load(&examples().join("candle.toml")).unwrap();
+    let s = SceneFile::load(&examples().join("candle.toml")).unwrap();
     let mesh = s.load_mesh().unwrap();
     assert!(!mesh.triangles.is_empty());
     assert_eq!(s.deformations().unwrap(), vec![Deformation::Twist { degrees: 40.0 }]);
     assert_eq!(s.camera().fov_y_deg, 35.0);
     for name in BUILTIN_MESHES {
-        let s = Scene::parse(&format!("mesh = \"{name}\"\n"), PathBuf::new()).unwrap();
+        let s = SceneFile::parse(&format!("mesh = \"{name}\"\n"), PathBuf::new()).unwrap();
         assert!(!s.load_mesh().unwrap().triangles.is_empty(), "{name}");
     }
-    let s = Scene::parse("mesh = \"teapot\"\n", PathBuf::new()).unwrap();
+    let s = SceneFile::parse("mesh = \"teapot\"\n", PathBuf::new()).unwrap();
     assert!(format!("{:#}", s.load_mesh().unwrap_err()).contains("teapot"));
-    let s = Scene::parse("mesh = \"gone.obj\"\n", PathBuf::from("d")).unwrap();
+    let s = SceneFile::parse("mesh = \"gone.obj\"\n", PathBuf::from("d")).unwrap();
     assert!(format!("{:#}", s.load_mesh().unwrap_err()).contains("gone.obj"));
 }
 
 #[test]
 fn missing_files_are_named() {
-    let e = format!("{:#}", Scene::load(Path::new("no/such/scene.toml")).unwrap_err());
+    let e = format!("{:#}", SceneFile::load(Path::new("no/such/scene.toml")).unwrap_err());
     assert!(e.contains("no/such/scene.toml"), "{e}");
-    let s = Scene::parse("[environment]\npath = \"missing.exr\"\n", PathBuf::from("somewhere")).unwrap();
+    let s = SceneFile::parse("[environment]\npath = \"missing.exr\"\n", PathBuf::from("somewhere")).unwrap();
     let e = format!("{:#}", s.environment().unwrap_err());
     assert!(e.contains("missing.exr"), "{e}");
 }

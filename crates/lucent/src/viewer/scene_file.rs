@@ -5,7 +5,7 @@
 
 use super::core_adapter;
 use super::state::{EnvChoice, LightKind, LightSpec, ViewState};
-use crate::scene::Scene;
+use crate::scene::SceneFile;
 use glam::Vec3;
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
@@ -21,7 +21,7 @@ pub struct SceneStart {
 
 /// Loads `path` (errors name the file) and converts it.
 pub fn load(path: &Path) -> anyhow::Result<SceneStart> {
-    let scene = Scene::load(path)?;
+    let scene = SceneFile::load(path)?;
     let mut rest = scene.load_mesh()?;
     let mut deformed = Vec::new();
     for d in scene.deformations()? {

@@ -1,0 +1,518 @@
+//! One frame after another (Mertens §5.5): a [`FrameSession`] owns everything that outlives a
+//! frame on the CPU (the mesh and its current pose, the hierarchy and its links, the shadow BVH,
+//! the lights and environment, the diffusion profile, the method and mode) and turns "this
+//! changed" into the least work:
+//!
+//! | change                         | work on the next [`FrameSession::solve`]                     |
+//! |--------------------------------|--------------------------------------------------------------|
+//! | camera only                    | none (nothing the solve depends on changed)                  |
+//! | lights or environment          | irradiance, then pull/gather/push on the stored links        |
+//! | material, scale or profile     | profile tables; render mode relinks, incremental re-evaluates |
+//! | deformation (positions)        | BVH refit, irradiance; render relinks, incremental updates   |
+//! | oracle thresholds              | relink                                                       |
+//!
+//! The CLI (`lucent render`, `--frames`), the benches and the viewer's worker all drive this
+//! one session; the GPU side (rasterising `B/π`, or Shopf's HTSM for [`Method::Htsm`], which has
+//! no per-face solve) reads [`FrameSession::mesh`], [`FrameSession::lights`] and
+//! [`FrameSession::environment`] from it.
+
+use crate::Rgb;
+use crate::bssrdf::{Dipole, Material, ProfileKind};
+use crate::formfactor::FormFactorOptions;
+use crate::hierarchy::{Hierarchy, face_cluster};
+use crate::irradiance::{Environment, SceneLight, ShadowCaster, face_irradiance_shadowed, interreflection};
+use crate::mesh::Mesh;
+use crate::shading;
+use crate::solver::{self, HierarchicalSolver, Oracle};
+use glam::Vec3;
+use std::time::Instant;
+
+/// How the subsurface transport is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Mertens 2003's hierarchical boundary element solve (§3.2, §5). Default.
+    #[default]
+    Hierarchical,
+    /// The O(N²) reference: every face pair by the semi-analytic form factor.
+    Exact,
+    /// Shopf 2007's Heterogeneous Translucent Shadow Maps, on the GPU: no per-face solve here;
+    /// the session keeps the mesh pose, lights and environment the GPU renders from.
+    Htsm,
+}
+
+impl Method {
+    /// Every method, in the order the CLI and the viewer list them.
+    pub const ALL: [Method; 3] = [Method::Hierarchical, Method::Exact, Method::Htsm];
+
+    /// The name the CLI and scene files use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Hierarchical => "hierarchical",
+            Method::Exact => "exact",
+            Method::Htsm => "htsm",
+        }
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_name(s, &Method::ALL, Method::name, "method")
+    }
+}
+
+/// Mertens §5.5: what the hierarchical solve keeps between frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SolveMode {
+    /// Links made once and stored; a light change only re-gathers. Relinks after a deformation
+    /// or material change.
+    Render,
+    /// Links stored and updated after a deformation or material change: only the links that
+    /// the change touched are re-evaluated, promoted or demoted.
+    Incremental,
+    /// No stored links: refine from the root and gather while traversing, every solve. Default
+    /// for single images (nothing to reuse).
+    #[default]
+    OnTheFly,
+}
+
+impl SolveMode {
+    /// Every mode, in the order the CLI and the viewer list them.
+    pub const ALL: [SolveMode; 3] = [SolveMode::Render, SolveMode::Incremental, SolveMode::OnTheFly];
+
+    /// The name the CLI and the viewer use.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolveMode::Render => "render",
+            SolveMode::Incremental => "incremental",
+            SolveMode::OnTheFly => "on-the-fly",
+        }
+    }
+}
+
+impl std::str::FromStr for SolveMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_name(s, &SolveMode::ALL, SolveMode::name, "mode")
+    }
+}
+
+/// `s` (case-insensitive) among `all` by `name`, or a one-line error listing the accepted names.
+fn parse_name<T: Copy>(s: &str, all: &[T], name: fn(T) -> &'static str, what: &str) -> Result<T, String> {
+    let s = s.trim().to_ascii_lowercase();
+    all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
+        let names: Vec<_> = all.iter().map(|&v| name(v)).collect();
+        format!("unknown {what} {s:?}; expected one of {}", names.join(", "))
+    })
+}
+
+/// The material at its size, which together decide the diffusion profile.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transport {
+    /// Scattering coefficients (mm⁻¹) and relative index of refraction.
+    pub material: Material,
+    /// Model scale: the rest mesh's largest bounding-box side, metres (> 0).
+    pub scale_m: f64,
+    /// Diffusion profile (default [`ProfileKind::default`], photon beam diffusion).
+    pub profile: ProfileKind,
+    /// Whether the single-scattering term is included (`pbd`, `dipole`; `mertens` has none).
+    pub single_scattering: bool,
+}
+
+impl Transport {
+    /// `material` at `scale_m` metres with the default profile and its single-scattering
+    /// default.
+    pub fn new(material: Material, scale_m: f64) -> Self {
+        let profile = ProfileKind::default();
+        Transport { material, scale_m, profile, single_scattering: profile.single_scattering_by_default() }
+    }
+
+    /// The profile in the units of a mesh whose largest bounding-box side is `extent` mesh
+    /// units (tabulated profiles cost tens of milliseconds: made only when this changes).
+    pub fn dipole(&self, extent: f32) -> Dipole {
+        Dipole::profile_for_model_scale(
+            &self.material,
+            extent as f64,
+            self.scale_m,
+            self.profile,
+            self.single_scattering,
+        )
+    }
+}
+
+/// How the session solves, besides the material and the light.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameSettings {
+    /// Hierarchical, exact or HTSM.
+    pub method: Method,
+    /// What the hierarchical solve keeps between frames.
+    pub mode: SolveMode,
+    /// Refinement thresholds; `None`: the profile's defaults ([`Oracle::for_profile`]).
+    pub oracle: Option<Oracle>,
+    /// Whether the mesh shadows the environment (64 rays per face,
+    /// [`crate::irradiance::occlusion`]). Lights say for themselves ([`SceneLight::shadows`]).
+    pub environment_shadows: bool,
+    /// Bounces of subsurface light between facing parts through the air
+    /// ([`interreflection`]), 0..=4; 0 (default) switches them off.
+    pub bounces: u32,
+}
+
+/// Wall-clock times of one solve's stages, milliseconds. Stages that did not run are 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Irradiance at the leaves: lights, shadow rays, environment (and the BVH refit).
+    pub irradiance_ms: f64,
+    /// Profile tables, link creation, refinement or incremental update.
+    pub link_ms: f64,
+    /// Pulling irradiance up the hierarchy.
+    pub pull_ms: f64,
+    /// Gathering along the links (the whole O(N²) sum for the exact solver).
+    pub gather_ms: f64,
+    /// Pushing `B` down to the leaves, bounces and the per-vertex average.
+    pub push_ms: f64,
+}
+
+impl Timings {
+    /// Sum of the stages, milliseconds.
+    pub fn total_ms(&self) -> f64 {
+        self.irradiance_ms + self.link_ms + self.pull_ms + self.gather_ms + self.push_ms
+    }
+}
+
+/// What one solve produced.
+#[derive(Clone, Debug, Default)]
+pub struct Solved {
+    /// Radiosity `B` per face (empty for [`Method::Htsm`]).
+    pub face_b: Vec<Rgb>,
+    /// Diffuse exitant radiance `B / (c π)` per vertex, area-weighted (§3.2), before the exit
+    /// Fresnel factor (empty for [`Method::Htsm`]).
+    pub vertex_radiance: Vec<Rgb>,
+    /// Per-stage times of the solve that made this (zero when it was reused).
+    pub timings: Timings,
+    /// Links of the hierarchical solve (`None` for the exact solver and HTSM).
+    pub links: Option<usize>,
+    /// Whether anything was computed (false: nothing changed since the last solve).
+    pub fresh: bool,
+}
+
+/// What changed since the last solve.
+#[derive(Clone, Copy, Debug, Default)]
+struct Changes {
+    geometry: bool,
+    transport: bool,
+    light: bool,
+    oracle: bool,
+    method: bool,
+}
+
+impl Changes {
+    fn all() -> Self {
+        Changes { geometry: true, transport: true, light: true, oracle: true, method: true }
+    }
+    fn any(&self) -> bool {
+        self.geometry || self.transport || self.light || self.oracle || self.method
+    }
+}
+
+/// The CPU side of a translucent object across frames. See the module documentation.
+pub struct FrameSession {
+    /// The mesh in its current pose (topology fixed for the session's life).
+    mesh: Mesh,
+    /// Vertex positions of the rest pose: the hierarchical solver links there first, so that
+    /// a deformed pose is an incremental update.
+    rest: Vec<Vec3>,
+    /// The mesh's largest bounding-box side in its rest pose, mesh units: the profile's scale
+    /// does not follow a deformation.
+    rest_extent: f32,
+    transport: Transport,
+    dipole: Dipole,
+    settings: FrameSettings,
+    lights: Vec<SceneLight>,
+    environment: Option<Environment>,
+    /// The hierarchy a front end built (shrink-wrap), until the solver takes it.
+    hierarchy: Option<Hierarchy>,
+    solver: Option<HierarchicalSolver>,
+    caster: Option<ShadowCaster>,
+    /// Irradiance at the faces as last computed (reused when only the solver changed).
+    irradiance: Vec<Rgb>,
+    changes: Changes,
+    last: Solved,
+}
+
+impl FrameSession {
+    /// A session for `mesh` in its rest pose; `hierarchy`, when given, was built with `mesh`
+    /// (Mertens §5.1.2 subdivision), else the face-cluster hierarchy (§5.1.1) is built on first
+    /// use. Nothing is solved until [`FrameSession::solve`].
+    pub fn new(
+        mesh: Mesh,
+        hierarchy: Option<Hierarchy>,
+        transport: Transport,
+        settings: FrameSettings,
+    ) -> Self {
+        let rest_extent = mesh.extent();
+        let dipole = transport.dipole(rest_extent);
+        FrameSession {
+            rest: mesh.positions.clone(),
+            mesh,
+            rest_extent,
+            transport,
+            dipole,
+            settings,
+            lights: Vec::new(),
+            environment: None,
+            hierarchy,
+            solver: None,
+            caster: None,
+            irradiance: Vec::new(),
+            changes: Changes::all(),
+            last: Solved::default(),
+        }
+    }
+
+    /// The mesh in its current pose.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The diffusion profile in mesh units.
+    pub fn dipole(&self) -> &Dipole {
+        &self.dipole
+    }
+
+    /// The material at its size.
+    pub fn transport(&self) -> &Transport {
+        &self.transport
+    }
+
+    /// Method, mode, oracle, environment shadows and bounces.
+    pub fn settings(&self) -> &FrameSettings {
+        &self.settings
+    }
+
+    /// The lights, mesh units.
+    pub fn lights(&self) -> &[SceneLight] {
+        &self.lights
+    }
+
+    /// The distant environment, if any.
+    pub fn environment(&self) -> Option<&Environment> {
+        self.environment.as_ref()
+    }
+
+    /// The hierarchical solver with its hierarchy and links, once a hierarchical solve made it.
+    pub fn hierarchical(&self) -> Option<&HierarchicalSolver> {
+        self.solver.as_ref()
+    }
+
+    /// The oracle in use: the settings' thresholds, else the profile's defaults.
+    pub fn oracle(&self) -> Oracle {
+        self.settings.oracle.unwrap_or_else(|| Oracle::for_profile(self.dipole.profile))
+    }
+
+    /// Moves the mesh to `positions` (a deformation of the rest pose: same vertex count).
+    ///
+    /// # Panics
+    /// If the vertex count differs (the topology is fixed for a session).
+    pub fn set_positions(&mut self, positions: &[Vec3]) {
+        assert_eq!(positions.len(), self.mesh.positions.len(), "a session's topology is fixed");
+        if self.mesh.positions != positions {
+            self.mesh.positions.copy_from_slice(positions);
+            self.changes.geometry = true;
+        }
+    }
+
+    /// Changes the material, scale or profile (the profile is rebuilt only if one of them
+    /// changed).
+    pub fn set_transport(&mut self, transport: Transport) {
+        if self.transport != transport {
+            self.dipole = transport.dipole(self.rest_extent);
+            self.transport = transport;
+            self.changes.transport = true;
+        }
+    }
+
+    /// Changes the method, mode, oracle, environment shadows or bounces.
+    pub fn set_settings(&mut self, settings: FrameSettings) {
+        let s = &self.settings;
+        self.changes.oracle |= s.oracle != settings.oracle;
+        self.changes.method |= s.method != settings.method || s.mode != settings.mode;
+        self.changes.light |=
+            s.environment_shadows != settings.environment_shadows || s.bounces != settings.bounces;
+        self.settings = settings;
+    }
+
+    /// Replaces the lights.
+    pub fn set_lights(&mut self, lights: Vec<SceneLight>) {
+        if self.lights != lights {
+            self.lights = lights;
+            self.changes.light = true;
+        }
+    }
+
+    /// Replaces the environment.
+    pub fn set_environment(&mut self, environment: Option<Environment>) {
+        if self.environment != environment {
+            self.environment = environment;
+            self.changes.light = true;
+        }
+    }
+
+    /// True when nothing the solve depends on changed since the last solve.
+    pub fn is_current(&self) -> bool {
+        !self.changes.any()
+    }
+
+    /// Solves the current state, doing only what the changes since the last solve need (see
+    /// the module documentation); returns the last result, marked not fresh, when nothing
+    /// changed.
+    pub fn solve(&mut self) -> &Solved {
+        if !self.changes.any() {
+            self.last.fresh = false;
+            self.last.timings = Timings::default();
+            return &self.last;
+        }
+        let changes = std::mem::take(&mut self.changes);
+        if self.settings.method == Method::Htsm {
+            self.last = Solved { fresh: true, ..Solved::default() };
+            return &self.last;
+        }
+        let mut timings = Timings::default();
+        let t = Instant::now();
+        if changes.geometry || changes.light || changes.transport || self.irradiance.is_empty() {
+            self.irradiance = self.face_irradiance(changes.geometry);
+        }
+        timings.irradiance_ms = ms_since(t);
+
+        let e = std::mem::take(&mut self.irradiance);
+        let (mut face_b, links) = self.transport_once(&e, &changes, &mut timings);
+        let t = Instant::now();
+        // Each bounce: the light the last solve sent out, caught by facing parts, solved again
+        // (the solve is linear in the irradiance; stored links are reused).
+        let mut last = face_b.clone();
+        for _ in 0..self.settings.bounces {
+            let Some(caster) = &self.caster else { break };
+            let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
+            let unchanged = Changes::default();
+            last = self.transport_once(&e2, &unchanged, &mut Timings::default()).0;
+            face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
+        }
+        self.irradiance = e;
+        let vertex_radiance = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
+        timings.push_ms += ms_since(t);
+        self.last = Solved { face_b, vertex_radiance, timings, links, fresh: true };
+        &self.last
+    }
+
+    /// Fresnel-transmitted irradiance at the faces (§5.3), refitting the shadow BVH first when
+    /// the mesh `moved`.
+    fn face_irradiance(&mut self, moved: bool) -> Vec<Rgb> {
+        let shadows = self.lights.iter().any(|l| l.shadows)
+            || (self.environment.is_some() && self.settings.environment_shadows);
+        let need_caster = shadows || self.settings.bounces > 0;
+        match &mut self.caster {
+            Some(c) if moved => {
+                c.update(&self.mesh);
+            }
+            None if need_caster => self.caster = Some(ShadowCaster::new(&self.mesh)),
+            _ => {}
+        }
+        // Lights shadow per their own flag; the environment only when asked.
+        let caster = self.caster.as_ref().filter(|_| shadows);
+        let env = self.environment.filter(|_| caster.is_none() || self.settings.environment_shadows);
+        let mut e =
+            face_irradiance_shadowed(&self.mesh, &self.lights, env.as_ref(), &self.dipole.entry, caster);
+        if caster.is_some()
+            && !self.settings.environment_shadows
+            && let Some(env) = &self.environment
+        {
+            // Shadowed lights with an unshadowed environment: add the open environment.
+            let open = face_irradiance_shadowed(&self.mesh, &[], Some(env), &self.dipole.entry, None);
+            e.iter_mut().zip(open).for_each(|(e, o)| *e += o);
+        }
+        e
+    }
+
+    /// `B` per face for irradiance `e` by the settings' method, updating the hierarchical
+    /// solver for `changes` first: `(B, links)`.
+    fn transport_once(
+        &mut self,
+        e: &[Rgb],
+        changes: &Changes,
+        timings: &mut Timings,
+    ) -> (Vec<Rgb>, Option<usize>) {
+        if self.settings.method == Method::Exact {
+            let t = Instant::now();
+            let b = solver::exact::solve(&self.mesh, &self.dipole, e, &FormFactorOptions::default());
+            timings.gather_ms += ms_since(t);
+            return (b, None);
+        }
+        let oracle = self.oracle();
+        let mode = self.settings.mode;
+        self.make_solver();
+        let Self { solver, mesh, dipole, .. } = self;
+        let s = solver.as_mut().expect("made above");
+        let moved = s.mesh.positions != mesh.positions;
+        let t = Instant::now();
+        let profile_changed = s.dipole != *dipole;
+        let oracle_changed = changes.oracle || s.oracle != oracle;
+        let relink = moved || profile_changed || oracle_changed;
+        s.oracle = oracle;
+        let solution = match mode {
+            SolveMode::OnTheFly => {
+                if moved {
+                    s.set_positions(&mesh.positions);
+                }
+                s.dipole = dipole.clone();
+                s.solve_on_the_fly(e)
+            }
+            SolveMode::Render => {
+                if relink || s.links().is_none() {
+                    if moved {
+                        s.set_positions(&mesh.positions);
+                    }
+                    s.dipole = dipole.clone();
+                    s.link();
+                    timings.link_ms += ms_since(t);
+                }
+                s.solve_render(e)
+            }
+            SolveMode::Incremental => {
+                if profile_changed {
+                    s.set_dipole(dipole.clone());
+                }
+                if oracle_changed || s.links().is_none() {
+                    // Links on the pose they were asked for first, so that later updates are
+                    // incremental.
+                    s.link();
+                }
+                s.update_incremental(&mesh.positions, None);
+                timings.link_ms += ms_since(t);
+                s.solve_render(e)
+            }
+        };
+        let st = solution.stats;
+        timings.link_ms += if mode == SolveMode::OnTheFly { st.link_ms } else { 0.0 };
+        timings.pull_ms += st.pull_ms;
+        timings.gather_ms += st.gather_ms;
+        timings.push_ms += st.push_ms;
+        (solution.face_b, Some(st.links))
+    }
+
+    /// Makes the hierarchical solver on first use, on the rest pose.
+    fn make_solver(&mut self) {
+        if self.solver.is_none() {
+            let rest = Mesh::new(self.rest.clone(), self.mesh.triangles.clone());
+            let h = self.hierarchy.take().unwrap_or_else(|| face_cluster::build(&rest));
+            let mut s = HierarchicalSolver::new(rest, h, self.dipole.clone(), self.oracle());
+            s.ff_opts = FormFactorOptions::default();
+            self.solver = Some(s);
+        }
+    }
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+#[cfg(test)]
+mod tests;

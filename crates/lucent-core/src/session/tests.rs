@@ -1,0 +1,137 @@
+use super::*;
+use crate::irradiance::Light;
+use crate::mesh::deform::{self, Deformer as _};
+use crate::mesh::generate;
+
+fn marble() -> Transport {
+    Transport::new(Material::by_name("marble").unwrap(), 0.05)
+}
+
+fn key_light() -> Vec<SceneLight> {
+    vec![SceneLight::from(Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::splat(14.0) })]
+}
+
+fn session(mode: SolveMode) -> FrameSession {
+    let settings = FrameSettings { mode, ..FrameSettings::default() };
+    let mut s = FrameSession::new(generate::icosphere(2), None, marble(), settings);
+    s.set_lights(key_light());
+    s
+}
+
+fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f32 {
+    let scale = a.iter().map(|v| v.max_element()).fold(0.0f32, f32::max).max(1e-30);
+    a.iter().zip(b).map(|(x, y)| (*x - *y).abs().max_element() / scale).fold(0.0, f32::max)
+}
+
+/// The session's on-the-fly solve is the solver's, bit for bit.
+#[test]
+fn on_the_fly_matches_the_solver_called_directly() {
+    let mut s = session(SolveMode::OnTheFly);
+    let b = s.solve().face_b.clone();
+    let mesh = generate::icosphere(2);
+    let dipole = marble().dipole(mesh.extent());
+    let e = face_irradiance_shadowed(&mesh, &key_light(), None, &dipole.entry, None);
+    let direct = HierarchicalSolver::new(
+        mesh.clone(),
+        face_cluster::build(&mesh),
+        dipole.clone(),
+        Oracle::for_profile(dipole.profile),
+    )
+    .solve_on_the_fly(&e)
+    .face_b;
+    assert_eq!(b, direct);
+}
+
+/// Nothing changed: nothing is computed; a camera move is not the session's business.
+#[test]
+fn an_unchanged_state_is_not_solved_again() {
+    let mut s = session(SolveMode::Render);
+    assert!(s.solve().fresh);
+    assert!(s.is_current());
+    let again = s.solve();
+    assert!(!again.fresh && again.timings.total_ms() == 0.0);
+    s.set_lights(key_light());
+    assert!(s.is_current(), "the same lights are no change");
+}
+
+/// Render mode: a light change re-gathers on the stored links (no relink) and gives what a new
+/// session gives under the new light.
+#[test]
+fn a_light_change_in_render_mode_reuses_the_links() {
+    let mut s = session(SolveMode::Render);
+    let links = s.solve().links;
+    let other = vec![SceneLight::from(Light::Directional { direction: Vec3::NEG_Y, irradiance: Vec3::ONE })];
+    s.set_lights(other.clone());
+    let solved = s.solve().clone();
+    assert_eq!(solved.links, links);
+    assert_eq!(solved.timings.link_ms, 0.0, "no relink for a light change");
+    let mut fresh = session(SolveMode::Render);
+    fresh.set_lights(other);
+    assert_eq!(solved.face_b, fresh.solve().face_b);
+}
+
+/// A deformation: incremental and render modes agree with on-the-fly at the new pose within
+/// the hierarchical solve's own tolerance, and on-the-fly agrees with a new session.
+#[test]
+fn a_deformation_is_followed_by_every_mode() {
+    let rest = generate::icosphere(2);
+    let bent = deform::twist(Vec3::ZERO, Vec3::Y, 0.8).deformed(&rest).positions;
+    let mut reference = session(SolveMode::OnTheFly);
+    reference.set_positions(&bent);
+    let reference = reference.solve().face_b.clone();
+    for mode in SolveMode::ALL {
+        let mut s = session(mode);
+        s.solve();
+        s.set_positions(&bent);
+        let b = s.solve().face_b.clone();
+        let d = max_rel_diff(&b, &reference);
+        assert!(d < 0.02, "{mode:?}: {d}");
+        if mode == SolveMode::OnTheFly {
+            assert_eq!(b, reference);
+        }
+    }
+}
+
+/// A material change makes a new profile, and the result is that of a new session.
+#[test]
+fn a_material_change_rebuilds_the_profile() {
+    for mode in SolveMode::ALL {
+        let mut s = session(mode);
+        let before = s.solve().face_b.clone();
+        let ketchup = Transport::new(Material::by_name("ketchup").unwrap(), 0.05);
+        s.set_transport(ketchup.clone());
+        let after = s.solve().face_b.clone();
+        assert_ne!(before, after);
+        let mut fresh = session(mode);
+        fresh.set_transport(ketchup);
+        let d = max_rel_diff(&after, &fresh.solve().face_b);
+        assert!(d < 0.02, "{mode:?}: {d}");
+    }
+}
+
+/// The exact method solves without links; HTSM has no per-face solve.
+#[test]
+fn exact_and_htsm() {
+    let mut s = session(SolveMode::OnTheFly);
+    let hierarchical = s.solve().face_b.clone();
+    s.set_settings(FrameSettings { method: Method::Exact, ..*s.settings() });
+    let exact = s.solve();
+    assert_eq!(exact.links, None);
+    let d = max_rel_diff(&exact.face_b.clone(), &hierarchical);
+    assert!(d < 0.02, "{d}");
+    s.set_settings(FrameSettings { method: Method::Htsm, ..*s.settings() });
+    let htsm = s.solve();
+    assert!(htsm.fresh && htsm.face_b.is_empty() && htsm.vertex_radiance.is_empty());
+}
+
+#[test]
+fn names_parse_and_bad_ones_list_the_choices() {
+    for m in SolveMode::ALL {
+        assert_eq!(m.name().parse::<SolveMode>(), Ok(m));
+    }
+    for m in Method::ALL {
+        assert_eq!(m.name().to_uppercase().parse::<Method>(), Ok(m));
+    }
+    let e = "fast".parse::<SolveMode>().unwrap_err();
+    assert_eq!(e, "unknown mode \"fast\"; expected one of render, incremental, on-the-fly");
+}

@@ -1,0 +1,416 @@
+//! The one resolved [`Scene`]: what `lucent render`, the benches and `lucent view` work on,
+//! from [`Overrides`] (the command line) and an optional scene file. A value given as a flag
+//! wins over the file, the file over the defaults, and every default is written here once.
+//! Everything that can fail (files, numbers, names) fails here, before any output exists.
+
+use super::{LoadedEnvironment, MeshSource, SceneFile};
+use anyhow::{Context, Result, bail};
+use glam::Vec3;
+use lucent_core::bssrdf::{Material, ProfileKind};
+use lucent_core::hierarchy::Hierarchy;
+use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use lucent_core::mesh::Mesh;
+use lucent_core::mesh::deform::Deformation;
+use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Transport};
+use lucent_core::solver::Oracle;
+use lucent_gpu::camera::OrbitCamera;
+use std::path::{Path, PathBuf};
+
+/// Side of the equirect copy of an environment map that the GPU reflects.
+const REFLECTION_SIZE: (usize, usize) = (256, 128);
+/// The material when neither a flag nor the file names one.
+pub const DEFAULT_MATERIAL: &str = "skimmilk";
+/// The model scale when neither a flag nor the file gives one, metres.
+pub const DEFAULT_SCALE_M: f64 = 0.05;
+/// Relative index of refraction of a material given by colour and distance on the command line.
+pub const DEFAULT_ETA: f64 = 1.3;
+
+/// What the command line says about a scene; `None` (or empty, or false) leaves the scene
+/// file's value, else the default. Numbers were range-checked by the flags' parsers
+/// (`crate::ranges`).
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// A scene file (TOML) to start from.
+    pub scene: Option<PathBuf>,
+    /// A mesh file (OBJ, PLY, OFF, glTF/GLB).
+    pub mesh: Option<PathBuf>,
+    /// A material preset by name.
+    pub material: Option<String>,
+    /// A material by colour and distance: slab albedo (0.001..=0.999) and reduced mean free
+    /// path (mm), per channel.
+    pub colour: Option<([f64; 3], [f64; 3])>,
+    /// Model scale, metres.
+    pub scale: Option<f64>,
+    /// Exposure multiplier.
+    pub exposure: Option<f32>,
+    /// Diffusion profile.
+    pub profile: Option<ProfileKind>,
+    /// Single scattering on or off.
+    pub single_scattering: Option<bool>,
+    /// Lights as `point:x,y,z` or `dir:x,y,z`; any replaces all of the file's lights.
+    pub lights: Vec<String>,
+    /// Turns off every shadow (lights and environment).
+    pub no_shadows: bool,
+    /// Bounces of subsurface light between facing parts (0..=4).
+    pub bounces: Option<u32>,
+    /// Environment: `courtyard`, `forest` or an `.hdr`/`.exr` path.
+    pub env: Option<String>,
+    /// Environment rotation about +Y, degrees.
+    pub env_rotation: Option<f32>,
+    /// One deformation (`twist:DEG`, `bump:...`, `noise:...`), replacing the file's.
+    pub deform: Option<String>,
+    /// Camera yaw, degrees.
+    pub yaw: Option<f32>,
+    /// Camera pitch, degrees (-89..89).
+    pub pitch: Option<f32>,
+    /// Camera distance, bounding-sphere radii (> 1).
+    pub distance: Option<f32>,
+    /// Drops the surface reflection and highlight.
+    pub no_surface: bool,
+    /// Hierarchical, exact or HTSM.
+    pub method: Option<Method>,
+    /// Render, incremental or on-the-fly.
+    pub mode: Option<SolveMode>,
+    /// Refinement thresholds; `None`: the profile's defaults.
+    pub oracle: Option<Oracle>,
+}
+
+/// A scene after loading and parsing: everything a frame needs.
+pub struct Scene {
+    /// Where the mesh came from, for messages (`"embedded bunny"`, a built-in name or the path).
+    pub source: String,
+    /// The mesh in its rest pose (before [`Scene::deformed`]), mesh units.
+    pub mesh: Mesh,
+    /// The mesh file, when the mesh came from one (HTSM reads glTF volume parameters from it).
+    pub mesh_path: Option<PathBuf>,
+    /// Material, model scale, profile and single scattering.
+    pub transport: Transport,
+    /// Lights (mesh units) with whether each casts shadows.
+    pub lights: Vec<SceneLight>,
+    /// Distant environment: SH for the solve, a small map for the GPU reflection.
+    pub environment: Option<LoadedEnvironment>,
+    /// Method, oracle, environment shadows and bounces; the mode is `None` unless asked for
+    /// (see [`Scene::settings`]).
+    pub settings: FrameSettings,
+    /// The mode asked for, if any.
+    pub mode: Option<SolveMode>,
+    /// Deformations applied in order to the rest mesh (empty: none).
+    pub deform: Vec<Deformation>,
+    /// The camera around the rest mesh's bounding sphere.
+    pub camera: OrbitCamera,
+    /// Exposure multiplier before tone mapping (> 0). Default 1.
+    pub exposure: f32,
+    /// Whether the surface reflection and highlight are drawn (false: the subsurface term
+    /// alone). Default true.
+    pub surface: bool,
+    /// A hierarchy built with `mesh` (shrink-wrap); `None`: the face-cluster hierarchy.
+    pub hierarchy: Option<Hierarchy>,
+}
+
+impl Scene {
+    /// Loads the scene file (if any), the mesh, material, lights and environment, with the
+    /// flags in `o` overriding the file.
+    pub fn resolve(o: &Overrides) -> Result<Scene> {
+        let file = o.scene.as_deref().map(SceneFile::load).transpose()?;
+        let in_file = |e: anyhow::Error| match &o.scene {
+            Some(p) => e.context(format!("scene file {}", p.display())),
+            None => e,
+        };
+        let (source, mesh, mesh_path) = load_mesh(o, file.as_ref()).map_err(in_file)?;
+        let transport = transport(o, file.as_ref())?;
+        let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+        let environment = environment(o, file.as_ref()).map_err(in_file)?;
+        let mut lights: Vec<SceneLight> = if !o.lights.is_empty() {
+            o.lights.iter().map(|s| parse_light(s, center).map(SceneLight::from)).collect::<Result<_>>()?
+        } else {
+            file.as_ref().map(|f| f.lights(center)).unwrap_or_default()
+        };
+        if lights.is_empty() && environment.is_none() {
+            lights.extend(default_lights(&mesh).map(SceneLight::from));
+        }
+        if o.no_shadows {
+            lights.iter_mut().for_each(|l| l.shadows = false);
+        }
+        let deform = match (&o.deform, &file) {
+            (Some(spec), _) => {
+                vec![spec.parse::<Deformation>().with_context(|| format!("--deform {spec:?}"))?]
+            }
+            (None, Some(f)) => f.deformations()?,
+            (None, None) => Vec::new(),
+        };
+        let settings = FrameSettings {
+            method: o.method.unwrap_or_default(),
+            mode: o.mode.unwrap_or_default(),
+            oracle: o.oracle,
+            environment_shadows: !o.no_shadows,
+            bounces: o.bounces.or(file.as_ref().map(|f| f.bounces)).unwrap_or(0),
+        };
+        Ok(Scene {
+            source,
+            mesh,
+            mesh_path,
+            transport,
+            lights,
+            environment,
+            settings,
+            mode: o.mode,
+            deform,
+            camera: camera(o, file.as_ref())?,
+            exposure: o.exposure.or(file.as_ref().map(|f| f.exposure)).unwrap_or(1.0),
+            surface: !o.no_surface && file.as_ref().is_none_or(|f| f.surface),
+            hierarchy: None,
+        })
+    }
+
+    /// The scattering material.
+    pub fn material(&self) -> &Material {
+        &self.transport.material
+    }
+
+    /// Model scale: the rest mesh's largest bounding-box side, metres.
+    pub fn scale(&self) -> f64 {
+        self.transport.scale_m
+    }
+
+    /// The frame settings with the mode asked for, else `default_mode` (on-the-fly for a
+    /// single image, where nothing is reused; incremental for an animation; render in the
+    /// viewer, where lights change more often than shapes).
+    pub fn settings(&self, default_mode: SolveMode) -> FrameSettings {
+        FrameSettings { mode: self.mode.unwrap_or(default_mode), ..self.settings }
+    }
+
+    /// A frame session on the rest mesh with the scene's transport, lights and environment.
+    pub fn session(&self, default_mode: SolveMode) -> FrameSession {
+        let mut s = FrameSession::new(
+            self.mesh.clone(),
+            self.hierarchy.clone(),
+            self.transport.clone(),
+            self.settings(default_mode),
+        );
+        s.set_lights(self.lights.clone());
+        s.set_environment(self.environment.as_ref().map(|e| e.environment));
+        s
+    }
+
+    /// The rest mesh deformed by every deformation at animation parameter `t` (0 = rest pose,
+    /// 1 = as specified; see `Deformation::apply`).
+    pub fn deformed(&self, t: f32) -> Mesh {
+        let mut mesh = self.mesh.clone();
+        let mut pos = Vec::with_capacity(mesh.positions.len());
+        for d in &self.deform {
+            d.apply(&mesh, t, &mut pos);
+            std::mem::swap(&mut mesh.positions, &mut pos);
+        }
+        mesh
+    }
+
+    /// The lights alone, for the GPU highlight.
+    pub fn plain_lights(&self) -> Vec<Light> {
+        self.lights.iter().map(|l| l.light).collect()
+    }
+}
+
+/// The mesh from `--mesh`, else the file's, else the embedded bunny: `(source, mesh, path)`.
+fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, Mesh, Option<PathBuf>)> {
+    Ok(match (&o.mesh, file) {
+        (Some(path), _) => (path.display().to_string(), super::load_mesh_file(path)?, Some(path.clone())),
+        (None, Some(f)) => {
+            let mesh = f.load_mesh()?;
+            match f.mesh_source() {
+                MeshSource::File(p) => (p.display().to_string(), mesh, Some(p)),
+                MeshSource::Builtin(name) => (format!("built-in {name}"), mesh, None),
+            }
+        }
+        (None, None) => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny(), None),
+    })
+}
+
+/// Material, scale, profile and single scattering. A colour-and-distance material (flags, else
+/// scene keys) says on stdout what it became.
+fn transport(o: &Overrides, file: Option<&SceneFile>) -> Result<Transport> {
+    let material = match (&o.material, o.colour, file) {
+        (Some(name), _, _) => Material::by_name(name)?,
+        (None, Some((albedo, mfp)), _) => Material::from_albedo_mfp("custom", albedo, mfp, DEFAULT_ETA)?,
+        (None, None, Some(f)) => f.material()?,
+        (None, None, None) => Material::by_name(DEFAULT_MATERIAL)?,
+    };
+    let by_colour = match &o.material {
+        Some(_) => None,
+        None => o.colour.or_else(|| file.and_then(|f| f.material.by_colour())),
+    };
+    if let Some((albedo, mfp)) = by_colour {
+        println!("lucent: {}", colour_material_line(albedo, mfp, &material));
+    }
+    let profile = match (o.profile, file.and_then(|f| f.profile.as_deref())) {
+        (Some(p), _) => p,
+        (None, Some(name)) => name.parse::<ProfileKind>().map_err(|e| anyhow::anyhow!("scene file: {e}"))?,
+        (None, None) => ProfileKind::default(),
+    };
+    let single_scattering = o
+        .single_scattering
+        .or(file.and_then(|f| f.single_scattering))
+        .unwrap_or(profile.single_scattering_by_default());
+    let scale_m = o.scale.or(file.map(|f| f.scale)).unwrap_or(DEFAULT_SCALE_M);
+    Ok(Transport { material, scale_m, profile, single_scattering })
+}
+
+/// `--env` (with `--env-rotation`), else the file's environment.
+fn environment(o: &Overrides, file: Option<&SceneFile>) -> Result<Option<LoadedEnvironment>> {
+    let env = match (&o.env, file) {
+        (Some(spec), _) => Some(environment_of(&load_env_map(spec)?, o.env_rotation.unwrap_or(0.0), 1.0)?),
+        (None, Some(f)) => {
+            let mut f = f.clone();
+            if let (Some(spec), Some(r)) = (&mut f.environment, o.env_rotation) {
+                spec.rotation = r;
+            }
+            f.environment()?
+        }
+        (None, None) => None,
+    };
+    if let Some(env) = &env {
+        // The DC term: the map's mean radiance, what decides an environment-lit image's level.
+        let mean = env.environment.sh.coeffs[0] * (0.282_094_8 * env.environment.intensity);
+        log::info!("environment: mean radiance {mean:.3}, rotation {} deg", env.environment.rotation_deg);
+    }
+    Ok(env)
+}
+
+/// The file's camera with `--yaw`, `--pitch` and `--distance` applied.
+fn camera(o: &Overrides, file: Option<&SceneFile>) -> Result<OrbitCamera> {
+    let mut camera = file.map(|f| f.camera()).unwrap_or_default();
+    camera.yaw_deg = o.yaw.unwrap_or(camera.yaw_deg);
+    camera.pitch_deg = o.pitch.unwrap_or(camera.pitch_deg);
+    camera.distance = o.distance.or(camera.distance);
+    if !camera.yaw_deg.is_finite() || !(-89.0..=89.0).contains(&camera.pitch_deg) {
+        bail!("--pitch must be within -89..89 degrees and --yaw finite");
+    }
+    if let Some(d) = camera.distance
+        && !(d.is_finite() && d > 1.0)
+    {
+        bail!("--distance is in bounding-sphere radii and must be > 1, got {d}");
+    }
+    Ok(camera)
+}
+
+/// `courtyard` and `forest` name the light probes compiled into lucent; anything else is a path
+/// to an equirectangular `.hdr` or `.exr` map.
+pub fn load_env_map(spec: &str) -> Result<EnvMap> {
+    Ok(match EnvMap::builtin(spec) {
+        Some(map) => map?,
+        None => EnvMap::load(Path::new(spec))?,
+    })
+}
+
+/// The SH projection for the solve and the rotated reflection copy of `map`.
+pub fn environment_of(map: &EnvMap, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
+    if !rotation.is_finite() {
+        bail!("--env-rotation must be finite");
+    }
+    let environment = Environment { rotation_deg: rotation, intensity, ..Environment::from_map(map) };
+    let (w, h) = REFLECTION_SIZE;
+    Ok(LoadedEnvironment { environment, reflection: map.downsampled(w, h).rotated(rotation) })
+}
+
+/// A key light in front of the object (towards the default camera), above and to the right, and
+/// a back light behind and above that shows the translucency of thin parts (Mertens fig. 6.3);
+/// each gives irradiance 1 at the object's centre. The CLI and the viewer both start with these.
+pub fn default_lights(mesh: &Mesh) -> [Light; 2] {
+    let (center, radius) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+    let key = center + Vec3::new(1.0, 1.1, 1.8) * radius;
+    let back = center + Vec3::new(-0.3, 0.6, -2.2) * radius;
+    [point_light(key, center), point_light(back, center)]
+}
+
+/// A white point light whose irradiance at the object's centre distance is 1 (arbitrary but
+/// consistent units), so images look alike whatever the mesh units.
+fn point_light(position: Vec3, center: Vec3) -> Light {
+    let d2 = position.distance_squared(center).max(1e-12);
+    Light::Point { position, intensity: Vec3::splat(d2) }
+}
+
+/// What a colour-and-distance material became, on one line: `material: albedo 0.800,0.600,0.400
+/// mfp 1,0.5,0.25 mm -> sigma_s' 0.9794,1.979,3.979 sigma_a 0.02065,0.02111,0.02089 mm^-1 (eta 1.3)`.
+pub fn colour_material_line(albedo: [f64; 3], mfp_mm: [f64; 3], m: &Material) -> String {
+    let join = |v: [f64; 3], f: &dyn Fn(f64) -> String| v.map(f).join(",");
+    // Four significant figures, with an exponent only outside 0.001..10000.
+    let sig4 = |x: f64| match x.abs() {
+        a if (1e-3..1e4).contains(&a) => {
+            let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+            format!("{x:.decimals$}")
+        }
+        _ => format!("{x:.3e}"),
+    };
+    format!(
+        "material: albedo {} mfp {} mm -> sigma_s' {} sigma_a {} mm^-1 (eta {})",
+        join(albedo, &|x| format!("{x:.3}")),
+        join(mfp_mm, &|x| format!("{x}")),
+        join(m.sigma_s_prime, &sig4),
+        join(m.sigma_a, &sig4),
+        m.eta
+    )
+}
+
+/// Parses three comma-separated numbers; errors start with `label` and end with `usage`.
+pub fn parse_three(label: &str, text: &str, usage: &str) -> Result<Vec3> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("{label}: {e}; {usage}"))?;
+    let [x, y, z] = v[..] else {
+        bail!("{label}: {} numbers given; {usage}", v.len());
+    };
+    Ok(Vec3::new(x, y, z))
+}
+
+/// Parses `point:x,y,z` (position, mesh units) or `dir:x,y,z` (direction the light travels).
+/// Point lights give irradiance 1 at the distance of `center`; directional lights give 1.
+pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
+    let usage = "expected point:x,y,z (position, mesh units) or dir:x,y,z (direction of travel)";
+    let (kind, rest) = spec.split_once(':').with_context(|| format!("--light {spec:?}: {usage}"))?;
+    let p = parse_three(&format!("--light {spec:?}"), rest, usage)?;
+    let range = crate::ranges::COORDINATE;
+    if !p.to_array().iter().all(|c| range.contains(c)) {
+        bail!("--light {spec:?}: coordinates must be within {}..={}", range.start(), range.end());
+    }
+    match kind.trim().to_ascii_lowercase().as_str() {
+        "point" => Ok(point_light(p, center)),
+        "dir" | "directional" => {
+            if p.length_squared() == 0.0 {
+                bail!("--light {spec:?}: a direction cannot be zero");
+            }
+            Ok(Light::Directional { direction: p.normalize(), irradiance: Vec3::ONE })
+        }
+        other => bail!("--light {spec:?}: unknown kind {other:?}; {usage}"),
+    }
+}
+
+/// The lights turned by `angle` radians about the vertical axis through `center` (positions
+/// and directions), for `--orbit-light`.
+pub fn orbit_lights(lights: &[SceneLight], center: Vec3, angle: f32) -> Vec<SceneLight> {
+    let q = glam::Quat::from_rotation_y(angle);
+    let turn = |p: Vec3| center + q * (p - center);
+    lights
+        .iter()
+        .map(|l| SceneLight {
+            light: match l.light {
+                Light::Point { position, intensity } => Light::Point { position: turn(position), intensity },
+                Light::Directional { direction, irradiance } => {
+                    Light::Directional { direction: q * direction, irradiance }
+                }
+                Light::Spot { position, direction, intensity, cone_angle, soft_edge } => Light::Spot {
+                    position: turn(position),
+                    direction: q * direction,
+                    intensity,
+                    cone_angle,
+                    soft_edge,
+                },
+            },
+            shadows: l.shadows,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+#[path = "resolve_tests.rs"]
+mod tests;

@@ -1,0 +1,91 @@
+use super::*;
+
+fn candle() -> Option<PathBuf> {
+    Some(format!("{}/../../examples/scenes/candle.toml", env!("CARGO_MANIFEST_DIR")).into())
+}
+
+#[test]
+fn lights_parse_and_bad_ones_are_rejected() {
+    let c = Vec3::ZERO;
+    assert_eq!(
+        parse_light("point:0,3,4", c).unwrap(),
+        Light::Point { position: Vec3::new(0.0, 3.0, 4.0), intensity: Vec3::splat(25.0) }
+    );
+    assert_eq!(
+        parse_light("dir: 0, -2, 0", c).unwrap(),
+        Light::Directional { direction: Vec3::NEG_Y, irradiance: Vec3::ONE }
+    );
+    for bad in ["point:1,2", "spot:1,2,3", "point", "dir:0,0,0", "point:a,b,c", "point:1,2,inf"] {
+        let e = parse_light(bad, c).unwrap_err().to_string();
+        assert!(e.contains(bad), "{bad}: {e}");
+    }
+}
+
+/// Flags given explicitly win over the scene file; the rest comes from the file.
+#[test]
+fn flags_override_the_scene_file() {
+    let s = Scene::resolve(&Overrides { scene: candle(), ..Default::default() }).unwrap();
+    assert_eq!(s.material().name, "Wax");
+    assert_eq!((s.scale(), s.exposure, s.camera.yaw_deg), (0.1, 1.0, 20.0));
+    assert_eq!(s.lights.len(), 2);
+    assert!(s.lights[0].shadows && !s.lights[1].shadows);
+    assert_eq!(s.deform, vec![Deformation::Twist { degrees: 40.0 }]);
+
+    let s = Scene::resolve(&Overrides {
+        scene: candle(),
+        material: Some("marble".into()),
+        scale: Some(0.2),
+        exposure: Some(2.0),
+        yaw: Some(-10.0),
+        lights: vec!["dir:0,-1,0".into()],
+        deform: Some("twist:10".into()),
+        no_shadows: true,
+        ..Default::default()
+    })
+    .unwrap();
+    assert_eq!(s.material().name, "Marble");
+    assert_eq!((s.scale(), s.exposure, s.camera.yaw_deg, s.camera.pitch_deg), (0.2, 2.0, -10.0, 10.0));
+    assert_eq!(s.lights.len(), 1);
+    assert!(!s.lights[0].shadows && !s.settings.environment_shadows);
+    assert_eq!(s.deform, vec![Deformation::Twist { degrees: 10.0 }]);
+}
+
+/// `--albedo`/`--mfp` invert to a material at eta 1.3, said on one line.
+#[test]
+fn colour_flags_make_the_material_and_say_so() {
+    let colour = Some(([0.8, 0.6, 0.4], [1.0, 0.5, 0.25]));
+    let s = Scene::resolve(&Overrides { colour, ..Default::default() }).unwrap();
+    let m = s.material();
+    assert_eq!(*m, Material::from_albedo_mfp("custom", [0.8, 0.6, 0.4], [1.0, 0.5, 0.25], 1.3).unwrap());
+    let line = colour_material_line([0.8, 0.6, 0.4], [1.0, 0.5, 0.25], m);
+    assert!(line.starts_with("material: albedo 0.800,0.600,0.400 mfp 1,0.5,0.25 mm -> sigma_s' "), "{line}");
+    assert!(line.ends_with(" mm^-1 (eta 1.3)") && !line.contains('\n'), "{line}");
+    let tiny = Material::from_albedo_mfp("t", [0.001; 3], [1e3; 3], 1.3).unwrap();
+    let tiny_line = colour_material_line([0.001; 3], [1e3; 3], &tiny);
+    assert!(tiny_line.contains("sigma_s' 1.3"), "{tiny_line}");
+}
+
+#[test]
+fn defaults_without_a_scene() {
+    let s = Scene::resolve(&Overrides::default()).unwrap();
+    assert_eq!((s.material().name.as_str(), s.scale(), s.exposure), ("Skimmilk", 0.05, 1.0));
+    assert_eq!(s.lights.len(), 2, "the default key and back lights");
+    assert!(s.lights.iter().all(|l| l.shadows), "default lights cast shadows");
+    assert!(s.environment.is_none() && s.deform.is_empty());
+    assert_eq!(s.settings(SolveMode::Render).mode, SolveMode::Render, "the caller's default mode");
+    // An environment alone needs no extra light.
+    let o = Overrides { env: Some("forest".into()), env_rotation: Some(45.0), ..Default::default() };
+    let s = Scene::resolve(&o).unwrap();
+    assert!(s.lights.is_empty());
+    assert_eq!(s.environment.unwrap().environment.rotation_deg, 45.0);
+}
+
+/// Orbiting keeps the distance to the centre and turns about +Y.
+#[test]
+fn orbit_turns_about_the_vertical_axis() {
+    let c = Vec3::new(1.0, 2.0, 3.0);
+    let l = [SceneLight::from(Light::Point { position: c + Vec3::X, intensity: Vec3::ONE })];
+    let turned = orbit_lights(&l, c, std::f32::consts::FRAC_PI_2);
+    let Light::Point { position, .. } = turned[0].light else { panic!() };
+    assert!((position - (c - Vec3::Z)).length() < 1e-6, "{position}");
+}
