@@ -528,14 +528,17 @@ pub struct ViewArgs {
     /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the built-in mesh when absent.
     #[arg(long)]
     pub mesh: Option<PathBuf>,
-    /// Material preset (case-insensitive), as for `lucent render`.
-    #[arg(long, default_value = "skimmilk")]
-    pub material: String,
-    /// Model scale: the largest side of the mesh's bounding box, in metres.
-    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true, default_value_t = 0.05)]
-    pub scale: f64,
+    /// Material preset (case-insensitive), as for `lucent render` [default: the scene's, else
+    /// skimmilk].
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Model scale: the largest side of the mesh's bounding box, in metres [default: the
+    /// scene's, else 0.05].
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::SCALE_M), allow_negative_numbers = true)]
+    pub scale: Option<f64>,
     /// Scene file (TOML, as for `lucent render`): mesh, material, scale, exposure, lights and
     /// environment (courtyard or forest); its deformations are baked into the starting mesh.
+    /// Flags given beside it win, as for `lucent render`.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Save a PNG of the final frame (3D view and panel) to this path, then exit (scripted run).

@@ -264,6 +264,8 @@ pub enum MeshSource {
 /// An environment ready for the solver and the renderer.
 #[derive(Clone, Debug)]
 pub struct LoadedEnvironment {
+    /// What named it: a built-in probe's name or the file's path as given.
+    pub name: String,
     /// SH coefficients with rotation and intensity, for the leaf irradiance.
     pub environment: Environment,
     /// A 256 x 128 equirect copy of the map for the GPU's Fresnel-weighted reflection, already
@@ -434,15 +436,7 @@ impl SceneFile {
                 EnvMap::load(&path)?
             }
         };
-        let environment = Environment {
-            rotation_deg: spec.rotation,
-            intensity: spec.intensity,
-            ..Environment::from_map(&map)
-        };
-        Ok(Some(LoadedEnvironment {
-            environment,
-            reflection: map.downsampled(256, 128).rotated(spec.rotation),
-        }))
+        resolve::environment_of(&spec.path, &map, spec.rotation, spec.intensity).map(Some)
     }
 }
 

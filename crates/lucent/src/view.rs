@@ -4,10 +4,9 @@ use crate::cli::ViewArgs;
 use crate::viewer::app::{App, Options, WorkerWake};
 use crate::viewer::scene_file;
 use crate::viewer::script::{self, Automation};
-use crate::viewer::state::ViewState;
 use crate::viewer::worker::MeshOrigin;
 use anyhow::Context as _;
-use lucent_core::bssrdf::Material;
+use lucent::scene::{Overrides, Scene};
 use winit::event_loop::EventLoop;
 
 /// Opens the viewer and runs until the window closes (or a scripted run finishes).
@@ -35,18 +34,16 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     if args.width < 200 || args.height < 150 {
         anyhow::bail!("--width/--height must be at least 200x150, got {}x{}", args.width, args.height);
     }
-    let (mesh, state) = match (&args.scene, &args.mesh) {
-        (Some(_), Some(_)) => anyhow::bail!("give either --scene or --mesh, not both"),
-        (Some(path), None) => {
-            let start = scene_file::load(path)?;
-            (MeshOrigin::Loaded(Box::new(start.mesh)), start.state)
-        }
-        (None, mesh) => {
-            let material = Material::by_name(&args.material).context("--material")?;
-            let origin = mesh.clone().map_or(MeshOrigin::Default, MeshOrigin::File);
-            (origin, ViewState::new(material, args.scale))
-        }
+    // The same resolution as `lucent render`: flags over the scene file over the defaults.
+    let overrides = Overrides {
+        scene: args.scene.clone(),
+        mesh: args.mesh.clone(),
+        material: args.material.clone(),
+        scale: args.scale,
+        ..Overrides::default()
     };
+    let start = scene_file::start(&Scene::resolve(&overrides)?)?;
+    let (mesh, state) = (MeshOrigin::Loaded(Box::new(start.mesh)), start.state);
     let actions = match &args.script {
         Some(s) => script::parse(s)?,
         None => Vec::new(),

@@ -70,7 +70,118 @@ pub fn spot_falloff(cos_angle: f32, cone_angle: f32, soft_edge: f32) -> f32 {
     }
 }
 
+/// The kind of a [`Light`], for editors and file formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LightKind {
+    /// [`Light::Point`].
+    Point,
+    /// [`Light::Spot`].
+    Spot,
+    /// [`Light::Directional`].
+    Directional,
+}
+
+impl LightKind {
+    /// Every kind, in the order editors list them.
+    pub const ALL: [LightKind; 3] = [LightKind::Point, LightKind::Spot, LightKind::Directional];
+
+    /// The kind's name (as scene files spell it).
+    pub fn name(self) -> &'static str {
+        match self {
+            LightKind::Point => "point",
+            LightKind::Spot => "spot",
+            LightKind::Directional => "directional",
+        }
+    }
+}
+
+/// Spot cone half-angle a light gets when it becomes a spot, radians (30 degrees).
+const DEFAULT_CONE: f32 = std::f32::consts::FRAC_PI_6;
+/// Soft edge a light gets when it becomes a spot (fraction of the cone angle).
+const DEFAULT_SOFT_EDGE: f32 = 0.2;
+
 impl Light {
+    /// Point, spot or directional.
+    pub fn kind(&self) -> LightKind {
+        match self {
+            Light::Point { .. } => LightKind::Point,
+            Light::Spot { .. } => LightKind::Spot,
+            Light::Directional { .. } => LightKind::Directional,
+        }
+    }
+
+    /// Position, mesh units (`None` for a directional light).
+    pub fn position(&self) -> Option<Vec3> {
+        match *self {
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
+            Light::Directional { .. } => None,
+        }
+    }
+
+    /// The direction the light shines (`None` for a point light, which shines everywhere).
+    pub fn direction(&self) -> Option<Vec3> {
+        match *self {
+            Light::Spot { direction, .. } | Light::Directional { direction, .. } => Some(direction),
+            Light::Point { .. } => None,
+        }
+    }
+
+    /// Strength per channel: radiant intensity (W/sr; point, spot on its axis) or irradiance
+    /// (W/m^2; directional).
+    pub fn power(&self) -> Rgb {
+        match *self {
+            Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity,
+            Light::Directional { irradiance, .. } => irradiance,
+        }
+    }
+
+    /// Moves a positional light (nothing for a directional one).
+    pub fn set_position(&mut self, p: Vec3) {
+        if let Light::Point { position, .. } | Light::Spot { position, .. } = self {
+            *position = p;
+        }
+    }
+
+    /// Turns a spot or directional light (nothing for a point light).
+    pub fn set_direction(&mut self, d: Vec3) {
+        if let Light::Spot { direction, .. } | Light::Directional { direction, .. } = self {
+            *direction = d;
+        }
+    }
+
+    /// Sets the strength per channel (see [`Light::power`]).
+    pub fn set_power(&mut self, p: Rgb) {
+        match self {
+            Light::Point { intensity, .. } | Light::Spot { intensity, .. } => *intensity = p,
+            Light::Directional { irradiance, .. } => *irradiance = p,
+        }
+    }
+
+    /// This light as `kind`, keeping what both have (position, direction, strength); a light
+    /// becoming positional is placed opposite its direction at `distance` from the origin, one
+    /// becoming directed points at the origin, a new spot gets a 30 degree cone.
+    pub fn with_kind(&self, kind: LightKind, distance: f32) -> Light {
+        let power = self.power();
+        let position = self
+            .position()
+            .unwrap_or_else(|| -self.direction().unwrap_or(Vec3::NEG_Y).normalize_or_zero() * distance);
+        let direction = self.direction().unwrap_or(-position);
+        match kind {
+            LightKind::Point => Light::Point { position, intensity: power },
+            LightKind::Directional => Light::Directional { direction, irradiance: power },
+            LightKind::Spot => match *self {
+                Light::Spot { .. } => *self,
+                _ => Light::Spot {
+                    position,
+                    direction,
+                    intensity: power,
+                    cone_angle: DEFAULT_CONE,
+                    soft_edge: DEFAULT_SOFT_EDGE,
+                },
+            },
+        }
+    }
+
     /// The light arriving at point `p` (mesh units), or `None` where it gets nothing (outside a
     /// spot's cone, or a light with zero direction).
     pub fn incident(&self, p: Vec3) -> Option<Incident> {

@@ -257,7 +257,9 @@ fn transport(o: &Overrides, file: Option<&SceneFile>) -> Result<Transport> {
 /// `--env` (with `--env-rotation`), else the file's environment.
 fn environment(o: &Overrides, file: Option<&SceneFile>) -> Result<Option<LoadedEnvironment>> {
     let env = match (&o.env, file) {
-        (Some(spec), _) => Some(environment_of(&load_env_map(spec)?, o.env_rotation.unwrap_or(0.0), 1.0)?),
+        (Some(spec), _) => {
+            Some(environment_of(spec, &load_env_map(spec)?, o.env_rotation.unwrap_or(0.0), 1.0)?)
+        }
         (None, Some(f)) => {
             let mut f = f.clone();
             if let (Some(spec), Some(r)) = (&mut f.environment, o.env_rotation) {
@@ -301,14 +303,15 @@ pub fn load_env_map(spec: &str) -> Result<EnvMap> {
     })
 }
 
-/// The SH projection for the solve and the rotated reflection copy of `map`.
-pub fn environment_of(map: &EnvMap, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
+/// The SH projection for the solve and the rotated reflection copy of `map`, named `name`.
+pub fn environment_of(name: &str, map: &EnvMap, rotation: f32, intensity: f32) -> Result<LoadedEnvironment> {
     if !rotation.is_finite() {
         bail!("--env-rotation must be finite");
     }
     let environment = Environment { rotation_deg: rotation, intensity, ..Environment::from_map(map) };
     let (w, h) = REFLECTION_SIZE;
-    Ok(LoadedEnvironment { environment, reflection: map.downsampled(w, h).rotated(rotation) })
+    let reflection = map.downsampled(w, h).rotated(rotation);
+    Ok(LoadedEnvironment { name: name.to_string(), environment, reflection })
 }
 
 /// A key light in front of the object (towards the default camera), above and to the right, and

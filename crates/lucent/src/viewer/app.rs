@@ -3,7 +3,6 @@
 //! to the worker, draw, take screenshots, advance the script.
 
 use super::camera::OrbitCamera;
-use super::core_adapter::{self, CAPABILITIES};
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
@@ -147,7 +146,9 @@ impl App {
         let worker = Worker::spawn(move || {
             let _ = proxy.send_event(WorkerWake);
         });
-        worker.send(Request::Load(self.mesh_origin.take().unwrap_or(MeshOrigin::Default)));
+        if let Some(origin) = self.mesh_origin.take() {
+            worker.send(Request::Load(origin));
+        }
         self.worker = Some(worker);
     }
 
@@ -167,7 +168,6 @@ impl App {
             solver: s.solution.solver,
             draw_ms: self.stats.draw_ms,
             fps: self.stats.fps,
-            caps: CAPABILITIES,
         }
     }
 
@@ -259,8 +259,11 @@ impl App {
             return;
         }
         if let Some(light) = state.params.lights.first_mut() {
-            light.position = glam::Quat::from_rotation_y(0.5 * dt) * light.position;
-            light.direction = -light.position;
+            if let Some(p) = light.position() {
+                let p = glam::Quat::from_rotation_y(0.5 * dt) * p;
+                light.set_position(p);
+                light.set_direction(-p);
+            }
         }
         self.last_progress = Instant::now();
     }
@@ -307,8 +310,8 @@ impl App {
                 state.deform.dents.push(dent);
             }
             Action::Light(p) => match state.params.lights.first_mut() {
-                Some(l) => l.position = p,
-                None => state.params.lights.push(super::state::LightSpec::point(p)),
+                Some(l) => l.set_position(p),
+                None => state.params.lights.push(super::ui::point_light(p)),
             },
             Action::Twist(k) => state.deform.twist = k,
             Action::Material(name) => {
@@ -339,7 +342,7 @@ impl App {
                 }
                 state.deform.noise_animated = true;
                 if state.params.lights.is_empty() {
-                    state.params.lights.push(super::state::LightSpec::point(glam::Vec3::new(0.0, 1.0, -2.0)));
+                    state.params.lights.push(super::ui::point_light(glam::Vec3::new(0.0, 1.0, -2.0)));
                 }
                 self.animate_until = Some(Instant::now() + Duration::from_secs_f64(seconds));
             }
@@ -420,7 +423,7 @@ fn draw_params(
         camera: render::camera_view(camera.view(), proj, camera.eye()),
         shading: Shading {
             eta: state.params.material.eta as f32,
-            lights: core_adapter::core_lights(&state.params.lights),
+            lights: state.params.lights.clone(),
             specular: if false_colour { 0.0 } else { 1.0 },
             environment: if false_colour || state.params.env == EnvChoice::None {
                 0.0

@@ -7,7 +7,6 @@
 //! It re-renders only when something it depends on changed (camera, light, mesh, settings,
 //! viewport size), so an idle window costs nothing.
 
-use super::state::LightSpec;
 use glam::Vec3;
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
@@ -84,14 +83,14 @@ impl HtsmPanel {
         egui_ctx: &egui::Context,
         mesh: &Arc<Mesh>,
         settings: &HtsmSettings,
-        lights: &[LightSpec],
+        lights: &[lucent_core::irradiance::Light],
         camera: CameraView,
         tone: ToneMap,
         size: (u32, u32),
     ) {
-        let light = super::core_adapter::core_lights(lights)
-            .into_iter()
-            .next()
+        let light = lights
+            .first()
+            .copied()
             .unwrap_or(Light::Directional { direction: Vec3::NEG_Z, irradiance: Vec3::ONE });
         let inputs = Inputs {
             mesh: mesh.clone(),

@@ -161,8 +161,10 @@ mod tests {
     #[test]
     fn settles_after_the_latest_state_is_solved_and_drawn() {
         let worker = Worker::spawn(|| {});
-        let mut scene = Scene::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05));
-        worker.send(Request::Load(MeshOrigin::Default));
+        let lights = vec![crate::viewer::ui::point_light(glam::Vec3::new(1.0, 1.1, 1.8))];
+        let mut scene = Scene::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05, lights));
+        let bunny = crate::viewer::core_adapter::normalise(lucent_core::mesh::embedded::bunny());
+        worker.send(Request::Load(MeshOrigin::Loaded(Box::new(bunny))));
         wait_for(&mut scene, &worker, |s| s.base.is_some());
         scene.sync(&worker);
         assert!(scene.solving() && !scene.settled());
@@ -174,7 +176,8 @@ mod tests {
         assert!(scene.settled());
 
         // Two quick edits: only the newest needs to arrive for the image to settle.
-        scene.state.params.lights[0].position.x += 0.5;
+        let p = scene.state.params.lights[0].position().unwrap();
+        scene.state.params.lights[0].set_position(p + glam::Vec3::X * 0.5);
         scene.sync(&worker);
         scene.state.deform.twist = 1.0;
         scene.sync(&worker);

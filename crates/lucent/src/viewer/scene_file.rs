@@ -1,81 +1,62 @@
-//! `lucent view --scene FILE`: a TOML scene (see [`crate::scene`]) turned into the viewer's
-//! start-up state. The viewer works in normalised mesh units (centred, bounding-box side 1), so
-//! light positions and intensities are converted. The file's deformations are baked into the mesh
-//! the viewer starts from; the panel's tools (dent, twist, noise) then act on top of them.
+//! `lucent view`'s start: the resolved [`Scene`] (flags and an optional scene file, as for
+//! `lucent render`) turned into the viewer's state. The viewer works in normalised mesh units
+//! (centred, bounding-box side 1), so light positions and intensities are converted. The
+//! scene's deformations are baked into the mesh the viewer starts from; the panel's tools (dent,
+//! twist, noise) then act on top of them.
 
 use super::core_adapter;
-use super::state::{EnvChoice, LightKind, LightSpec, ViewState};
-use crate::scene::SceneFile;
+use super::state::{EnvChoice, ViewState};
+use crate::scene::Scene;
 use glam::Vec3;
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
 use std::path::Path;
 
-/// What a scene file gives the viewer: the normalised mesh, the state and the exposure.
+/// What a scene gives the viewer: the normalised mesh and the state.
 pub struct SceneStart {
-    /// The scene's mesh, normalised (see [`core_adapter::normalise`]).
+    /// The scene's mesh, deformed and normalised (see [`core_adapter::normalise`]).
     pub mesh: Mesh,
-    /// Material, scale, lights and environment from the file.
+    /// Material, scale, lights and environment of the scene.
     pub state: ViewState,
 }
 
-/// Loads `path` (errors name the file) and converts it.
-pub fn load(path: &Path) -> anyhow::Result<SceneStart> {
-    let scene = SceneFile::load(path)?;
-    let mut rest = scene.load_mesh()?;
-    let mut deformed = Vec::new();
-    for d in scene.deformations()? {
-        d.apply(&rest, 1.0, &mut deformed);
-        rest = Mesh::new(std::mem::take(&mut deformed), rest.triangles);
-    }
+/// Converts `scene` (already validated) for the viewer; an environment the viewer does not
+/// offer is an error naming it.
+pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
+    let rest = scene.deformed(1.0);
     let (lo, hi) = rest.bounds();
     let (centre, extent) = (0.5 * (lo + hi), rest.extent().max(1e-12));
-    let mut state = ViewState::new(scene.material()?, scene.scale);
+    let lights = scene.lights.iter().map(|l| normalised_light(&l.light, centre, extent)).collect();
+    let mut state = ViewState::new(scene.material().clone(), scene.scale(), lights);
     state.exposure = scene.exposure;
-    state.params.lights = scene.lights(centre).iter().map(|l| light_spec(&l.light, centre, extent)).collect();
-    if let Some(first) = scene.lights.first() {
-        state.params.shadows = light_casts_shadows(first);
+    state.params.profile = scene.transport.profile;
+    state.params.single_scattering = scene.transport.single_scattering;
+    state.params.shadows = scene.lights.first().is_none_or(|l| l.shadows);
+    if let Some(mode) = scene.mode {
+        state.params.mode = mode;
     }
     if let Some(env) = &scene.environment {
-        state.params.env = env_choice(&env.path).ok_or_else(|| {
+        state.params.env = env_choice(&env.name).ok_or_else(|| {
             anyhow::anyhow!(
-                "{}: the viewer offers the built-in environments courtyard and forest, not {}",
-                path.display(),
-                env.path
+                "the viewer offers the built-in environments courtyard and forest, not {}",
+                env.name
             )
         })?;
-        state.params.env_rotation_deg = env.rotation;
-        state.params.env_strength = env.intensity;
+        state.params.env_rotation_deg = env.environment.rotation_deg;
+        state.params.env_strength = env.environment.intensity;
     }
     Ok(SceneStart { mesh: core_adapter::normalise(rest), state })
 }
 
-/// The UI's form of a core light given in the scene's mesh units: positions mapped to the
-/// normalised frame, and radiant intensities divided by `extent^2` so the irradiance at the
-/// mesh stays the same.
-fn light_spec(light: &Light, centre: Vec3, extent: f32) -> LightSpec {
-    let to_view = |p: Vec3| (p - centre) / extent;
-    let k = 1.0 / (extent * extent);
-    let (kind, position, direction, rgb, cone) = match *light {
-        Light::Point { position, intensity } => {
-            (LightKind::Point, to_view(position), -to_view(position), intensity * k, 30.0)
-        }
-        Light::Spot { position, direction, intensity, cone_angle, .. } => {
-            (LightKind::Spot, to_view(position), direction, intensity * k, cone_angle.to_degrees())
-        }
-        Light::Directional { direction, irradiance } => {
-            (LightKind::Directional, Vec3::Y, direction, irradiance, 30.0)
-        }
-    };
-    let power = rgb.max_element().max(1e-6);
-    LightSpec { kind, position, direction, color: rgb / power, power, spot_angle_deg: cone }
-}
-
-fn light_casts_shadows(l: &crate::scene::LightSpec) -> bool {
-    use crate::scene::LightSpec as S;
-    match l {
-        S::Point { shadows, .. } | S::Directional { shadows, .. } | S::Spot { shadows, .. } => *shadows,
+/// A light given in the scene's mesh units, in the viewer's normalised frame: positions mapped,
+/// and radiant intensities divided by `extent^2` so the irradiance at the mesh stays the same.
+fn normalised_light(light: &Light, centre: Vec3, extent: f32) -> Light {
+    let mut l = *light;
+    if let Some(p) = l.position() {
+        l.set_position((p - centre) / extent);
+        l.set_power(l.power() / (extent * extent));
     }
+    l
 }
 
 /// The viewer's choice for a scene's environment: a built-in probe's name, or a file of the
@@ -95,10 +76,10 @@ mod tests {
     fn point_light_keeps_its_irradiance() {
         let (centre, extent) = (Vec3::new(1.0, 2.0, 3.0), 10.0);
         let light = Light::Point { position: Vec3::new(1.0, 2.0, 23.0), intensity: Vec3::splat(400.0) };
-        let spec = light_spec(&light, centre, extent);
-        assert_eq!(spec.position, Vec3::new(0.0, 0.0, 2.0));
+        let l = normalised_light(&light, centre, extent);
+        assert_eq!(l.position(), Some(Vec3::new(0.0, 0.0, 2.0)));
         let e_scene = 400.0 / 20.0f32.powi(2);
-        let e_view = spec.power * spec.color.x / spec.position.length_squared();
+        let e_view = l.power().x / 2.0f32.powi(2);
         assert!((e_scene - e_view).abs() < 1e-5, "{e_scene} vs {e_view}");
     }
 

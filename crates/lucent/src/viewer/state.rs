@@ -4,68 +4,10 @@
 //! between frames).
 
 use glam::Vec3;
-use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
 use lucent_core::bssrdf::ProfileKind;
-
-/// Kind of a light in the lights list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LightKind {
-    /// Isotropic point light.
-    Point,
-    /// Point light restricted to a cone around `direction`.
-    Spot,
-    /// Distant light travelling along `direction`.
-    Directional,
-}
-
-impl LightKind {
-    /// All kinds, in the order the UI lists them.
-    pub const ALL: [LightKind; 3] = [LightKind::Point, LightKind::Spot, LightKind::Directional];
-
-    /// Name shown in the UI.
-    pub fn label(self) -> &'static str {
-        match self {
-            LightKind::Point => "point",
-            LightKind::Spot => "spot",
-            LightKind::Directional => "directional",
-        }
-    }
-}
-
-/// One light as the UI edits it. Positions are in the viewer's normalised mesh units (the mesh
-/// is centred at the origin with a bounding-box extent of 1, see [`super::scene_mesh`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct LightSpec {
-    /// Point, spot or directional.
-    pub kind: LightKind,
-    /// Position (point and spot), mesh units.
-    pub position: Vec3,
-    /// Direction the light travels (spot axis and directional), need not be unit.
-    pub direction: Vec3,
-    /// Colour, linear RGB in 0..1, multiplied by `power`.
-    pub color: Rgb,
-    /// Strength: radiant intensity (W/sr, point/spot) or irradiance (W/m^2, directional)
-    /// per unit of `color`. > 0.
-    pub power: f32,
-    /// Spot cone half-angle in degrees (spot only), 1..90.
-    pub spot_angle_deg: f32,
-}
-
-impl LightSpec {
-    /// A white point light at `position` whose irradiance on a surface at the origin facing it
-    /// is 1 (so the default exposure shows it without clipping).
-    pub fn point(position: Vec3) -> Self {
-        LightSpec {
-            kind: LightKind::Point,
-            position,
-            direction: -position,
-            color: Rgb::ONE,
-            power: position.length_squared().max(0.01),
-            spot_angle_deg: 30.0,
-        }
-    }
-}
+use lucent_core::irradiance::Light;
+pub use lucent_core::session::SolveMode;
 
 /// Environment map choice (Mertens §5.3 lights with an HDR environment too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,31 +54,6 @@ impl EnvChoice {
     }
 }
 
-/// Solver mode (Mertens §5.5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SolverMode {
-    /// Links kept; only irradiance is re-gathered when lighting changes.
-    Render,
-    /// Links kept and updated (demoted/promoted) after material or geometry changes.
-    Incremental,
-    /// Full hierarchical evaluation from scratch every solve, no stored links.
-    OnTheFly,
-}
-
-impl SolverMode {
-    /// All modes, in UI order.
-    pub const ALL: [SolverMode; 3] = [SolverMode::Render, SolverMode::Incremental, SolverMode::OnTheFly];
-
-    /// Name shown in the UI.
-    pub fn label(self) -> &'static str {
-        match self {
-            SolverMode::Render => "render",
-            SolverMode::Incremental => "incremental",
-            SolverMode::OnTheFly => "on-the-fly",
-        }
-    }
-}
-
 /// A dent (a bump of negative height) applied where the user clicked.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dent {
@@ -177,27 +94,26 @@ pub struct SolveParams {
     pub material: Material,
     /// Model scale: the mesh's largest bounding-box side, in metres (> 0).
     pub scale_m: f64,
-    /// The lights.
-    pub lights: Vec<LightSpec>,
+    /// The lights, in the viewer's normalised mesh units (the mesh centred with a bounding-box
+    /// side of 1).
+    pub lights: Vec<Light>,
     /// Environment map.
     pub env: EnvChoice,
     /// Environment rotation about the vertical axis, degrees.
     pub env_rotation_deg: f32,
     /// Environment strength multiplier (>= 0).
     pub env_strength: f32,
-    /// Solver mode.
-    pub mode: SolverMode,
+    /// Solver mode (Mertens §5.5).
+    pub mode: SolveMode,
     /// Diffusion profile (default [`ProfileKind::default`]: photon beam diffusion).
     pub profile: ProfileKind,
     /// Whether the single-scattering term is included (pbd, dipole).
     pub single_scattering: bool,
-    /// Refinement oracle threshold ε1 at the receiver (`Oracle::eps1`, transport mode: largest
-    /// relative change of the transport over a receiver cluster; smaller refines more).
-    pub epsilon1: f64,
-    /// Refinement oracle threshold ε2 at the emitter (`Oracle::eps2`, transport mode: largest
-    /// relative disagreement of an emitter's one-point estimate; smaller refines more).
-    pub epsilon2: f64,
-    /// Whether lights are shadowed by the mesh.
+    /// The refinement oracle (Mertens §5.2): mode and thresholds `eps1` (receiver), `eps2`
+    /// (emitter) and, in transport mode, `eps_abs` (relative to `R_d_total`). Default: the
+    /// profile's own ([`lucent_core::solver::Oracle::for_profile`]).
+    pub oracle: lucent_core::solver::Oracle,
+    /// Whether the mesh shadows the lights and the environment.
     pub shadows: bool,
     /// Figure 6.9: the face whose gathered-from clusters are shown, if that view is on (set
     /// from [`ViewState::show_clusters`] and [`ViewState::picked_face`]).
@@ -266,27 +182,24 @@ pub enum Tool {
 }
 
 impl ViewState {
-    /// The initial state for a material and model scale, with a key light in front-above and a
-    /// back light (translucency shows best lit from behind, Mertens fig. 6.3).
-    pub fn new(material: Material, scale_m: f64) -> Self {
+    /// The initial state for a material and model scale under `lights` (normalised mesh
+    /// units), solved in render mode (lights change more often than shapes here).
+    pub fn new(material: Material, scale_m: f64, lights: Vec<Light>) -> Self {
+        let profile = ProfileKind::default();
         ViewState {
             params: SolveParams {
                 material,
                 scale_m,
-                lights: vec![
-                    LightSpec::point(Vec3::new(1.0, 1.1, 1.8)),
-                    LightSpec::point(Vec3::new(-0.3, 0.4, -1.5)),
-                ],
+                lights,
                 env: EnvChoice::None,
                 env_rotation_deg: 0.0,
                 env_strength: 1.0,
-                mode: SolverMode::Render,
-                profile: ProfileKind::default(),
-                single_scattering: ProfileKind::default().single_scattering_by_default(),
+                mode: SolveMode::Render,
+                profile,
+                single_scattering: profile.single_scattering_by_default(),
                 // The profile's default thresholds (transport oracle), which meet 1% of the
                 // exact solve on the bunny.
-                epsilon1: lucent_core::solver::Oracle::for_profile(ProfileKind::default()).eps1 as f64,
-                epsilon2: lucent_core::solver::Oracle::for_profile(ProfileKind::default()).eps2 as f64,
+                oracle: lucent_core::solver::Oracle::for_profile(profile),
                 shadows: true,
                 cluster_face: None,
             },

@@ -3,12 +3,16 @@
 //! requests (screenshot, resets) in [`UiRequests`]; it never touches the GPU or the worker.
 
 use super::camera::OrbitCamera;
-use super::core_adapter::{Capabilities, Timings, level_colour};
+use super::core_adapter::{Timings, level_colour};
 use super::htsm::HtsmPanel;
-use super::state::{EnvChoice, LightKind, LightSpec, SolverMode, Tool, ViewMethod, ViewState};
+use super::state::{EnvChoice, SolveMode, Tool, ViewMethod, ViewState};
 use egui::{Color32, ComboBox, Slider, Ui};
 use glam::{Vec2, Vec3};
+use lucent_core::bssrdf::ProfileKind;
 use lucent_core::bssrdf::{Material, PRESETS};
+use lucent_core::irradiance::{Light, LightKind};
+use lucent_core::solver::Oracle;
+use lucent_core::solver::oracle::OracleMode;
 
 /// Read-only facts the panel displays.
 #[derive(Clone, Debug, Default)]
@@ -33,8 +37,6 @@ pub struct Status {
     pub draw_ms: f64,
     /// Frames per second, smoothed.
     pub fps: f64,
-    /// What the linked core modules can do.
-    pub caps: Capabilities,
 }
 
 /// One-off requests from the panel.
@@ -59,7 +61,7 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status, htsm: &Ht
             section(ui, "Material", true, |ui| material(ui, state));
             section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights));
             section(ui, "Environment", false, |ui| environment(ui, state));
-            section(ui, "Solver", true, |ui| solver(ui, state, status));
+            section(ui, "Solver", true, |ui| solver(ui, state));
             section(ui, "Deformation", true, |ui| deformation(ui, state));
             section(ui, "Timings", true, |ui| timings(ui, status));
         });
@@ -170,34 +172,51 @@ fn by_colour(ui: &mut Ui, state: &mut ViewState) {
     });
 }
 
-fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>) {
+/// A white point light at `position` (normalised mesh units) giving irradiance 1 at the origin.
+pub fn point_light(position: Vec3) -> Light {
+    Light::Point { position, intensity: Vec3::splat(position.length_squared().max(0.01)) }
+}
+
+/// The lights list: each core [`Light`] edited in place (kind, colour and power, position,
+/// direction, spot cone).
+fn lights(ui: &mut Ui, lights: &mut Vec<Light>) {
     let mut remove = None;
     for (i, l) in lights.iter_mut().enumerate() {
         ui.push_id(i, |ui| {
+            // Strength shown as a colour (its largest channel 1) times a power.
+            let power = l.power().max_element().max(1e-6);
+            let mut colour = (l.power() / power).to_array();
+            let mut new_power = power;
             ui.horizontal(|ui| {
-                ComboBox::from_id_salt("kind").selected_text(l.kind.label()).width(100.0).show_ui(ui, |ui| {
+                let mut kind = l.kind();
+                ComboBox::from_id_salt("kind").selected_text(kind.name()).width(100.0).show_ui(ui, |ui| {
                     for k in LightKind::ALL {
-                        ui.selectable_value(&mut l.kind, k, k.label());
+                        ui.selectable_value(&mut kind, k, k.name());
                     }
                 });
-                let mut rgb = l.color.to_array();
-                if ui.color_edit_button_rgb(&mut rgb).changed() {
-                    l.color = Vec3::from_array(rgb);
+                if kind != l.kind() {
+                    *l = l.with_kind(kind, 2.0);
                 }
+                ui.color_edit_button_rgb(&mut colour);
                 if ui.small_button("remove").clicked() {
                     remove = Some(i);
                 }
             });
-            if l.kind != LightKind::Directional {
-                vec3_sliders(ui, &mut l.position, -3.0..=3.0, "pos");
+            if let Some(mut p) = l.position() {
+                vec3_sliders(ui, &mut p, -3.0..=3.0, "pos");
+                l.set_position(p);
             }
-            if l.kind != LightKind::Point {
-                vec3_sliders(ui, &mut l.direction, -1.0..=1.0, "dir");
+            if let Some(mut d) = l.direction() {
+                vec3_sliders(ui, &mut d, -1.0..=1.0, "dir");
+                l.set_direction(d);
             }
-            if l.kind == LightKind::Spot {
-                ui.add(Slider::new(&mut l.spot_angle_deg, 1.0..=90.0).text("cone (°)"));
+            if let Light::Spot { cone_angle, .. } = l {
+                let mut deg = cone_angle.to_degrees();
+                ui.add(Slider::new(&mut deg, 1.0..=90.0).text("cone (°)"));
+                *cone_angle = deg.to_radians();
             }
-            ui.add(Slider::new(&mut l.power, 0.01..=100.0).logarithmic(true).text("power"));
+            ui.add(Slider::new(&mut new_power, 0.01..=100.0).logarithmic(true).text("power"));
+            l.set_power(Vec3::from_array(colour) * new_power);
             ui.separator();
         });
     }
@@ -205,7 +224,7 @@ fn lights(ui: &mut Ui, lights: &mut Vec<LightSpec>) {
         lights.remove(i);
     }
     if ui.button("Add light").clicked() {
-        lights.push(LightSpec::point(Vec3::new(0.0, 1.2, 1.2)));
+        lights.push(point_light(Vec3::new(0.0, 1.2, 1.2)));
     }
 }
 
@@ -216,6 +235,28 @@ fn vec3_sliders(ui: &mut Ui, v: &mut Vec3, range: std::ops::RangeInclusive<f32>,
             ui.add(egui::DragValue::new(c).speed(0.01).range(range.clone()));
         }
     });
+}
+
+/// The refinement oracle (Mertens §5.2): its mode, its thresholds, and a reset to the profile's
+/// defaults. Smaller thresholds refine more.
+fn oracle(ui: &mut Ui, o: &mut Oracle, profile: ProfileKind) {
+    ui.horizontal(|ui| {
+        ui.label("oracle");
+        ui.radio_value(&mut o.mode, OracleMode::Transport, "transport");
+        ui.radio_value(&mut o.mode, OracleMode::SolidAngle, "solid angle");
+        if ui.small_button("defaults").clicked() {
+            *o = Oracle { mode: o.mode, ..Oracle::for_profile(profile) };
+        }
+    });
+    let (unit, range) = match o.mode {
+        OracleMode::Transport => ("", 1e-3..=1.0),
+        OracleMode::SolidAngle => (" (sr)", 1e-4..=1.0),
+    };
+    ui.add(Slider::new(&mut o.eps1, range.clone()).logarithmic(true).text(format!("ε1 receiver{unit}")));
+    ui.add(Slider::new(&mut o.eps2, range).logarithmic(true).text(format!("ε2 emitter{unit}")));
+    if o.mode == OracleMode::Transport {
+        ui.add(Slider::new(&mut o.eps_abs, 1e-6..=1e-1).logarithmic(true).text("ε_abs (of R_d total)"));
+    }
 }
 
 fn environment(ui: &mut Ui, state: &mut ViewState) {
@@ -235,11 +276,11 @@ fn environment(ui: &mut Ui, state: &mut ViewState) {
     ui.checkbox(&mut p.shadows, "shadows");
 }
 
-fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
+fn solver(ui: &mut Ui, state: &mut ViewState) {
     let p = &mut state.params;
     ui.horizontal(|ui| {
-        for m in SolverMode::ALL {
-            ui.radio_value(&mut p.mode, m, m.label());
+        for m in SolveMode::ALL {
+            ui.radio_value(&mut p.mode, m, m.name());
         }
     });
     ui.horizontal(|ui| {
@@ -252,11 +293,7 @@ fn solver(ui: &mut Ui, state: &mut ViewState, status: &Status) {
         ui.checkbox(&mut p.single_scattering, "single scattering");
     }
     // Transport-oracle thresholds (relative errors): smaller refines more.
-    ui.add(Slider::new(&mut p.epsilon1, 1e-3..=1.0).logarithmic(true).text("ε1 receiver"));
-    ui.add(Slider::new(&mut p.epsilon2, 1e-3..=1.0).logarithmic(true).text("ε2 emitter"));
-    if !status.caps.hierarchical {
-        ui.weak("hierarchical solver not linked");
-    }
+    oracle(ui, &mut p.oracle, p.profile);
     ui.checkbox(&mut state.show_clusters, "figure 6.9: clusters gathered by a triangle");
     if state.show_clusters {
         state.tool = Tool::PickTriangle;
@@ -327,19 +364,20 @@ fn timings(ui: &mut Ui, status: &Status) {
 }
 
 /// Draws a marker for every positional light over the 3D view (`rect`, points).
-pub fn light_markers(ui: &Ui, rect: egui::Rect, camera: &OrbitCamera, lights: &[LightSpec]) {
+pub fn light_markers(ui: &Ui, rect: egui::Rect, camera: &OrbitCamera, lights: &[Light]) {
     let painter = ui.ctx().layer_painter(egui::LayerId::background());
     let size = Vec2::new(rect.width(), rect.height());
     let view_proj = camera.projection(size.x / size.y) * camera.view();
-    for l in lights.iter().filter(|l| l.kind != LightKind::Directional) {
-        let clip = view_proj * l.position.extend(1.0);
+    for l in lights {
+        let Some(position) = l.position() else { continue };
+        let clip = view_proj * position.extend(1.0);
         if clip.w <= 0.0 {
             continue;
         }
         let ndc = clip.truncate() / clip.w;
         let pos =
             egui::pos2(rect.left() + (ndc.x + 1.0) * 0.5 * size.x, rect.top() + (1.0 - ndc.y) * 0.5 * size.y);
-        let c = (l.color.normalize_or_zero() * 255.0).to_array().map(|v| v as u8);
+        let c = (l.power().normalize_or_zero() * 255.0).to_array().map(|v| v as u8);
         painter.circle(pos, 5.0, Color32::from_rgb(c[0], c[1], c[2]), (1.0, Color32::WHITE));
     }
 }

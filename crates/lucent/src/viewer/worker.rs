@@ -3,10 +3,9 @@
 //! always drains its queue and solves only the newest state (Mertens §5.5 interactivity: a
 //! stale solution is never worth finishing when a newer one is wanted).
 
-use super::core_adapter::{self, Solution, SolverSession};
+use super::core_adapter::{Solution, SolverSession};
 use super::state::SolveParams;
 use lucent_core::mesh::Mesh;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::thread::JoinHandle;
@@ -28,11 +27,7 @@ pub enum Request {
 
 /// Where the mesh comes from.
 pub enum MeshOrigin {
-    /// The built-in default mesh.
-    Default,
-    /// A mesh file.
-    File(PathBuf),
-    /// A mesh already loaded and normalised (from a scene file).
+    /// A mesh already loaded (by the resolved scene) and normalised.
     Loaded(Box<Mesh>),
 }
 
@@ -127,15 +122,11 @@ fn next_coalesced(requests: &Receiver<Request>) -> Option<Request> {
 }
 
 fn load(origin: MeshOrigin) -> Result<Mesh, String> {
-    let mesh = match origin {
-        MeshOrigin::File(p) => core_adapter::load_mesh(&p).map_err(|e| format!("{e:#}"))?,
-        MeshOrigin::Default => core_adapter::default_mesh(),
-        MeshOrigin::Loaded(mesh) => return Ok(*mesh),
-    };
+    let MeshOrigin::Loaded(mesh) = origin;
     if mesh.triangles.is_empty() {
         return Err("the mesh has no triangles".into());
     }
-    Ok(core_adapter::normalise(mesh))
+    Ok(*mesh)
 }
 
 #[cfg(test)]
