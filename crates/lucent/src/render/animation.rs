@@ -104,7 +104,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
             created_dir = true;
         }
         image.write(&out.join(frame_name(i, format)))?;
-        times.push(&solved, render_ms, ms_since(t));
+        times.push(solved, render_ms, ms_since(t));
         bar.set_message(format!("solve {:.0} ms", solved.timings.total_ms()));
         bar.inc(1);
     }

@@ -258,12 +258,12 @@ impl App {
             self.animate_until = None;
             return;
         }
-        if let Some(light) = state.params.lights.first_mut() {
-            if let Some(p) = light.position() {
-                let p = glam::Quat::from_rotation_y(0.5 * dt) * p;
-                light.set_position(p);
-                light.set_direction(-p);
-            }
+        if let Some(light) = state.params.lights.first_mut()
+            && let Some(p) = light.position()
+        {
+            let p = glam::Quat::from_rotation_y(0.5 * dt) * p;
+            light.set_position(p);
+            light.set_direction(-p);
         }
         self.last_progress = Instant::now();
     }

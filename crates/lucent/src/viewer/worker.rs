@@ -139,8 +139,8 @@ mod tests {
     #[test]
     fn queued_solves_coalesce_to_the_newest() {
         let (tx, rx) = channel();
-        let mesh = Arc::new(core_adapter::default_mesh());
-        let params = ViewState::new(Material::by_name("marble").unwrap(), 0.05).params;
+        let mesh = Arc::new(lucent_core::mesh::generate::icosphere(1));
+        let params = ViewState::new(Material::by_name("marble").unwrap(), 0.05, Vec::new()).params;
         for generation in 1..=5 {
             tx.send(Request::Solve { generation, mesh: mesh.clone(), params: params.clone() }).unwrap();
         }
