@@ -4,7 +4,6 @@
 mod bench;
 mod cli;
 mod render;
-mod render_htsm;
 mod view;
 mod viewer;
 

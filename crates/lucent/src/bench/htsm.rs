@@ -10,7 +10,7 @@
 
 use crate::cli::{BenchArgs, Cli, Command, RenderArgs};
 use crate::render::Scene;
-use crate::render_htsm::{build_volume, htsm_params};
+use crate::render::htsm::{build_volume, htsm_params};
 use anyhow::{Context, Result};
 use clap::Parser;
 use lucent_gpu::GpuContext;

@@ -9,11 +9,12 @@
 //!   GPU frame, likewise.
 //! * [`animation`]: `--frames N`, a deformation ramp or an orbiting light.
 //!
-//! `--method htsm` takes a separate path ([`render_htsm`]): Shopf 2007 renders on the GPU from
+//! `--method htsm` takes its own GPU path ([`htsm`]): Shopf 2007 renders on the GPU from
 //! light-view maps and has no per-vertex solve.
 
 pub mod animation;
 pub mod frame;
+pub mod htsm;
 pub mod output;
 
 pub use crate::scene::Scene;
@@ -176,7 +177,7 @@ fn render_mertens(
 
 /// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.
 fn render_htsm(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(Frame, Timings)> {
-    crate::render_htsm::render(scene, args, format)
+    htsm::render(scene, args, format)
 }
 
 pub(crate) fn tone_map(args: &RenderArgs, exposure: f32) -> ToneMap {
