@@ -6,7 +6,8 @@
 //!
 //! * [`context`]: [`GpuContext`] (device, queue, adapter) and the shared texture formats.
 //! * [`readback`]: textures and buffers back to the CPU (row padding handled).
-//! * [`camera`]: an orbit camera framing a bounding sphere.
+//! * [`camera`]: the orbit camera framing a bounding sphere (renderer, scene files and viewer:
+//!   orbit, pan, zoom, picking rays).
 //! * [`mesh_pass`]: per-vertex `B / pi` times the per-pixel exit Fresnel factor, highlights and
 //!   the environment-reflection hook, into an HDR target.
 //! * [`tonemap`]: exposure, gamma curve or ACES fit, background.

@@ -372,6 +372,7 @@ impl Scene {
             pitch_deg: self.camera.pitch,
             distance: self.camera.distance,
             fov_y_deg: self.camera.fov,
+            ..OrbitCamera::default()
         }
     }
 

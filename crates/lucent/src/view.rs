@@ -35,16 +35,16 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     if args.width < 200 || args.height < 150 {
         anyhow::bail!("--width/--height must be at least 200x150, got {}x{}", args.width, args.height);
     }
-    let (mesh, state) = match (&args.scene, &args.mesh) {
+    let (mesh, state, camera) = match (&args.scene, &args.mesh) {
         (Some(_), Some(_)) => anyhow::bail!("give either --scene or --mesh, not both"),
         (Some(path), None) => {
             let start = scene_file::load(path)?;
-            (MeshOrigin::Loaded(Box::new(start.mesh)), start.state)
+            (MeshOrigin::Loaded(Box::new(start.mesh)), start.state, Some(start.camera))
         }
         (None, mesh) => {
             let material = Material::by_name(&args.material).context("--material")?;
             let origin = mesh.clone().map_or(MeshOrigin::Default, MeshOrigin::File);
-            (origin, ViewState::new(material, args.scale))
+            (origin, ViewState::new(material, args.scale), None)
         }
     };
     let actions = match &args.script {
@@ -54,5 +54,5 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     let scripted = args.frames.is_some() || args.script.is_some() || args.screenshot.is_some();
     let automation =
         scripted.then(|| Automation::new(args.frames.unwrap_or(10), actions, args.screenshot.clone()));
-    Ok(Options { mesh, state, automation, size: (args.width, args.height) })
+    Ok(Options { mesh, state, camera, automation, size: (args.width, args.height) })
 }

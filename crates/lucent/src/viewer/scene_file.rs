@@ -17,6 +17,9 @@ pub struct SceneStart {
     pub mesh: Mesh,
     /// Material, scale, lights and environment from the file.
     pub state: ViewState,
+    /// The `[camera]` table as it is: the viewer frames the mesh's bounding sphere as
+    /// `lucent render` does (see [`super::framing`]).
+    pub camera: lucent_gpu::camera::OrbitCamera,
 }
 
 /// Loads `path` (errors name the file) and converts it.
@@ -47,7 +50,7 @@ pub fn load(path: &Path) -> anyhow::Result<SceneStart> {
         state.params.env_rotation_deg = env.rotation;
         state.params.env_strength = env.intensity;
     }
-    Ok(SceneStart { mesh: core_adapter::normalise(rest), state })
+    Ok(SceneStart { mesh: core_adapter::normalise(rest), state, camera: scene.camera() })
 }
 
 /// The UI's form of a core light given in the scene's mesh units: positions mapped to the
