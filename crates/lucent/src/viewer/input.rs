@@ -1,7 +1,7 @@
 //! Mouse and keyboard over the 3D view: camera control, denting by click-drag, triangle
 //! picking. egui sees every event first; only what it does not consume arrives here.
 
-use super::pick;
+use super::pick::{self, Picker};
 use super::state::{Dent, Tool, ViewState};
 use glam::Vec2;
 use lucent_core::mesh::Mesh;
@@ -32,6 +32,8 @@ pub struct Input {
     orbiting: bool,
     panning: bool,
     dent: Option<DentDrag>,
+    /// The mesh's BVH, kept between clicks.
+    picker: Picker,
 }
 
 /// The 3D viewport in physical pixels: (top-left, size).
@@ -62,7 +64,7 @@ impl Input {
             MouseButton::Left => {
                 let hit = mesh.and_then(|m| {
                     let (o, d) = camera.ray(self.cursor - view.0, view.1);
-                    pick::pick(m, o, d)
+                    self.picker.pick(m, o, d)
                 });
                 match (state.tool, hit) {
                     (Tool::Dent, Some(h)) => {
@@ -109,9 +111,9 @@ impl Input {
         }
     }
 
-    /// Forgets held buttons (focus lost, pointer left the window).
+    /// Forgets held buttons (focus lost, pointer left the window); keeps the picking tree.
     pub fn release_all(&mut self) {
-        *self = Input { cursor: self.cursor, ..Default::default() };
+        *self = Input { cursor: self.cursor, picker: std::mem::take(&mut self.picker), ..Default::default() };
     }
 }
 

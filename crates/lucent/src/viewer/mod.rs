@@ -7,7 +7,7 @@
 //! * [`render`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
 //! * [`ui`]: the egui side panel.
 //! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_gpu::camera`) frames,
-//!   mouse handling, ray picking.
+//!   mouse handling, ray picking through the mesh's BVH.
 //! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
 //! * [`worker`]: the solve thread (coalesced requests).
 //! * [`core_adapter`]: every call into `lucent-core`, in one place.
