@@ -13,6 +13,7 @@
 //! * [`tonemap`]: exposure, gamma curve or ACES fit, background.
 //! * [`offscreen`]: the two passes into offscreen targets and read-back to an image.
 //! * [`htsm`]: Heterogeneous Translucent Shadow Maps (Shopf 2007).
+//! * [`test_support`]: tests that skip with a note where no adapter exists (and fail under CI).
 
 pub mod camera;
 pub mod context;
@@ -20,6 +21,7 @@ pub mod htsm;
 pub mod mesh_pass;
 pub mod offscreen;
 pub mod readback;
+pub mod test_support;
 pub mod tonemap;
 
 pub use context::{DEPTH_FORMAT, GpuContext, GpuError, HDR_FORMAT, LDR_FORMAT};
