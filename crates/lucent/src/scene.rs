@@ -378,6 +378,7 @@ impl SceneFile {
             pitch_deg: self.camera.pitch,
             distance: self.camera.distance,
             fov_y_deg: self.camera.fov,
+            ..OrbitCamera::default()
         }
     }
 

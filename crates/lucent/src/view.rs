@@ -43,6 +43,8 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
         ..Overrides::default()
     };
     let start = scene_file::start(&Scene::resolve(&overrides)?)?;
+    // A scene file's `[camera]` as it is; without one, the viewer's home view.
+    let camera = args.scene.is_some().then_some(start.camera);
     let (mesh, state) = (MeshOrigin::Loaded(Box::new(start.mesh)), start.state);
     let actions = match &args.script {
         Some(s) => script::parse(s)?,
@@ -51,5 +53,5 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     let scripted = args.frames.is_some() || args.script.is_some() || args.screenshot.is_some();
     let automation =
         scripted.then(|| Automation::new(args.frames.unwrap_or(10), actions, args.screenshot.clone()));
-    Ok(Options { mesh, state, automation, size: (args.width, args.height) })
+    Ok(Options { mesh, state, camera, automation, size: (args.width, args.height) })
 }

@@ -2,6 +2,8 @@
 //! to PNGs of the requested size with the object in it; bad input gives exit code 1, a one-line
 //! message naming the culprit, and no output file or directory.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -56,6 +58,9 @@ fn luminance(p: &image::Rgba<u8>) -> f32 {
 
 #[test]
 fn default_scene_renders_an_object_of_the_requested_size() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("default");
     let out = dir.join("default.png");
     let run = lucent(&["render", "--width", "160", "--height", "120", "--out", out.to_str().unwrap()], &[]);
@@ -140,6 +145,9 @@ fn object_luminance(img: &image::RgbaImage) -> f32 {
 
 #[test]
 fn example_scenes_render() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("scenes");
     for name in ["candle", "bunny_courtyard", "bunny_spot"] {
         let out = dir.join(format!("{name}.png"));
@@ -157,6 +165,9 @@ fn example_scenes_render() {
 /// darker image of the same scene.
 #[test]
 fn flags_override_the_scene() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("override");
     let scene = examples().join("candle.toml");
     let mut lum = Vec::new();
@@ -207,6 +218,9 @@ fn bad_scene_field_is_one_clean_error_naming_file_and_field() {
 /// stdout, and the deformation visible as frames that differ.
 #[test]
 fn frames_write_a_numbered_sequence() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("frames");
     let out = dir.join("anim");
     let run = lucent(
@@ -240,6 +254,9 @@ fn frames_write_a_numbered_sequence() {
 
 #[test]
 fn orbit_light_frames_differ() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("orbit");
     let out = dir.join("orbit");
     let o = out.to_str().unwrap();
@@ -283,6 +300,9 @@ fn bad_animations_are_clean_errors_without_output() {
 /// missing map is a clean error naming it.
 #[test]
 fn environment_flag_lights_the_object() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("env");
     let out = dir.join("env.png");
     let o = out.to_str().unwrap();
@@ -312,6 +332,9 @@ fn environment_flag_lights_the_object() {
 
 #[test]
 fn shrink_wrap_hierarchy_renders_the_wrapped_mesh() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("shrink_wrap");
     let out = dir.join("wrapped.png");
     let run = lucent(
@@ -367,6 +390,9 @@ fn shrink_wrap_hierarchy_renders_the_wrapped_mesh() {
 
 #[test]
 fn oracle_flag_trades_links_for_accuracy() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("oracle");
     let links_of = |oracle: &str| {
         let out = dir.join(format!("{}.png", oracle.replace([':', ','], "_")));
@@ -408,6 +434,9 @@ fn oracle_flag_trades_links_for_accuracy() {
 /// object gets brighter and never darker; out of range is a usage error (exit 2).
 #[test]
 fn bounces_add_light_between_parts() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let dir = scratch("bounces");
     let render = |bounces: &str| {
         let out = dir.join(format!("b{bounces}.png"));

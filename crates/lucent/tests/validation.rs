@@ -5,6 +5,8 @@
 //! measured by `validation/lucent_validation.py compare --write-bounds`, plus margins). A change
 //! that moves lucent away from the path tracer fails here.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -81,6 +83,9 @@ fn figures(w: usize, h: usize, ours: &[[f32; 4]], a: &[[f32; 4]], b: &[[f32; 4]]
 
 #[test]
 fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
+    if !common::gpu_or_skip() {
+        return;
+    }
     let root = root();
     let cases: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(root.join("validation/cases.json")).unwrap()).unwrap();

@@ -1,6 +1,9 @@
 //! The viewer end to end: `lucent view` in a real window under Xvfb (Mesa's lavapipe or
 //! llvmpipe draws it), driven by a script that dents the mesh and moves a light, with a
-//! screenshot before and after. Needs `xvfb-run` (Debian: `apt-get install xvfb xauth`).
+//! screenshot before and after. Needs `xvfb-run` (Debian: `apt-get install xvfb xauth`) and a
+//! GPU adapter; without them the tests skip with a note, except under CI (see `common`).
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -8,11 +11,6 @@ use std::process::Command;
 /// Background of the 3D view in the PNG: `viewer::mesh_pass::BACKGROUND` (0.055, 0.06, 0.07)
 /// written as 8-bit display values.
 const BACKGROUND: [u8; 3] = [14, 15, 18];
-
-fn find_on_path(name: &str) -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path).map(|dir| dir.join(name)).find(|p| p.is_file())
-}
 
 /// The 3D viewport `(x, y, width, height)` that the viewer reports for a saved screenshot.
 fn viewport_of(stdout: &str, file: &str) -> [u32; 4] {
@@ -39,18 +37,13 @@ fn differs_from_background(p: &image::Rgb<u8>) -> bool {
 }
 
 /// Runs `lucent view` under Xvfb in `dir` with `script`, saving the final frame to `last`;
-/// returns the viewer's stdout, or `None` when `xvfb-run` is missing and this is not CI (the
-/// test then says it was skipped and how to install it; under `CI` a missing Xvfb fails).
+/// returns the viewer's stdout, or `None` when `xvfb-run` or an adapter is missing (the test
+/// is then skipped with a note, or fails under CI: see `common`).
 fn run_viewer(dir: &Path, script: &str, last: &str) -> Option<String> {
-    let Some(xvfb) = find_on_path("xvfb-run") else {
-        let how = "the viewer test needs a virtual X server: install it with `apt-get install xvfb xauth` \
-                   (.ci/run does)";
-        if std::env::var_os("CI").is_some() {
-            panic!("xvfb-run is not installed under CI: {how}");
-        }
-        eprintln!("SKIPPED: xvfb-run is not installed; {how}");
+    let xvfb = common::xvfb_run_or_skip()?;
+    if !common::gpu_or_skip() {
         return None;
-    };
+    }
     std::fs::create_dir_all(dir).unwrap();
     let output = Command::new(xvfb)
         .args(["-a", "-s", "-screen 0 1280x1024x24"])

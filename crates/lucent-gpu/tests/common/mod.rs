@@ -5,12 +5,6 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use lucent_gpu::GpuContext;
-
-/// The context, or a failure that says what is missing (tests must not skip silently).
-pub fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
-}
 
 /// A unit icosphere subdivided `levels` times (20 * 4^levels faces), counter-clockwise seen
 /// from outside. Returns positions (also the unit normals) and triangles.

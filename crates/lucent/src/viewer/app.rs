@@ -2,7 +2,7 @@
 //! the scene, and runs one frame per redraw: take worker replies, run the UI, send the new state
 //! to the worker, draw, take screenshots, advance the script.
 
-use super::camera::OrbitCamera;
+use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
@@ -16,6 +16,7 @@ use super::worker::{MeshOrigin, Request, Worker};
 use anyhow::Context as _;
 use glam::Vec2;
 use lucent_core::bssrdf::Material;
+use lucent_gpu::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::Shading;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -36,6 +37,9 @@ pub struct Options {
     pub mesh: MeshOrigin,
     /// Initial state (material, scale, lights...).
     pub state: ViewState,
+    /// The scene file's camera (degrees, radii of the mesh's bounding sphere), framed as
+    /// `lucent render` frames it; `None`: the viewer's home view ([`super::framing::home`]).
+    pub camera: Option<OrbitCamera>,
     /// Scripted run, if any.
     pub automation: Option<Automation>,
     /// Window inner size, logical pixels.
@@ -74,7 +78,7 @@ pub struct App {
     proxy: EventLoopProxy<WorkerWake>,
     worker: Option<Worker>,
     scene: Scene,
-    camera: OrbitCamera,
+    framing: Framing,
     input: Input,
     automation: Option<Automation>,
     last_progress: Instant,
@@ -98,7 +102,7 @@ impl App {
             proxy,
             worker: None,
             scene: Scene::new(options.state),
-            camera: OrbitCamera::default(),
+            framing: Framing::new(options.camera),
             input: Input::default(),
             automation: options.automation,
             last_progress: Instant::now(),
@@ -206,25 +210,26 @@ impl App {
         if state.method == ViewMethod::Htsm
             && let Some(mesh) = &self.scene.mesh
         {
-            let params = draw_params(&self.camera, state, self.viewport, false);
+            let params = draw_params(&self.framing, state, self.viewport, false);
             let size = (self.viewport.1.x as u32, self.viewport.1.y as u32);
             let (ctx, lights) = (&surface.gfx.ctx, &state.params.lights);
             let htsm = &mut surface.htsm;
             htsm.update(ctx, &surface.egui_ctx, mesh, &state.htsm, lights, params.camera, params.tone, size);
         }
-        let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.camera);
+        let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.framing);
         self.viewport = viewport;
         if requests.reset_camera {
-            self.camera = OrbitCamera::default();
+            self.framing.reset();
         }
         if requests.screenshot {
             self.pending_shot = Some(screenshot::timestamped_path());
         }
         self.scene.sync(worker);
+        self.framing.update(self.scene.base.as_ref(), self.scene.mesh.as_ref());
         upload_scene(surface, &mut self.scene)?;
         let ui = EguiFrame::new(surface, output);
         let false_colour = self.scene.solution.clusters.is_some();
-        let mut params = draw_params(&self.camera, &self.scene.state, viewport, false_colour);
+        let mut params = draw_params(&self.framing, &self.scene.state, viewport, false_colour);
         if !surface.renderer.reflects() {
             params.shading.environment = 0.0;
         }
@@ -318,11 +323,7 @@ impl App {
                 state.params.material = Material::by_name(&name)?;
             }
             Action::Scale(m) => state.params.scale_m = m,
-            Action::Camera(yaw, pitch, distance) => {
-                self.camera.yaw = yaw.to_radians();
-                self.camera.pitch = pitch.to_radians();
-                self.camera.distance = distance;
-            }
+            Action::Camera(yaw, pitch, distance) => self.framing.place(yaw, pitch, distance),
             Action::Exposure(k) => state.exposure = k,
             Action::Clusters(p) => {
                 let mesh = self.scene.mesh.as_ref().context("clusters: no mesh")?;
@@ -362,22 +363,18 @@ impl App {
             WindowEvent::MouseInput { state, button, .. } => {
                 let inside = self.cursor_in_viewport();
                 if *state == ElementState::Released || inside {
-                    self.input.button(
-                        *button,
-                        *state,
-                        self.viewport,
-                        &self.camera,
-                        &mut self.scene.state,
-                        mesh.as_deref(),
-                    );
+                    let size = self.viewport.1;
+                    let camera = self.framing.view(size.x / size.y.max(1.0));
+                    let (view, scene) = (self.viewport, &mut self.scene.state);
+                    self.input.button(*button, *state, view, &camera, scene, mesh.as_ref());
                 }
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let p = Vec2::new(position.x as f32, position.y as f32);
-                self.input.moved(p, self.viewport, &mut self.camera);
+                self.input.moved(p, self.viewport, &mut self.framing.camera);
             }
             WindowEvent::MouseWheel { delta, .. } if self.cursor_in_viewport() => {
-                self.input.wheel(*delta, &mut self.camera)
+                self.input.wheel(*delta, self.viewport, &mut self.framing.camera)
             }
             WindowEvent::CursorLeft { .. } | WindowEvent::Focused(false) => self.input.release_all(),
             _ => {}
@@ -413,14 +410,13 @@ impl App {
 /// The 3D pass's parameters for the camera, the state and the viewport's aspect ratio;
 /// `false_colour` shows the uploaded colours as they are (no highlight, exposure 1).
 fn draw_params(
-    camera: &OrbitCamera,
+    framing: &Framing,
     state: &ViewState,
     (_, size): ViewportRect,
     false_colour: bool,
 ) -> DrawParams {
-    let proj = camera.projection(size.x / size.y.max(1.0));
     DrawParams {
-        camera: render::camera_view(camera.view(), proj, camera.eye()),
+        camera: framing.view(size.x / size.y.max(1.0)),
         shading: Shading {
             eta: state.params.material.eta as f32,
             lights: state.params.lights.clone(),
@@ -453,7 +449,7 @@ fn run_ui(
     surface: &mut Surface,
     state: &mut ViewState,
     status: &Status,
-    camera: &OrbitCamera,
+    framing: &Framing,
 ) -> (egui::FullOutput, ui::UiRequests, ViewportRect) {
     let raw = surface.egui_state.take_egui_input(&surface.window);
     let mut requests = ui::UiRequests::default();
@@ -468,7 +464,8 @@ fn run_ui(
             let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
             root.painter().image(texture, central, uv, egui::Color32::WHITE);
         }
-        ui::light_markers(root, central, camera, &state.params.lights);
+        let camera = framing.view(central.width() / central.height().max(1.0));
+        ui::light_markers(root, central, &camera, &state.params.lights);
     });
     surface.egui_state.handle_platform_output(&surface.window, output.platform_output.clone());
     let ppp = output.pixels_per_point;

@@ -1,11 +1,12 @@
 //! Mouse and keyboard over the 3D view: camera control, denting by click-drag, triangle
 //! picking. egui sees every event first; only what it does not consume arrives here.
 
-use super::camera::OrbitCamera;
-use super::pick;
+use super::pick::{self, Picker};
 use super::state::{Dent, Tool, ViewState};
 use glam::Vec2;
 use lucent_core::mesh::Mesh;
+use lucent_gpu::camera::{CameraView, OrbitCamera};
+use std::sync::Arc;
 use std::time::Instant;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta};
 
@@ -31,6 +32,8 @@ pub struct Input {
     orbiting: bool,
     panning: bool,
     dent: Option<DentDrag>,
+    /// The mesh's BVH, kept between clicks.
+    picker: Picker,
 }
 
 /// The 3D viewport in physical pixels: (top-left, size).
@@ -42,15 +45,15 @@ impl Input {
         self.dent.is_some()
     }
 
-    /// A button press or release over the 3D view.
+    /// A button press or release over the 3D view; `camera` is framed for the viewport.
     pub fn button(
         &mut self,
         button: MouseButton,
         pressed: ElementState,
         view: ViewportRect,
-        camera: &OrbitCamera,
+        camera: &CameraView,
         state: &mut ViewState,
-        mesh: Option<&Mesh>,
+        mesh: Option<&Arc<Mesh>>,
     ) {
         let down = pressed == ElementState::Pressed;
         match button {
@@ -61,7 +64,7 @@ impl Input {
             MouseButton::Left => {
                 let hit = mesh.and_then(|m| {
                     let (o, d) = camera.ray(self.cursor - view.0, view.1);
-                    pick::pick(m, o, d)
+                    self.picker.pick(m, o, d)
                 });
                 match (state.tool, hit) {
                     (Tool::Dent, Some(h)) => {
@@ -85,17 +88,17 @@ impl Input {
         if self.orbiting {
             camera.orbit(delta);
         } else if self.panning {
-            camera.pan(delta, view.1.y);
+            camera.pan(delta, view.1);
         }
     }
 
-    /// Mouse wheel: zoom.
-    pub fn wheel(&mut self, delta: MouseScrollDelta, camera: &mut OrbitCamera) {
+    /// Mouse wheel over the 3D view: zoom.
+    pub fn wheel(&mut self, delta: MouseScrollDelta, view: ViewportRect, camera: &mut OrbitCamera) {
         let lines = match delta {
             MouseScrollDelta::LineDelta(_, y) => y,
             MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
         };
-        camera.zoom(lines);
+        camera.zoom(lines, view.1.x / view.1.y.max(1.0));
     }
 
     /// Per frame: a held dent deepens with time.
@@ -108,9 +111,9 @@ impl Input {
         }
     }
 
-    /// Forgets held buttons (focus lost, pointer left the window).
+    /// Forgets held buttons (focus lost, pointer left the window); keeps the picking tree.
     pub fn release_all(&mut self) {
-        *self = Input { cursor: self.cursor, ..Default::default() };
+        *self = Input { cursor: self.cursor, picker: std::mem::take(&mut self.picker), ..Default::default() };
     }
 }
 

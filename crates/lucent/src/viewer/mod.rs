@@ -6,7 +6,8 @@
 //! * [`gfx`]: adapter, device and window surface (format, present mode, resize, minimise).
 //! * [`render`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
 //! * [`ui`]: the egui side panel.
-//! * [`camera`], [`input`], [`pick`]: orbit camera, mouse handling, ray picking.
+//! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_gpu::camera`) frames,
+//!   mouse handling, ray picking through the mesh's BVH.
 //! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
 //! * [`worker`]: the solve thread (coalesced requests).
 //! * [`core_adapter`]: every call into `lucent-core`, in one place.
@@ -14,8 +15,8 @@
 //! * [`scene_file`]: start-up state from a TOML scene.
 
 pub mod app;
-pub mod camera;
 pub mod core_adapter;
+pub mod framing;
 pub mod gfx;
 pub mod htsm;
 pub mod input;

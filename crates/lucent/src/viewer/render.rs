@@ -6,7 +6,6 @@
 //! pass also reflects a small copy of the map, Fresnel-weighted (§5.4).
 
 use super::state::EnvChoice;
-use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::irradiance::EnvMap;
 use lucent_core::mesh::Mesh;
@@ -239,11 +238,6 @@ impl ViewRenderer {
 /// The tone curve the viewer uses: the paper's gamma curve over [`BACKGROUND`].
 pub fn tone_map(exposure: f32) -> ToneMap {
     ToneMap { exposure, background: BACKGROUND, ..Default::default() }
-}
-
-/// A camera view from eye, view and projection matrices.
-pub fn camera_view(view: glam::Mat4, proj: glam::Mat4, eye: Vec3) -> CameraView {
-    CameraView { view, proj, view_proj: proj * view, eye }
 }
 
 fn set_viewport(pass: &mut wgpu::RenderPass<'_>, v: Viewport) {

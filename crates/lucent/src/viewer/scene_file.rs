@@ -18,6 +18,9 @@ pub struct SceneStart {
     pub mesh: Mesh,
     /// Material, scale, lights and environment of the scene.
     pub state: ViewState,
+    /// The `[camera]` table as it is: the viewer frames the mesh's bounding sphere as
+    /// `lucent render` does (see [`super::framing`]).
+    pub camera: lucent_gpu::camera::OrbitCamera,
 }
 
 /// Converts `scene` (already validated) for the viewer; an environment the viewer does not
@@ -45,7 +48,7 @@ pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
         state.params.env_rotation_deg = env.environment.rotation_deg;
         state.params.env_strength = env.environment.intensity;
     }
-    Ok(SceneStart { mesh: core_adapter::normalise(rest), state })
+    Ok(SceneStart { mesh: core_adapter::normalise(rest), state, camera: scene.camera })
 }
 
 /// A light given in the scene's mesh units, in the viewer's normalised frame: positions mapped,

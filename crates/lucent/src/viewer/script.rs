@@ -12,7 +12,7 @@
 //! | `twist:k` | twist about the vertical axis, `k` radians per mesh unit of height |
 //! | `material:name` | switch to a material preset |
 //! | `scale:m` | set the model scale, metres |
-//! | `camera:yaw,pitch,distance` | place the camera (degrees, degrees, mesh units) |
+//! | `camera:yaw,pitch,distance` | place the camera (degrees, degrees, and mesh units from the point looked at, which the normalised mesh's extent 1 makes model-independent; scene files give radii) |
 //! | `exposure:k` | set the exposure multiplier |
 //! | `clusters:x,y,z` | figure 6.9 view for the face nearest to `(x,y,z)` |
 //! | `method:htsm` / `method:mertens` | switch the 3D view's method (HTSM: Shopf 2007) |
@@ -38,7 +38,8 @@ pub enum Action {
     Material(String),
     /// Set the model scale (metres).
     Scale(f64),
-    /// Place the camera: yaw and pitch in degrees, distance in mesh units.
+    /// Place the camera: yaw and pitch in degrees, distance from the point looked at in mesh
+    /// units (see [`super::framing::Framing::place`]).
     Camera(f32, f32, f32),
     /// Set the exposure.
     Exposure(f32),

@@ -2,7 +2,6 @@
 //! timings and the figure 6.9 view. It edits a [`ViewState`] in place and reports one-off
 //! requests (screenshot, resets) in [`UiRequests`]; it never touches the GPU or the worker.
 
-use super::camera::OrbitCamera;
 use super::core_adapter::{Timings, level_colour};
 use super::htsm::HtsmPanel;
 use super::state::{EnvChoice, SolveMode, Tool, ViewMethod, ViewState};
@@ -13,6 +12,7 @@ use lucent_core::bssrdf::{Material, PRESETS};
 use lucent_core::irradiance::{Light, LightKind};
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
+use lucent_gpu::camera::CameraView;
 
 /// Read-only facts the panel displays.
 #[derive(Clone, Debug, Default)]
@@ -363,20 +363,15 @@ fn timings(ui: &mut Ui, status: &Status) {
     ui.small(format!("solver: {}", status.solver));
 }
 
-/// Draws a marker for every positional light over the 3D view (`rect`, points).
-pub fn light_markers(ui: &Ui, rect: egui::Rect, camera: &OrbitCamera, lights: &[Light]) {
+/// Draws a marker for every positional light over the 3D view (`rect`, points; `camera`
+/// framed for its aspect ratio).
+pub fn light_markers(ui: &Ui, rect: egui::Rect, camera: &CameraView, lights: &[Light]) {
     let painter = ui.ctx().layer_painter(egui::LayerId::background());
     let size = Vec2::new(rect.width(), rect.height());
-    let view_proj = camera.projection(size.x / size.y) * camera.view();
     for l in lights {
         let Some(position) = l.position() else { continue };
-        let clip = view_proj * position.extend(1.0);
-        if clip.w <= 0.0 {
-            continue;
-        }
-        let ndc = clip.truncate() / clip.w;
-        let pos =
-            egui::pos2(rect.left() + (ndc.x + 1.0) * 0.5 * size.x, rect.top() + (1.0 - ndc.y) * 0.5 * size.y);
+        let Some(p) = camera.to_pixel(position, size) else { continue };
+        let pos = egui::pos2(rect.left() + p.x, rect.top() + p.y);
         let c = (l.power().normalize_or_zero() * 255.0).to_array().map(|v| v as u8);
         painter.circle(pos, 5.0, Color32::from_rgb(c[0], c[1], c[2]), (1.0, Color32::WHITE));
     }
