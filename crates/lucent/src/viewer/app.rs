@@ -6,9 +6,10 @@ use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
-use super::render::{self, DrawParams, ViewRenderer, Viewport};
+use super::render::{self, DrawParams, ViewRenderer};
 use super::scene::Scene;
-use super::screenshot::{self, Offscreen};
+use super::present::{EguiFrame, Surface, encode_and_submit, save_screenshot, upload_scene};
+use super::screenshot;
 use super::script::{Action, Automation, Step};
 use super::state::{EnvChoice, ViewMethod, ViewState};
 use super::ui::{self, Status};
@@ -51,17 +52,6 @@ const FRAME_INTERVAL: Duration = Duration::from_millis(16);
 /// A scripted run fails if it makes no progress for this long.
 const SCRIPT_TIMEOUT: Duration = Duration::from_secs(300);
 
-/// Window, GPU and egui state, created on `resumed`.
-struct Surface {
-    window: Arc<Window>,
-    gfx: Gfx,
-    egui_ctx: egui::Context,
-    egui_state: egui_winit::State,
-    egui_renderer: egui_wgpu::Renderer,
-    renderer: ViewRenderer,
-    /// The HTSM image of the 3D view when that method is chosen.
-    htsm: HtsmPanel,
-}
 
 /// Smoothed frame statistics.
 #[derive(Debug)]
@@ -473,125 +463,6 @@ fn run_ui(
     let min = Vec2::new(central.min.x * ppp, central.min.y * ppp).clamp(Vec2::ZERO, Vec2::new(w, h));
     let max = Vec2::new(central.max.x * ppp, central.max.y * ppp).clamp(min, Vec2::new(w, h));
     (output, requests, (min, (max - min).max(Vec2::ONE)))
-}
-
-/// egui's tessellated output for one frame, with its textures uploaded.
-struct EguiFrame {
-    jobs: Vec<egui::ClippedPrimitive>,
-    screen: egui_wgpu::ScreenDescriptor,
-    free: Vec<egui::TextureId>,
-}
-
-impl EguiFrame {
-    /// Tessellates `output` and uploads the textures it sets.
-    fn new(surface: &mut Surface, mut output: egui::FullOutput) -> Self {
-        let ppp = output.pixels_per_point;
-        let gfx = &surface.gfx;
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                surface.egui_renderer.update_texture(&gfx.ctx.device, &gfx.ctx.queue, *id, delta);
-            }
-        }
-        EguiFrame {
-            jobs: surface.egui_ctx.tessellate(output.shapes, ppp),
-            screen: egui_wgpu::ScreenDescriptor {
-                size_in_pixels: [gfx.config.width, gfx.config.height],
-                pixels_per_point: ppp,
-            },
-            free: std::mem::take(&mut output.textures_delta.free).into_iter().collect(),
-        }
-    }
-
-    /// Frees the textures egui no longer needs (after the frame's draws).
-    fn free_textures(self, surface: &mut Surface) {
-        for id in &self.free {
-            surface.egui_renderer.free_texture(id);
-        }
-    }
-}
-
-/// Uploads geometry and radiance that changed since the last frame.
-fn upload_scene(surface: &mut Surface, scene: &mut Scene) -> anyhow::Result<()> {
-    let ctx = &surface.gfx.ctx;
-    if scene.geometry_dirty {
-        if let Some(mesh) = &scene.mesh {
-            surface.renderer.set_geometry(ctx, mesh)?;
-            // Radiance of the previous geometry still matches vertex for vertex.
-            scene.radiance_dirty = true;
-        }
-        scene.geometry_dirty = false;
-    }
-    let p = &scene.state.params;
-    surface.renderer.set_environment(ctx, p.env, p.env_rotation_deg);
-    if scene.radiance_dirty {
-        // The figure 6.9 false colours replace the radiance while that view is on.
-        let colours = scene.solution.clusters.as_ref().unwrap_or(&scene.solution.vertex_radiance);
-        surface.renderer.set_radiance(ctx, colours)?;
-        scene.radiance_dirty = false;
-    }
-    Ok(())
-}
-
-/// Records the 3D pass and the egui pass into `target` and submits them.
-fn encode_and_submit(
-    surface: &mut Surface,
-    target: &wgpu::TextureView,
-    (origin, size): ViewportRect,
-    params: &DrawParams,
-    ui: &EguiFrame,
-) -> anyhow::Result<()> {
-    let (jobs, screen) = (&ui.jobs, &ui.screen);
-    let gfx = &surface.gfx;
-    let mut encoder = gfx.ctx.device.create_command_encoder(&Default::default());
-    let viewport = Viewport { x: origin.x, y: origin.y, width: size.x, height: size.y };
-    let target_size = (gfx.config.width, gfx.config.height);
-    surface.renderer.draw(&gfx.ctx, &mut encoder, target, target_size, viewport, params)?;
-    let extra =
-        surface.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, jobs, screen);
-    {
-        let mut pass = encoder
-            .begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                ..Default::default()
-            })
-            .forget_lifetime();
-        surface.egui_renderer.render(&mut pass, jobs, screen);
-    }
-    gfx.ctx.queue.submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
-    gfx.ctx.check("drawing the frame")?;
-    Ok(())
-}
-
-/// Draws the frame again into an offscreen texture and writes it to `path` as a PNG.
-fn save_screenshot(
-    surface: &mut Surface,
-    path: &std::path::Path,
-    viewport: ViewportRect,
-    params: &DrawParams,
-    ui: &EguiFrame,
-) -> anyhow::Result<()> {
-    let gfx = &surface.gfx;
-    let offscreen = Offscreen::new(&gfx.ctx.device, gfx.config.format, gfx.config.width, gfx.config.height);
-    encode_and_submit(surface, &offscreen.view, viewport, params, ui)?;
-    offscreen.save_png(&surface.gfx.ctx.device, &surface.gfx.ctx.queue, path)?;
-    let (o, s) = viewport;
-    println!(
-        "lucent view: saved {} ({}x{}, 3D viewport {} {} {} {})",
-        path.display(),
-        surface.gfx.config.width,
-        surface.gfx.config.height,
-        o.x as u32,
-        o.y as u32,
-        s.x as u32,
-        s.y as u32
-    );
-    Ok(())
 }
 
 impl ApplicationHandler<WorkerWake> for App {

@@ -2,7 +2,8 @@
 //! interactive results of figure 6: lighting, material, scale and geometry change while the
 //! per-vertex solution is recomputed on a worker thread, and the window stays responsive.
 //!
-//! * [`app`]: the winit application and the per-frame sequence.
+//! * [`app`]: the winit application and the per-frame sequence; [`present`]: one frame's GPU
+//!   work (uploads, passes, submit, screenshot).
 //! * [`gfx`]: adapter, device and window surface (format, present mode, resize, minimise).
 //! * [`render`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
 //! * [`ui`]: the egui side panel.
@@ -10,9 +11,9 @@
 //!   mouse handling, ray picking through the mesh's BVH.
 //! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
 //! * [`worker`]: the solve thread (coalesced requests).
-//! * [`core_adapter`]: every call into `lucent-core`, in one place.
+//! * [`core_adapter`]: the panel's state mapped onto `lucent-core`'s frame session.
 //! * [`script`], [`screenshot`]: scripted runs and PNG screenshots.
-//! * [`scene_file`]: start-up state from a TOML scene.
+//! * [`scene_file`]: start-up state from the resolved scene (flags and a TOML scene file).
 
 pub mod app;
 pub mod core_adapter;
@@ -21,6 +22,7 @@ pub mod gfx;
 pub mod htsm;
 pub mod input;
 pub mod pick;
+pub mod present;
 pub mod render;
 pub mod scene;
 pub mod scene_file;
