@@ -294,75 +294,17 @@ impl MeshPass {
                 attributes: &wgpu::vertex_attr_array![2 => Float32x3],
             }),
         ];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lucent mesh"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &buffers,
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
-                // Open meshes show their inside; the shader flips the normal there.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState { count: sample_count, ..Default::default() },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: color_format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let target = PassTarget { color_format, sample_count };
+        let mesh = Stage { label: "lucent mesh", vertex: "vs_main", fragment: "fs_main", depth_write: true };
+        let pipeline = create_pipeline(device, &layout, &module, mesh, &buffers, target);
         // A full-screen triangle behind everything: no depth written, so the mesh draws over it.
-        let background_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lucent environment background"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_background"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState { count: sample_count, ..Default::default() },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_background"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: color_format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let background = Stage {
+            label: "lucent environment background",
+            vertex: "vs_background",
+            fragment: "fs_background",
+            depth_write: false,
+        };
+        let background_pipeline = create_pipeline(device, &layout, &module, background, &[], target);
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lucent mesh uniforms"),
             size: std::mem::size_of::<MeshUniforms>() as u64,
@@ -537,4 +479,69 @@ impl EnvironmentMap {
         let view = texture.create_view(&Default::default());
         Ok(EnvironmentMap { texture, view })
     }
+}
+
+/// The colour target a mesh-pass pipeline draws into.
+#[derive(Clone, Copy)]
+struct PassTarget {
+    color_format: wgpu::TextureFormat,
+    sample_count: u32,
+}
+
+/// One of the mesh pass's two pipelines: the mesh (depth written and tested) or the background
+/// behind it (neither).
+#[derive(Clone, Copy)]
+struct Stage {
+    label: &'static str,
+    vertex: &'static str,
+    fragment: &'static str,
+    depth_write: bool,
+}
+
+fn create_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    stage: Stage,
+    buffers: &[Option<wgpu::VertexBufferLayout>],
+    target: PassTarget,
+) -> wgpu::RenderPipeline {
+    let compare = if stage.depth_write { wgpu::CompareFunction::Less } else { wgpu::CompareFunction::Always };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(stage.label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(stage.vertex),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            // Open meshes show their inside; the shader flips the normal there.
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(stage.depth_write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState { count: target.sample_count, ..Default::default() },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(stage.fragment),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: target.color_format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

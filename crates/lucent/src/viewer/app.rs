@@ -6,9 +6,9 @@ use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
+use super::present::{EguiFrame, Surface, encode_and_submit, save_screenshot, upload_scene};
 use super::render::{self, DrawParams, ViewRenderer};
 use super::scene::Scene;
-use super::present::{EguiFrame, Surface, encode_and_submit, save_screenshot, upload_scene};
 use super::screenshot;
 use super::script::{Action, Automation, Step};
 use super::state::{EnvChoice, ViewMethod, ViewState};
@@ -51,7 +51,6 @@ pub struct Options {
 const FRAME_INTERVAL: Duration = Duration::from_millis(16);
 /// A scripted run fails if it makes no progress for this long.
 const SCRIPT_TIMEOUT: Duration = Duration::from_secs(300);
-
 
 /// Smoothed frame statistics.
 #[derive(Debug)]
