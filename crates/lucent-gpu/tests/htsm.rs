@@ -37,7 +37,11 @@ fn view(mesh: &Mesh, size: u32) -> HtsmView {
             let (centre, radius) = bounding_sphere(&mesh.positions);
             OrbitCamera { pitch_deg: 0.0, ..Default::default() }.frame(centre, radius, 1.0)
         },
-        light: Light::Directional { direction: Vec3::new(0.15, -0.2, 1.0), irradiance: Vec3::splat(3.0) },
+        lights: vec![Light::Directional {
+            direction: Vec3::new(0.15, -0.2, 1.0),
+            irradiance: Vec3::splat(3.0),
+        }],
+        environment: None,
         width: size,
         height: size,
     }
