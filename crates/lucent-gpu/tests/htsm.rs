@@ -6,6 +6,16 @@
 //! The scene is self-contained: an ellipsoid (a subdivided icosahedron, 2 x 1.4 x 1 mesh units)
 //! lit from behind by a distant light, seen from the front.
 //! `LUCENT_UPDATE_GOLDEN=1 cargo test --release -p lucent-gpu --test htsm` rewrites the golden.
+//!
+//! More in the submodules: several lights, spots and the environment ([`lights`]), deformation
+//! ([`deformation`]) and drawing into a caller's texture ([`target`]).
+
+#[path = "htsm/deformation.rs"]
+mod deformation;
+#[path = "htsm/lights.rs"]
+mod lights;
+#[path = "htsm/target.rs"]
+mod target;
 
 use glam::Vec3;
 use lucent_core::irradiance::Light;
