@@ -53,7 +53,8 @@ impl ToneMap {
         })
     }
 
-    fn validate(&self) -> Result<(), GpuError> {
+    /// Checks exposure and gamma (finite, > 0).
+    pub(crate) fn validate(&self) -> Result<(), GpuError> {
         if !(self.exposure.is_finite() && self.exposure > 0.0) {
             return Err(GpuError::InvalidInput(format!(
                 "exposure must be finite and > 0, got {}",

@@ -6,6 +6,16 @@
 //! The scene is self-contained: an ellipsoid (a subdivided icosahedron, 2 x 1.4 x 1 mesh units)
 //! lit from behind by a distant light, seen from the front.
 //! `LUCENT_UPDATE_GOLDEN=1 cargo test --release -p lucent-gpu --test htsm` rewrites the golden.
+//!
+//! More in the submodules: several lights, spots and the environment ([`lights`]), deformation
+//! ([`deformation`]) and drawing into a caller's texture ([`target`]).
+
+#[path = "htsm/deformation.rs"]
+mod deformation;
+#[path = "htsm/lights.rs"]
+mod lights;
+#[path = "htsm/target.rs"]
+mod target;
 
 use glam::Vec3;
 use lucent_core::irradiance::Light;
@@ -34,7 +44,11 @@ fn view(mesh: &Mesh, size: u32) -> HtsmView {
             let (centre, radius) = bounding_sphere(&mesh.positions);
             OrbitCamera { pitch_deg: 0.0, ..Default::default() }.frame(centre, radius, 1.0)
         },
-        light: Light::Directional { direction: Vec3::new(0.15, -0.2, 1.0), irradiance: Vec3::splat(3.0) },
+        lights: vec![Light::Directional {
+            direction: Vec3::new(0.15, -0.2, 1.0),
+            irradiance: Vec3::splat(3.0),
+        }],
+        environment: None,
         width: size,
         height: size,
     }

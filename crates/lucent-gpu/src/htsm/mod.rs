@@ -1,45 +1,80 @@
 //! Heterogeneous Translucent Shadow Maps (Shopf 2007, "Interactive Rendering of Heterogeneous
 //! Translucent Objects", chapter 4).
 //!
-//! A translucent object is a mesh plus a [`DensityVolume`] over its bounding box (§4.2). Each
-//! frame runs four passes ([`passes`]):
+//! A translucent object is a mesh plus a [`DensityVolume`] over its rest bounding box (§4.2).
+//! Each frame runs, for every light in turn (files in brackets):
 //!
-//! 1. **Reference images** (§4.3, fig. 4.2): the mesh seen from the light into three images, the
-//!    irradiance transmitted through the surface (Schlick's Fresnel) times the light colour, the
-//!    3D texture coordinate of the lit surface (its position in the volume's `[0,1]^3` box) and
-//!    its normal. Alpha holds coverage. A perspective view for a point light, an orthographic
-//!    view fitted to the bounding sphere for a distant one.
-//! 2. **Mips** (§4.3.1): a full chain for each image by 2x2 averaging; the texture coordinate and
-//!    normal are normalised by coverage when sampled, so they average covered texels only.
-//! 3. **Camera pass** (§4.3.1-§4.3.5, table 4.1): for each visible point, `n` = 1, 5, 9 or 13
-//!    samples of the reference images in the hierarchical pattern of fig. 4.3 (the centre at
-//!    level 0, then rings of 4 at doubling radius, one mip level coarser per ring); for each, a
-//!    `K`-step ray cast through the density texture from the point to the sample's lit surface
-//!    gives the absorption `alpha_i` (`sigma_at = sigma_a + density`, eq. 4.1), the ray length is
-//!    `D_i`, and a Henyey-Greenstein table gives the phase `f(theta_i)`. [`TransportModel`]
-//!    turns these into transmitted light; Lambert and Blinn-Phong shading are added on the lit
-//!    side.
-//! 4. **Tone mapping** with lucent's shared pass ([`crate::tonemap`]) to an 8-bit image.
+//! 1. **Reference images** (§4.3, fig. 4.2; [`reference`]): the mesh seen from the light into
+//!    images of the irradiance transmitted through the surface (Schlick's Fresnel) times the
+//!    light colour, the 3D texture coordinate of the lit surface (its rest position in the
+//!    volume's `[0,1]^3` box), its normal, and (not in the thesis) its deformation offset.
+//!    Alpha holds coverage. A perspective view for a point or spot light, an orthographic view
+//!    fitted to the bounding sphere for a distant one ([`LightFrustum`]).
+//! 2. **Mips** (§4.3.1; [`mips`]): a full chain for each image by 2x2 averaging; texture
+//!    coordinates and offsets are normalised by coverage when sampled, so they average covered
+//!    texels only.
+//! 3. **Camera pass** (§4.3.1-§4.3.5, table 4.1; [`camera_pass`]): for each visible point,
+//!    `n` = 1, 5, 9 or 13 samples of the reference images in the hierarchical pattern of
+//!    fig. 4.3 (the centre at level 0, then rings of 4 at doubling radius, one mip level coarser
+//!    per ring); for each, a `K`-step ray cast through the density texture from the point to
+//!    the sample's lit surface gives the absorption `alpha_i` (`sigma_at = sigma_a + density`,
+//!    eq. 4.1), the ray length is `D_i`, and a Henyey-Greenstein table gives the phase
+//!    `f(theta_i)`. [`TransportModel`] turns these into transmitted light; Lambert and
+//!    Blinn-Phong shading are added on the lit side. The first light's pass writes an HDR
+//!    target, each further light's pass adds to it (additive blending, same depth).
+//!
+//! then **tone mapping** with lucent's shared pass ([`crate::tonemap`]) into an 8-bit image read
+//! back to the CPU ([`HtsmRenderer::render`]) or into a caller's texture, e.g. a window's
+//! surface ([`HtsmRenderer::encode_into`]). [`renderer`] holds the resources and the frame;
+//! [`pipeline`] and [`geometry`] the plumbing they share.
+//!
+//! # Lights and environment
+//!
+//! [`HtsmView::lights`] takes any number of point, spot and distant lights; a spot's cone
+//! (with its soft edge, as `lucent_core::irradiance::spot_falloff`) scales the irradiance of its
+//! reference image and of its surface terms. A spherical-harmonic [`Environment`], which the
+//! thesis cannot render (§5.4), is approximated by eight distant lights that match its radiance
+//! to SH band 1 for the subsurface transport, and by its full nine-coefficient irradiance for the
+//! lit side's diffuse term ([`environment`] says exactly what is approximated).
+//!
+//! # Deformation
+//!
+//! [`HtsmRenderer::set_positions`] moves the vertices; the rest positions stay as a vertex
+//! attribute, so every surface point keeps its rest texture coordinate and the density volume
+//! follows the mesh. The ray cast marches from the visible point's to the lit sample's texture
+//! coordinate (rest space) while `D_i` is the deformed length of that ray ([`geometry`]).
 //!
 //! # Units
 //!
-//! *Object units*: mesh units divided by the mesh's largest bounding-box side, so a transport
-//! distance of 0.5 is half the object's size whatever its scale. Ray lengths `D_i`, the transport
-//! distance `T_d`, the kernel radius and the density scale (per object unit) use them.
+//! *Object units*: mesh units divided by the rest mesh's largest bounding-box side, so a
+//! transport distance of 0.5 is half the object's size whatever its scale. Ray lengths `D_i`,
+//! the transport distance `T_d`, the kernel radius and the density scale (per object unit) use
+//! them.
 //!
 //! # Limits (Shopf §5.4)
 //!
 //! The space between a lit and a visible surface is assumed to be inside the object (convexity):
 //! concave objects absorb light in the gaps. Transport is forward only (no back-scattering).
+//! Each light costs one reference pass, one mip chain and one camera pass.
 
-pub mod passes;
+pub mod camera_pass;
+pub mod environment;
+pub mod geometry;
+pub mod mips;
+pub mod pipeline;
+pub mod reference;
+pub mod renderer;
 
 use crate::camera::CameraView;
 use crate::tonemap::ToneMap;
-use glam::{Mat4, Vec3};
-use lucent_core::irradiance::Light;
+use glam::Vec3;
+use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::DensityVolume;
+
+pub use environment::{ENVIRONMENT_LIGHTS, environment_lights};
+pub use reference::{LightFrustum, REFERENCE_IMAGES};
+pub use renderer::HtsmRenderer;
 
 /// The reference images' texel format: HDR irradiance and texture coordinates need more than
 /// 8 bits, and Rgba32Float is neither filterable nor renderable everywhere (lavapipe, GL).
@@ -59,7 +94,8 @@ pub enum HtsmError {
     /// The mesh cannot be rendered (empty, or a flat bounding box).
     #[error("mesh unusable for HTSM: {0}")]
     Mesh(String),
-    /// The light cannot be handled (a point light inside the object's bounding sphere).
+    /// The lights cannot be handled: none and no environment, a point or spot light inside the
+    /// object's bounding sphere, a zero direction or a spot cone outside `(0, pi]`.
     #[error("light unusable for HTSM: {0}")]
     Light(String),
     /// A size beyond the adapter's limits.
@@ -197,57 +233,6 @@ impl HtsmParams {
     }
 }
 
-/// The light's view and projection for the reference images, and the width of its frustum at
-/// the object's centre (mesh units), used to convert the kernel radius to texels.
-#[derive(Clone, Copy, Debug)]
-pub struct LightFrustum {
-    /// World to light clip.
-    pub view_proj: Mat4,
-    /// Width of the frustum at the bounding sphere's centre, mesh units.
-    pub width_at_centre: f32,
-}
-
-impl LightFrustum {
-    /// Fits the light's frustum to the object's bounding sphere (§4.3: a distant light is
-    /// rendered from the minimum distance that captures the object, a point light from its
-    /// position).
-    /// `sphere` is the object's bounding sphere (centre, radius; mesh units).
-    pub fn fit(sphere: (Vec3, f32), light: &Light) -> Result<LightFrustum, HtsmError> {
-        let (centre, radius) = sphere;
-        let up_for = |d: Vec3| {
-            if d.dot(Vec3::Y).abs() > 0.99 { Vec3::X } else { Vec3::Y }
-        };
-        match *light {
-            Light::Directional { direction, .. } => {
-                let d = direction.normalize_or_zero();
-                if d == Vec3::ZERO {
-                    return Err(HtsmError::Light("distant light has a zero direction".into()));
-                }
-                let eye = centre - d * 2.0 * radius;
-                let view = Mat4::look_at_rh(eye, centre, up_for(d));
-                let proj =
-                    Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.5 * radius, 3.5 * radius);
-                Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * radius })
-            }
-            Light::Point { position, .. } | Light::Spot { position, .. } => {
-                let to_centre = centre - position;
-                let dist = to_centre.length();
-                if dist <= radius * 1.001 {
-                    return Err(HtsmError::Light(format!(
-                        "point light at {position} is inside the object's bounding sphere \
-                         (centre {centre}, radius {radius}); HTSM renders the object from the light"
-                    )));
-                }
-                let half = (radius / dist).asin() * 1.02;
-                let view = Mat4::look_at_rh(position, centre, up_for(to_centre / dist));
-                let near = ((dist - radius) * 0.9).max(dist * 1e-3);
-                let proj = Mat4::perspective_rh(2.0 * half, 1.0, near, (dist + radius) * 1.1);
-                Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * dist * half.tan() })
-            }
-        }
-    }
-}
-
 /// Henyey-Greenstein phase function times `4 pi`, so that isotropic scattering weighs 1:
 /// `4 pi p(cos) = (1 - g^2) / (1 + g^2 - 2 g cos)^(3/2)`. `cos` is the cosine between the
 /// sample ray and `-N` (§4.3.4).
@@ -266,24 +251,32 @@ pub fn phase_table(g: f32) -> Vec<f32> {
         .collect()
 }
 
-/// Where the camera and the light are, and the image size.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Where the camera is, what lights the object, and the image size.
+#[derive(Clone, Debug, PartialEq)]
 pub struct HtsmView {
     /// The camera (e.g. [`crate::camera::OrbitCamera::frame`]), mesh units.
     pub camera: CameraView,
-    /// The one light HTSM renders from (Shopf: one point or distant light).
-    pub light: Light,
+    /// Point, spot and distant lights (positions in mesh units, outside the object's bounding
+    /// sphere), each rendered through its own reference images and added up. May be empty
+    /// when there is an environment; with neither, rendering fails with [`HtsmError::Light`].
+    pub lights: Vec<Light>,
+    /// A distant SH environment, or `None`. See [`environment`] for how HTSM renders it.
+    pub environment: Option<Environment>,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
 }
 
-/// GPU memory held by an [`passes::HtsmRenderer`], bytes.
+/// GPU memory held by an [`HtsmRenderer`], bytes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HtsmMemory {
-    /// The three reference images with their mip chains.
+    /// The thesis's three reference images (irradiance, texture coordinate, normal) with their
+    /// mip chains, shared by all lights.
     pub reference_images: u64,
+    /// The fourth reference image with its mip chain, the deformation offset (not in the thesis:
+    /// it serves [`HtsmRenderer::set_positions`]).
+    pub deformation_image: u64,
     /// The light-view depth buffer used to render them.
     pub reference_depth: u64,
     /// The density volume with its mip chain.
@@ -293,13 +286,12 @@ pub struct HtsmMemory {
 }
 
 impl HtsmMemory {
-    /// What the thesis counts (§5.2, "~3 MB"): reference images plus the density volume.
+    /// What the thesis counts (§5.2, "~3 MB"): its three reference images plus the density
+    /// volume (not the deformation image).
     pub fn thesis_bytes(&self) -> u64 {
         self.reference_images + self.volume
     }
 }
-
-pub use passes::HtsmRenderer;
 
 /// Dimensions of a density grid over `mesh`'s bounding box whose largest side has `largest`
 /// voxels and whose other sides follow the box's proportions (at least 4 voxels), so that

@@ -1,44 +1,72 @@
-// Shared declarations of the HTSM passes (Shopf 2007, §4.3). Prepended to every HTSM shader.
-// Lengths called "object units" are mesh units divided by the mesh's largest bounding-box side.
+// Shared declarations of the HTSM passes (Shopf 2007, §4.3). Prepended to every HTSM shader
+// except the mip pass. Lengths called "object units" are mesh units divided by the rest mesh's
+// largest bounding-box side.
 
-struct Globals {
+// Per frame: camera, volume box, material, and the environment's surface terms.
+struct Frame {
     // Camera: world (mesh units) -> clip.
     view_proj: mat4x4<f32>,
-    // Light: world -> light clip; its NDC xy maps to the reference images.
-    light_view_proj: mat4x4<f32>,
-    // xyz: minimum corner of the bounding box (mesh units).
+    // xyz: minimum corner of the rest mesh's bounding box (mesh units).
     box_min: vec4<f32>,
-    // xyz: size of the bounding box (mesh units); w: 1 / largest side (mesh -> object units).
+    // xyz: size of the rest bounding box (mesh units); w: 1 / largest side (mesh -> object units).
     box_size: vec4<f32>,
     // xyz: camera position (mesh units).
     eye: vec4<f32>,
-    // w = 1: point light at xyz (mesh units); w = 0: distant light travelling along xyz (unit).
-    light: vec4<f32>,
-    // rgb: light colour (point: intensity per mesh unit^2 at distance 1; distant: irradiance).
-    light_colour: vec4<f32>,
     // rgb: transport colour T_c; w: transport distance T_d (object units).
     transport: vec4<f32>,
     // rgb: Beer-Lambert attenuation sigma = -ln(T_c) / T_d (1 / object units); w: density scale
     // (extra absorption of density 1, 1 / object units).
     sigma: vec4<f32>,
-    // x: ring-1 radius (level-0 texels of the reference images); y: Schlick F0;
-    // z: shadow bias (object units); w: largest mip level of the density volume.
-    kernel: vec4<f32>,
+    // x: Schlick F0; y: shadow bias (object units); z: largest mip level of the density volume;
+    // w: unused.
+    material: vec4<f32>,
     // x: diffuse weight; y: specular weight; z: Blinn-Phong exponent; w: unused.
     shading: vec4<f32>,
     // x: samples n (1, 5, 9, 13); y: steps K; z: model (0 thesis, 1 Beer-Lambert);
     // w: largest side of the density volume (voxels).
     counts: vec4<f32>,
+    // Environment (see htsm/environment.rs): x, y: cos and sin of the rotation taking world
+    // directions to the map's frame (about +y); z: 1 when there is an environment; w: unused.
+    env_frame: vec4<f32>,
+    // rgb: SH coefficients of the Fresnel-transmitted irradiance (band weights of Schlick's
+    // transmitted cosine times the radiance coefficients times the intensity).
+    env_irradiance: array<vec4<f32>, 9>,
+    // rgb: SH coefficients of the radiance times the intensity (glossy reflection).
+    env_radiance: array<vec4<f32>, 9>,
 }
 
-@group(0) @binding(0) var<uniform> g: Globals;
+// Per light pass (a dynamic offset selects the light).
+struct LightPass {
+    // World -> light clip; its NDC xy maps to the reference images.
+    view_proj: mat4x4<f32>,
+    // w = 1: point or spot light at xyz (mesh units); w = 0: distant light travelling along xyz
+    // (unit).
+    position: vec4<f32>,
+    // rgb: light colour (point, spot: intensity, irradiance per mesh unit^2 at distance 1;
+    // distant: irradiance); w: the spot's soft-edge fraction (0..1).
+    colour: vec4<f32>,
+    // xyz: the spot's unit axis (the way it shines); w: the cone's half-angle in radians, 0 when
+    // the light is not a spot.
+    spot: vec4<f32>,
+    // x: ring-1 radius (level-0 texels of the reference images); y: 1 when this light adds the
+    // lit side's diffuse and specular terms (0 for the environment's directions); z: 1 when this
+    // pass adds the environment's surface terms (the first pass of a frame); w: unused.
+    flags: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> g: Frame;
+@group(0) @binding(1) var<uniform> light: LightPass;
 
 struct VertexIn {
+    // Deformed position (mesh units).
     @location(0) position: vec3<f32>,
+    // Deformed unit normal.
     @location(1) normal: vec3<f32>,
+    // Rest position (mesh units): the 3D texture coordinate before the rest box's affine map.
+    @location(2) rest: vec3<f32>,
 }
 
-// Position in the volume's [0,1]^3 box: the 3D texture coordinate of §4.3.2.
+// Position in the volume's [0,1]^3 box: the 3D texture coordinate of §4.3.2, of a rest position.
 fn texcoord_of(p: vec3<f32>) -> vec3<f32> {
     return (p - g.box_min.xyz) / g.box_size.xyz;
 }
@@ -48,10 +76,31 @@ fn tc_to_object(d: vec3<f32>) -> vec3<f32> {
     return d * g.box_size.xyz * g.box_size.w;
 }
 
+// How far deformation moved a point: deformed minus rest position, object units. Exactly zero
+// on an undeformed mesh, so rest renders do not depend on it.
+fn deformation_of(world: vec3<f32>, rest: vec3<f32>) -> vec3<f32> {
+    return (world - rest) * g.box_size.w;
+}
+
 // Schlick's approximation of the dielectric Fresnel reflectance.
 fn fresnel_schlick(cos_theta: f32, f0: f32) -> f32 {
     let m = 1.0 - clamp(cos_theta, 0.0, 1.0);
     return f0 + (1.0 - f0) * m * m * m * m * m;
+}
+
+// lucent_core::irradiance::spot_falloff: 1 inside cone * (1 - soft), 0 outside the cone, a
+// smoothstep in angle between.
+fn spot_falloff(cos_angle: f32, cone: f32, soft_edge: f32) -> f32 {
+    let angle = acos(clamp(cos_angle, -1.0, 1.0));
+    let inner = cone * (1.0 - clamp(soft_edge, 0.0, 1.0));
+    if (angle >= cone) {
+        return 0.0;
+    }
+    if (angle <= inner) {
+        return 1.0;
+    }
+    let t = (cone - angle) / (cone - inner);
+    return t * t * (3.0 - 2.0 * t);
 }
 
 // Unit direction from p towards the light, and the light's irradiance on a surface facing it.
@@ -62,14 +111,17 @@ struct LightAt {
 
 fn light_at(p: vec3<f32>) -> LightAt {
     var out: LightAt;
-    if (g.light.w > 0.5) {
-        let d = g.light.xyz - p;
+    if (light.position.w > 0.5) {
+        let d = light.position.xyz - p;
         let d2 = max(dot(d, d), 1e-12);
         out.to_light = d * inverseSqrt(d2);
-        out.irradiance = g.light_colour.rgb / d2;
+        out.irradiance = light.colour.rgb / d2;
+        if (light.spot.w > 0.0) {
+            out.irradiance = out.irradiance * spot_falloff(dot(light.spot.xyz, -out.to_light), light.spot.w, light.colour.w);
+        }
     } else {
-        out.to_light = -g.light.xyz;
-        out.irradiance = g.light_colour.rgb;
+        out.to_light = -light.position.xyz;
+        out.irradiance = light.colour.rgb;
     }
     return out;
 }

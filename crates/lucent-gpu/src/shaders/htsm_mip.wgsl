@@ -6,11 +6,13 @@
 @group(0) @binding(0) var src_irradiance: texture_2d<f32>;
 @group(0) @binding(1) var src_texcoord: texture_2d<f32>;
 @group(0) @binding(2) var src_normal: texture_2d<f32>;
+@group(0) @binding(3) var src_deformation: texture_2d<f32>;
 
 struct MipOut {
     @location(0) irradiance: vec4<f32>,
     @location(1) texcoord: vec4<f32>,
     @location(2) normal: vec4<f32>,
+    @location(3) deformation: vec4<f32>,
 }
 
 @vertex
@@ -32,5 +34,6 @@ fn fs_mip(@builtin(position) frag: vec4<f32>) -> MipOut {
     out.irradiance = mean4(src_irradiance, p);
     out.texcoord = mean4(src_texcoord, p);
     out.normal = mean4(src_normal, p);
+    out.deformation = mean4(src_deformation, p);
     return out;
 }

@@ -1,7 +1,12 @@
-// HTSM pass 2 (Shopf 2007 §4.3.1-§4.3.5): the camera view. For each visible point, sample the
-// reference images in the hierarchical pattern of fig. 4.3, ray cast the density volume from the
-// point to each sample's lit surface (§4.3.2), weight by the phase function (§4.3.4) and sum
-// with table 4.1's light transport approximation, then add surface shading on the lit side.
+// HTSM camera pass (Shopf 2007 §4.3.1-§4.3.5): the camera view, once per light. For each
+// visible point, sample the reference images in the hierarchical pattern of fig. 4.3, ray cast
+// the density volume from the point to each sample's lit surface (§4.3.2), weight by the phase
+// function (§4.3.4) and sum with table 4.1's light transport approximation, then add surface
+// shading on the lit side. The first light's pass writes the HDR target, later ones add to it.
+//
+// Deformation: the ray cast marches between rest texture coordinates (the density follows the
+// mesh) while D_i is the length of the same ray on the deformed mesh (rest vector plus the
+// difference of the two ends' deformation offsets).
 
 @group(1) @binding(0) var ref_irradiance: texture_2d<f32>;
 @group(1) @binding(1) var ref_texcoord: texture_2d<f32>;
@@ -12,11 +17,15 @@
 // Henyey-Greenstein phase table indexed by cos(theta) * 0.5 + 0.5 (a 256x1 2D texture: GLES,
 // one of our backends, has no 1D textures).
 @group(1) @binding(6) var phase_table: texture_2d<f32>;
+// Deformed minus rest position of the lit surface (object units), premultiplied by coverage.
+@group(1) @binding(7) var ref_deformation: texture_2d<f32>;
 
 struct CameraVarying {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: later lights' passes test depth for equality with the first pass's.
+    @invariant @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) rest: vec3<f32>,
 }
 
 @vertex
@@ -25,6 +34,7 @@ fn vs_camera(v: VertexIn) -> CameraVarying {
     out.clip = g.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
     out.normal = v.normal;
+    out.rest = v.rest;
     return out;
 }
 
@@ -45,7 +55,7 @@ fn pattern(i: i32) -> vec3<f32> {
 
 // Light-space position of world point p: reference-image uv in [0,1]^2.
 fn light_uv(p: vec3<f32>) -> vec2<f32> {
-    let c = g.light_view_proj * vec4<f32>(p, 1.0);
+    let c = light.view_proj * vec4<f32>(p, 1.0);
     let ndc = c.xy / c.w;
     return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
 }
@@ -53,7 +63,8 @@ fn light_uv(p: vec3<f32>) -> vec2<f32> {
 @fragment
 fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    let tc = texcoord_of(in.world);
+    let tc = texcoord_of(in.rest);
+    let moved = deformation_of(in.world, in.rest);
     let uv = light_uv(in.world);
     let map_size = vec2<f32>(textureDimensions(ref_irradiance, 0));
     let levels = f32(textureNumLevels(ref_irradiance));
@@ -65,7 +76,7 @@ fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
     var transport = vec3<f32>(0.0);
     for (var i = 0; i < samples; i = i + 1) {
         let s = pattern(i);
-        let radius_texels = g.kernel.x;
+        let radius_texels = light.flags.x;
         let offset = s.xy * radius_texels / map_size;
         // Ring r covers cells about as wide as its radius: level log2(radius in texels).
         var level = 0.0;
@@ -81,14 +92,18 @@ fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
         }
         let end = tcc.xyz / tcc.a;
         let dir = end - tc;
-        let ray = tc_to_object(dir);
+        // The ray on the deformed mesh, object units: its rest vector plus how much farther
+        // deformation moved its end than its start (zero without deformation).
+        let end_moved = textureSampleLevel(ref_deformation, ref_sampler, suv, level).xyz / tcc.a;
+        let ray = tc_to_object(dir) + (end_moved - moved);
         let d_i = length(ray);
 
-        // Fixed-step ray cast through the density volume (§4.3.2), midpoint rule. The mip level
-        // follows the step length so a coarse march averages, rather than aliases, fine detail
-        // (the 3D mip filtering the thesis could not have, §5.1).
+        // Fixed-step ray cast through the density volume (§4.3.2) in rest texture space, midpoint
+        // rule, each step D_i / K long on the deformed mesh. The mip level follows the step
+        // length so a coarse march averages, rather than aliases, fine detail (the 3D mip
+        // filtering the thesis could not have, §5.1).
         let step_voxels = length(dir) * g.counts.w / f32(steps);
-        let lod = clamp(log2(max(step_voxels, 1.0)), 0.0, g.kernel.w);
+        let lod = clamp(log2(max(step_voxels, 1.0)), 0.0, g.material.z);
         var sum = 0.0;
         for (var j = 0; j < steps; j = j + 1) {
             let t = (f32(j) + 0.5) / f32(steps);
@@ -126,19 +141,56 @@ fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
 
     // Surface shading where the surface faces the light and is not occluded: the lit surface
     // seen by the light at this point's light-space position must be this point itself.
+    // Compared in rest texture space: a surface point's rest coordinate identifies it whatever the
+    // deformation.
     let l = light_at(in.world);
     let cos_i = dot(n, l.to_light);
     let ref_tc = textureSampleLevel(ref_texcoord, ref_sampler, uv, 0.0);
-    let seen = ref_tc.a > 0.5 && length(tc_to_object(ref_tc.xyz / ref_tc.a - tc)) < g.kernel.z;
-    if (cos_i > 0.0 && seen) {
+    let seen = ref_tc.a > 0.5 && length(tc_to_object(ref_tc.xyz / ref_tc.a - tc)) < g.material.y;
+    if (cos_i > 0.0 && seen && light.flags.y > 0.5) {
         let v = normalize(g.eye.xyz - in.world);
         let h = normalize(v + l.to_light);
         let e = l.irradiance * cos_i;
-        let diffuse = g.shading.x * g.transport.rgb * e * (1.0 - fresnel_schlick(cos_i, g.kernel.y)) / 3.14159265;
+        let diffuse = g.shading.x * g.transport.rgb * e * (1.0 - fresnel_schlick(cos_i, g.material.x)) / 3.14159265;
         // Normalised Blinn-Phong with Schlick's Fresnel at the half vector.
         let shininess = g.shading.z;
-        let spec = g.shading.y * fresnel_schlick(dot(v, h), g.kernel.y) * (shininess + 8.0) / (8.0 * 3.14159265) * pow(max(dot(n, h), 0.0), shininess);
+        let spec = g.shading.y * fresnel_schlick(dot(v, h), g.material.x) * (shininess + 8.0) / (8.0 * 3.14159265) * pow(max(dot(n, h), 0.0), shininess);
         radiance = radiance + diffuse + spec * e;
     }
+    if (light.flags.z > 0.5) {
+        radiance = radiance + environment_surface(in.world, n);
+    }
     return vec4<f32>(radiance, 1.0);
+}
+
+// The environment in the map's frame: world directions turned about +y.
+fn to_map_frame(d: vec3<f32>) -> vec3<f32> {
+    let c = g.env_frame.x;
+    let s = g.env_frame.y;
+    return vec3<f32>(c * d.x + s * d.z, d.y, -s * d.x + c * d.z);
+}
+
+// sum_lm c_lm Y_lm(d) (lucent_core::irradiance::sh::sh_basis's order and constants).
+fn sh_eval(c: array<vec4<f32>, 9>, d: vec3<f32>) -> vec3<f32> {
+    let x = d.x;
+    let y = d.y;
+    let z = d.z;
+    return c[0].rgb * 0.282095 + c[1].rgb * (0.488603 * y) + c[2].rgb * (0.488603 * z)
+        + c[3].rgb * (0.488603 * x) + c[4].rgb * (1.092548 * x * y) + c[5].rgb * (1.092548 * y * z)
+        + c[6].rgb * (0.315392 * (3.0 * z * z - 1.0)) + c[7].rgb * (1.092548 * x * z)
+        + c[8].rgb * (0.546274 * (x * x - y * y));
+}
+
+// The environment's lit-side surface terms, from all nine SH coefficients (the subsurface part
+// comes from its directional lights, htsm/environment.rs): the diffuse term with the
+// Fresnel-transmitted SH irradiance instead of one light's, and the glossy reflection as the
+// band-limited radiance in the mirror direction times Schlick's Fresnel. Unshadowed.
+fn environment_surface(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let v = normalize(g.eye.xyz - p);
+    let e_t = max(sh_eval(g.env_irradiance, to_map_frame(n)), vec3<f32>(0.0));
+    let diffuse = g.shading.x * g.transport.rgb * e_t / 3.14159265;
+    let r = reflect(-v, n);
+    let l_r = max(sh_eval(g.env_radiance, to_map_frame(r)), vec3<f32>(0.0));
+    let spec = g.shading.y * fresnel_schlick(dot(n, v), g.material.x) * l_r;
+    return diffuse + spec;
 }

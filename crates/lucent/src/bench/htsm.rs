@@ -59,8 +59,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         println!("{:>3} {:>11} {:>12} {:>9} {:>7}", "n", "size", "ms/frame", "fps", "frames");
     }
     for size in SIZES {
-        let view =
-            HtsmView { camera: scene.camera.frame(centre, radius, 1.0), light, width: size, height: size };
+        let view = HtsmView {
+            camera: scene.camera.frame(centre, radius, 1.0),
+            lights: vec![light],
+            environment: None,
+            width: size,
+            height: size,
+        };
         for samples in SAMPLES {
             let params = HtsmParams { samples, ..base };
             for _ in 0..WARMUP {

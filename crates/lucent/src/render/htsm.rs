@@ -57,7 +57,8 @@ pub fn render(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(
     let (centre, radius) = bounding_sphere(&scene.mesh.positions);
     let view = HtsmView {
         camera: scene.camera.frame(centre, radius, args.width as f32 / args.height as f32),
-        light,
+        lights: vec![light],
+        environment: None,
         width: args.width,
         height: args.height,
     };

@@ -137,7 +137,8 @@ impl HtsmPanel {
         let (_, _, renderer) = self.renderer.as_mut().expect("made above");
         let view = HtsmView {
             camera: inputs.camera,
-            light: inputs.light,
+            lights: vec![inputs.light],
+            environment: None,
             width: inputs.size.0,
             height: inputs.size.1,
         };
