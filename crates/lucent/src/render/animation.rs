@@ -5,12 +5,14 @@
 //! across frames (Mertens §5.5: incremental mode by default, render mode for lighting alone).
 
 use super::frame::GpuFrame;
+use super::htsm::HtsmFrame;
+use super::output::Frame;
 use super::{image_format, tone_map};
 use crate::cli::{ImageFormat, Method, RenderArgs, SolveMode};
 use crate::scene::{Scene, orbit_lights};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use lucent_core::session::Solved;
+use lucent_core::session::{FrameSession, Solved};
 use lucent_gpu::GpuContext;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -63,7 +65,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         }
     };
 
-    let mut gpu: Option<GpuFrame> = None;
+    let mut drawer: Option<Drawer> = None;
     let mut times = Times::default();
     let bar = ProgressBar::new(frames as u64).with_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} (eta {eta}) {msg}")
@@ -74,29 +76,18 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     for i in 0..frames {
         let (mesh, lights) = frame_at(i);
         session.set_positions(&mesh.positions);
-        session.set_lights(lights.clone());
-        let solved = session.solve();
+        session.set_lights(lights);
+        let solved = session.solve().clone();
         first_links = first_links.or(solved.links);
         let t = Instant::now();
-        let image = match &mut gpu {
-            Some(g) => {
-                let moved = (!scene.deform.is_empty()).then_some(&mesh);
-                g.draw(moved, &solved.vertex_radiance, &lights, format)?
-            }
+        let d = match &mut drawer {
+            Some(d) => d,
             None => {
-                let ctx = ctx.take().expect("used once");
-                let g = gpu.insert(GpuFrame::new(
-                    ctx,
-                    scene,
-                    (args.width, args.height),
-                    tone_map(args, scene.exposure),
-                    &mesh,
-                    &solved.vertex_radiance,
-                    !args.no_env_background,
-                )?);
-                g.draw(None, &solved.vertex_radiance, &lights, format)?
+                drawer.insert(Drawer::new(ctx.take().expect("used once"), scene, args, &session, &solved)?)
             }
         };
+        // Every frame but a still one moves the mesh (the drawers start from the rest pose).
+        let image = d.draw(&session, &solved, !scene.deform.is_empty(), format)?;
         let render_ms = ms_since(t);
         let t = Instant::now();
         if !created_dir {
@@ -104,12 +95,12 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
             created_dir = true;
         }
         image.write(&out.join(frame_name(i, format)))?;
-        times.push(solved, render_ms, ms_since(t));
+        times.push(&solved, render_ms, ms_since(t));
         bar.set_message(format!("solve {:.0} ms", solved.timings.total_ms()));
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let adapter = gpu.as_ref().map(GpuFrame::adapter).unwrap_or_default();
+    let adapter = drawer.as_ref().map(Drawer::adapter).unwrap_or_default();
     println!(
         "lucent: {}: {} triangles, {} at {} m, {}{}, {} frames in {:.1} s on {} -> {}",
         scene.source,
@@ -137,6 +128,61 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         first_links.map(|l| format!(", {l} links")).unwrap_or_default(),
     );
     Ok(())
+}
+
+/// What draws the frames: the mesh pass over the solve's per-vertex radiance (Mertens), or
+/// HTSM from the session's pose, lights and environment (Shopf).
+enum Drawer {
+    Mertens(GpuFrame),
+    Htsm(Box<HtsmFrame>),
+}
+
+impl Drawer {
+    fn new(
+        ctx: GpuContext,
+        scene: &Scene,
+        args: &RenderArgs,
+        session: &FrameSession,
+        solved: &Solved,
+    ) -> Result<Self> {
+        Ok(match args.method {
+            Method::Htsm => {
+                let frame = HtsmFrame::new(ctx, scene, args)?;
+                println!("lucent: htsm: {}", frame.summary);
+                Drawer::Htsm(Box::new(frame))
+            }
+            _ => {
+                let size = (args.width, args.height);
+                let tone = tone_map(args, scene.exposure);
+                let background = !args.no_env_background;
+                let (mesh, radiance) = (session.mesh(), &solved.vertex_radiance);
+                Drawer::Mertens(GpuFrame::new(ctx, scene, size, tone, mesh, radiance, background)?)
+            }
+        })
+    }
+
+    fn draw(
+        &mut self,
+        session: &FrameSession,
+        solved: &Solved,
+        moved: bool,
+        format: ImageFormat,
+    ) -> Result<Frame> {
+        match self {
+            Drawer::Mertens(g) => {
+                let mesh = moved.then_some(session.mesh());
+                g.draw(mesh, &solved.vertex_radiance, session.lights(), format)
+            }
+            Drawer::Htsm(h) => h.draw(session, moved, format),
+        }
+    }
+
+    fn adapter(&self) -> String {
+        match self {
+            Drawer::Mertens(g) => g.adapter(),
+            Drawer::Htsm(h) => h.adapter(),
+        }
+    }
 }
 
 /// The default output directory of an animation.

@@ -4,14 +4,17 @@
 //! The mesh comes from the shared scene loader; the density volume from `--volume`; the material
 //! from `--transport-colour` / `--transport-distance`, else from the glTF file's
 //! `KHR_materials_volume` (attenuation colour, attenuation distance in mesh units, converted to
-//! object units), else the defaults. HTSM renders from one light: the first `--light`.
+//! object units), else the defaults. HTSM renders from every light (point, spot, directional)
+//! and the SH environment, with the mesh in the session's pose (the density follows the mesh
+//! through its rest-pose coordinates); [`HtsmFrame`] serves single images and `--frames`.
 
-use crate::cli::{HtsmArgs, HtsmModel, ImageFormat, RenderArgs};
+use crate::cli::{HtsmArgs, HtsmModel, ImageFormat, RenderArgs, SolveMode};
 use crate::render::output::{Frame, HdrImage};
 use crate::render::{Scene, Timings, tone_map};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::mesh::Mesh;
+use lucent_core::session::FrameSession;
 use lucent_core::volume::{DensityVolume, VolumeSpec};
 use lucent_gpu::GpuContext;
 use lucent_gpu::camera::bounding_sphere;
@@ -27,67 +30,107 @@ pub const DEFAULT_TRANSPORT_DISTANCE: f32 = 0.5;
 /// object units: far beyond any path through the object.
 const CLEAR_TRANSPORT_DISTANCE: f32 = 1.0e4;
 
-/// Renders `scene` with HTSM; returns the frame in `format` and the timings of the summary line.
-pub fn render(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(Frame, Timings)> {
-    let gltf = match &scene.mesh_path {
-        Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
-        _ => None,
-    };
-    let mut params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
-    params.tone = tone_map(args, scene.exposure);
-    if !scene.surface {
-        // The lit side's Lambert and Blinn-Phong terms: only the transport term remains.
-        params.diffuse = 0.0;
-        params.specular = 0.0;
-    }
-    let light =
-        scene.lights.first().context("HTSM needs a light (an environment alone is not enough)")?.light;
-    if scene.lights.len() > 1 {
-        log::warn!("HTSM renders from one light; using the first of {}", scene.lights.len());
-    }
+/// The GPU side of an HTSM frame across frames: the renderer (reference images, volume,
+/// phase table) made once on the rest mesh, then per frame the session's pose, lights and
+/// environment.
+pub struct HtsmFrame {
+    ctx: GpuContext,
+    renderer: HtsmRenderer,
+    params: HtsmParams,
+    camera: lucent_gpu::camera::CameraView,
+    size: (u32, u32),
+    /// The summary line's description of the volume and model.
+    pub summary: String,
+    /// Building the density volume, milliseconds.
+    pub volume_ms: f64,
+}
 
-    let ctx = GpuContext::new()?;
-    let t = Instant::now();
-    let volume = build_volume(&args.htsm, &scene.mesh)?;
-    let volume_ms = t.elapsed().as_secs_f64() * 1e3;
-
-    let t = Instant::now();
-    let mut renderer = HtsmRenderer::new(&ctx, &scene.mesh, &volume, args.htsm.htsm_size)
-        .with_context(|| format!("setting up HTSM for {}", scene.source))?;
-    let (centre, radius) = bounding_sphere(&scene.mesh.positions);
-    let view = HtsmView {
-        camera: scene.camera.frame(centre, radius, args.width as f32 / args.height as f32),
-        lights: vec![light],
-        environment: None,
-        width: args.width,
-        height: args.height,
-    };
-    let image = match format {
-        ImageFormat::Png => Frame::Ldr(renderer.render(&ctx, &view, &params)?),
-        ImageFormat::Exr => {
-            let pixels = renderer.render_hdr(&ctx, &view, &params)?;
-            Frame::Hdr(HdrImage { width: args.width, height: args.height, pixels })
+impl HtsmFrame {
+    /// The renderer for `scene`'s rest mesh with `args`' HTSM options, framed as the scene's
+    /// camera says.
+    pub fn new(ctx: GpuContext, scene: &Scene, args: &RenderArgs) -> Result<Self> {
+        let gltf = match &scene.mesh_path {
+            Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
+            _ => None,
+        };
+        let mut params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
+        params.tone = tone_map(args, scene.exposure);
+        if !scene.surface {
+            // The lit side's Lambert and Blinn-Phong terms: only the transport term remains.
+            params.diffuse = 0.0;
+            params.specular = 0.0;
         }
-    };
+        let t = Instant::now();
+        let volume = build_volume(&args.htsm, &scene.mesh)?;
+        let volume_ms = t.elapsed().as_secs_f64() * 1e3;
+        let renderer = HtsmRenderer::new(&ctx, &scene.mesh, &volume, args.htsm.htsm_size)
+            .with_context(|| format!("setting up HTSM for {}", scene.source))?;
+        let (centre, radius) = bounding_sphere(&scene.mesh.positions);
+        let camera = scene.camera.frame(centre, radius, args.width as f32 / args.height as f32);
+        let summary = format!(
+            "volume {} {}x{}x{}, n = {}, K = {}, {} model, T_c = {}, T_d = {} object units, density scale {}; \
+             reference images {}^2 + volume = {:.2} MB",
+            args.htsm.volume,
+            volume.dims[0],
+            volume.dims[1],
+            volume.dims[2],
+            params.samples,
+            params.steps,
+            model_name(params.model),
+            params.transport_colour,
+            params.transport_distance,
+            params.density_scale,
+            renderer.reference_size(),
+            renderer.memory().thesis_bytes() as f64 / 1e6,
+        );
+        Ok(HtsmFrame { ctx, renderer, params, camera, size: (args.width, args.height), summary, volume_ms })
+    }
+
+    /// Draws the session's current state: its mesh pose (`moved`: the positions changed since
+    /// the last draw), every light and the environment; the tone-mapped image, or for
+    /// [`ImageFormat::Exr`] the HDR radiance.
+    pub fn draw(&mut self, session: &FrameSession, moved: bool, format: ImageFormat) -> Result<Frame> {
+        if moved {
+            self.renderer.set_positions(&self.ctx, &session.mesh().positions)?;
+        }
+        let (width, height) = self.size;
+        let view = HtsmView {
+            camera: self.camera,
+            lights: session.lights().iter().map(|l| l.light).collect(),
+            environment: session.environment().copied(),
+            width,
+            height,
+        };
+        Ok(match format {
+            ImageFormat::Png => Frame::Ldr(self.renderer.render(&self.ctx, &view, &self.params)?),
+            ImageFormat::Exr => Frame::Hdr(HdrImage {
+                width,
+                height,
+                pixels: self.renderer.render_hdr(&self.ctx, &view, &self.params)?,
+            }),
+        })
+    }
+
+    /// The adapter, for the summary line.
+    pub fn adapter(&self) -> String {
+        self.ctx.describe()
+    }
+}
+
+/// Renders `scene` (deformed in full) with HTSM from every light and the environment; returns
+/// the frame in `format` and the timings of the summary line.
+pub fn render(scene: &Scene, args: &RenderArgs, format: ImageFormat) -> Result<(Frame, Timings)> {
+    let ctx = GpuContext::new()?;
+    let mut frame = HtsmFrame::new(ctx, scene, args)?;
+    let mut session = scene.session(SolveMode::OnTheFly);
+    let deformed = scene.deformed(1.0);
+    session.set_positions(&deformed.positions);
+    let t = Instant::now();
+    let image = frame.draw(&session, !scene.deform.is_empty(), format)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
-    let memory = renderer.memory();
-    println!(
-        "lucent: htsm: volume {} {}x{}x{}, n = {}, K = {}, {} model, T_c = {}, T_d = {} object units, \
-         density scale {}; reference images {}^2 + volume = {:.2} MB",
-        args.htsm.volume,
-        volume.dims[0],
-        volume.dims[1],
-        volume.dims[2],
-        params.samples,
-        params.steps,
-        model_name(params.model),
-        params.transport_colour,
-        params.transport_distance,
-        params.density_scale,
-        renderer.reference_size(),
-        memory.thesis_bytes() as f64 / 1e6,
-    );
-    Ok((image, Timings { solve_ms: volume_ms, render_ms, adapter: ctx.describe(), links: None }))
+    println!("lucent: htsm: {}", frame.summary);
+    let timings = Timings { solve_ms: frame.volume_ms, render_ms, adapter: frame.adapter(), links: None };
+    Ok((image, timings))
 }
 
 fn model_name(m: TransportModel) -> &'static str {

@@ -32,9 +32,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
     let scene = shrink_wrap_scene(Scene::resolve(&args.overrides())?, args)?;
     if let Some(frames) = args.frames {
-        if args.method == Method::Htsm {
-            bail!("--frames works with --method hierarchical or exact, not htsm");
-        }
         let out = args.out.clone().unwrap_or_else(animation::default_out);
         return animation::run(args, &scene, frames, &out);
     }
