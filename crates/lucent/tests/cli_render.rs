@@ -467,3 +467,34 @@ fn bounces_add_light_between_parts() {
     assert_eq!(run.status.code(), Some(2), "{:?}", stderr_lines(&run));
     assert!(!never.exists());
 }
+
+/// HTSM through the same frame session: `--frames` ramps the deformation (the density follows
+/// the mesh), and an environment alone lights the object with no light at all.
+#[test]
+fn htsm_animates_and_takes_the_environment() {
+    if !common::gpu_or_skip() {
+        return;
+    }
+    let dir = scratch("htsm_frames");
+    let out = dir.join("anim");
+    let small = ["--width", "64", "--height", "48", "--htsm-size", "64"];
+    let mut args = vec!["render", "--method", "htsm", "--frames", "2", "--deform", "twist:90"];
+    args.extend(small);
+    args.extend(["--out", out.to_str().unwrap()]);
+    let run = lucent(&args, &[]);
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let first = image::open(out.join("frame_0001.png")).unwrap().to_rgba8();
+    let last = image::open(out.join("frame_0002.png")).unwrap().to_rgba8();
+    assert_ne!(first, last, "the twist ramps from the rest pose to full");
+
+    let env = dir.join("env.png");
+    let mut args = vec!["render", "--method", "htsm", "--env", "forest"];
+    args.extend(small);
+    args.extend(["--out", env.to_str().unwrap()]);
+    let run = lucent(&args, &[]);
+    assert!(run.status.success(), "{:?}", stderr_lines(&run));
+    let img = image::open(&env).unwrap().to_rgb8();
+    // The object (centre pixels) is lit by the environment alone.
+    let centre = img.get_pixel(32, 24).0;
+    assert!(centre.iter().map(|&c| c as u32).sum::<u32>() > 60, "centre {centre:?}");
+}
