@@ -133,7 +133,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
 /// What draws the frames: the mesh pass over the solve's per-vertex radiance (Mertens), or
 /// HTSM from the session's pose, lights and environment (Shopf).
 enum Drawer {
-    Mertens(GpuFrame),
+    Mertens(Box<GpuFrame>),
     Htsm(Box<HtsmFrame>),
 }
 
@@ -156,7 +156,7 @@ impl Drawer {
                 let tone = tone_map(args, scene.exposure);
                 let background = !args.no_env_background;
                 let (mesh, radiance) = (session.mesh(), &solved.vertex_radiance);
-                Drawer::Mertens(GpuFrame::new(ctx, scene, size, tone, mesh, radiance, background)?)
+                Drawer::Mertens(Box::new(GpuFrame::new(ctx, scene, size, tone, mesh, radiance, background)?))
             }
         })
     }

@@ -2,6 +2,7 @@
 //! the scene, and runs one frame per redraw: take worker replies, run the UI, send the new state
 //! to the worker, draw, take screenshots, advance the script.
 
+use super::core_adapter::EnvCache;
 use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
@@ -78,6 +79,8 @@ pub struct App {
     exit_after_shot: bool,
     /// A scripted `animate:SECONDS` runs until then (noise flowing, the first light orbiting).
     animate_until: Option<Instant>,
+    /// The environment HTSM draws with (the worker keeps its own for the solve).
+    environment: EnvCache,
     /// The first error that ends the run (returned by [`super::run`]).
     pub error: Option<anyhow::Error>,
 }
@@ -101,6 +104,7 @@ impl App {
             pending_shot: None,
             exit_after_shot: false,
             animate_until: None,
+            environment: EnvCache::default(),
             error: None,
         }
     }
@@ -201,9 +205,9 @@ impl App {
         {
             let params = draw_params(&self.framing, state, self.viewport, false);
             let size = (self.viewport.1.x as u32, self.viewport.1.y as u32);
-            let (ctx, lights) = (&surface.gfx.ctx, &state.params.lights);
-            let htsm = &mut surface.htsm;
-            htsm.update(ctx, &surface.egui_ctx, mesh, &state.htsm, lights, params.camera, params.tone, size);
+            let light = (&state.params.lights[..], self.environment.get(&state.params));
+            let (ctx, renderer) = (&surface.gfx.ctx, &mut surface.egui_renderer);
+            surface.htsm.update(ctx, renderer, mesh, &state.htsm, light, params.camera, params.tone, size);
         }
         let (output, requests, viewport) = run_ui(surface, &mut self.scene.state, &status, &self.framing);
         self.viewport = viewport;

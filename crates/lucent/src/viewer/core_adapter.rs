@@ -67,18 +67,38 @@ pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
 #[derive(Default)]
 pub struct SolverSession {
     session: Option<FrameSession>,
-    environment: Option<(EnvChoice, Option<Environment>)>,
+    environment: EnvCache,
+}
+
+/// The environment of the panel's choice, its SH projection made when the choice changes.
+#[derive(Default)]
+pub struct EnvCache(Option<(EnvChoice, Option<Environment>)>);
+
+impl EnvCache {
+    /// The environment of `params` (choice, rotation, strength), loaded and projected on first
+    /// use. A missing or bad map is logged and lights nothing.
+    pub fn get(&mut self, params: &SolveParams) -> Option<Environment> {
+        let choice = params.env;
+        if self.0.as_ref().is_none_or(|(c, _)| *c != choice) {
+            let env = choice.load().and_then(|r| match r {
+                Ok(map) => Some(Environment::from_map(&map)),
+                Err(e) => {
+                    log::warn!("environment {}: {e}", choice.label());
+                    None
+                }
+            });
+            self.0 = Some((choice, env));
+        }
+        let env = self.0.as_ref().and_then(|(_, env)| *env)?;
+        Some(Environment { rotation_deg: params.env_rotation_deg, intensity: params.env_strength, ..env })
+    }
 }
 
 impl SolverSession {
     /// Solves for the per-vertex radiance of `mesh` (the session's rest mesh or a deformation
     /// of it; a new topology starts a new session) under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
-        let environment = self.environment(params.env).map(|env| Environment {
-            rotation_deg: params.env_rotation_deg,
-            intensity: params.env_strength,
-            ..env
-        });
+        let environment = self.environment.get(params);
         let transport = Transport {
             material: params.material.clone(),
             scale_m: params.scale_m,
@@ -117,22 +137,6 @@ impl SolverSession {
             solver: "hierarchical",
             clusters,
         }
-    }
-
-    /// The environment for `choice`, loaded and projected on first use. A missing or bad map
-    /// is logged and lights nothing.
-    fn environment(&mut self, choice: EnvChoice) -> Option<Environment> {
-        if self.environment.as_ref().is_none_or(|(c, _)| *c != choice) {
-            let env = choice.load().and_then(|r| match r {
-                Ok(map) => Some(Environment::from_map(&map)),
-                Err(e) => {
-                    log::warn!("environment {}: {e}", choice.label());
-                    None
-                }
-            });
-            self.environment = Some((choice, env));
-        }
-        self.environment.as_ref().and_then(|(_, env)| *env)
     }
 }
 

@@ -2,13 +2,15 @@
 //! switchable with the homogeneous Mertens solve in the panel.
 //!
 //! HTSM needs no CPU solve: [`HtsmPanel::update`] renders the current (deformed) mesh with a
-//! density volume through [`lucent_gpu::htsm::HtsmRenderer`] on the viewer's device, from the
-//! first light, and keeps the image as an egui texture that the UI draws over the 3D viewport.
-//! It re-renders only when something it depends on changed (camera, light, mesh, settings,
-//! viewport size), so an idle window costs nothing.
+//! density volume through [`lucent_gpu::htsm::HtsmRenderer`] on the viewer's device, from every
+//! light and the environment, straight into a GPU texture of the 3D viewport's size that egui
+//! draws as a native texture (no read-back). The renderer is made once per mesh topology and
+//! volume; a deformation only moves its vertices (the density follows through the rest pose).
+//! It re-renders only when something it depends on changed (camera, lights, environment, mesh,
+//! settings, viewport size), so an idle window costs nothing.
 
 use glam::Vec3;
-use lucent_core::irradiance::Light;
+use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::VolumeSpec;
 use lucent_gpu::GpuContext;
@@ -47,7 +49,8 @@ struct Inputs {
     volume: String,
     params: HtsmParams,
     camera: CameraView,
-    light: Light,
+    lights: Vec<Light>,
+    environment: Option<Environment>,
     size: (u32, u32),
 }
 
@@ -55,18 +58,39 @@ impl Inputs {
     /// The same mesh (by identity) and equal everything else.
     fn same_as(&self, other: &Inputs) -> bool {
         Arc::ptr_eq(&self.mesh, &other.mesh)
-            && (&self.volume, &self.params, &self.camera, &self.light, self.size)
-                == (&other.volume, &other.params, &other.camera, &other.light, other.size)
+            && (&self.volume, &self.params, &self.camera, &self.lights, &self.environment, self.size)
+                == (
+                    &other.volume,
+                    &other.params,
+                    &other.camera,
+                    &other.lights,
+                    &other.environment,
+                    other.size,
+                )
     }
 }
+
+/// The GPU texture HTSM draws into, registered with egui.
+struct Target {
+    view: wgpu::TextureView,
+    id: egui::TextureId,
+    size: (u32, u32),
+}
+
+/// The texture's format: what egui-wgpu takes for native textures (gamma-encoded bytes,
+/// sampled as they are), and what the tone map writes for a PNG.
+const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// The HTSM renderer of the current mesh and volume, and its last image.
 #[derive(Default)]
 pub struct HtsmPanel {
-    renderer: Option<(Arc<Mesh>, String, HtsmRenderer)>,
+    /// The renderer with the topology and volume it was made for.
+    renderer: Option<(Vec<[u32; 3]>, String, HtsmRenderer)>,
+    /// The positions last uploaded (the renderer's mesh pose).
+    positions: Option<Arc<Mesh>>,
     last: Option<Inputs>,
-    texture: Option<egui::TextureHandle>,
-    /// GPU time of the last HTSM frame (encode to read-back), milliseconds.
+    target: Option<Target>,
+    /// CPU time to record and submit the last HTSM frame, milliseconds.
     pub frame_ms: f64,
     /// Why the last render failed (shown in the panel instead of an image).
     pub error: Option<String>,
@@ -74,84 +98,111 @@ pub struct HtsmPanel {
 
 impl HtsmPanel {
     /// Renders `mesh` with `settings` into the texture when an input changed. `lights` are the
-    /// viewer's (normalised mesh units); HTSM uses the first. Errors (a bad volume spec, a
-    /// parameter out of range) are kept in [`HtsmPanel::error`], not returned: the window stays.
+    /// viewer's (normalised mesh units). Errors (a bad volume spec, a parameter out of range, no
+    /// light and no environment) are kept in [`HtsmPanel::error`], not returned: the window
+    /// stays.
     #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
         ctx: &GpuContext,
-        egui_ctx: &egui::Context,
+        egui_renderer: &mut egui_wgpu::Renderer,
         mesh: &Arc<Mesh>,
         settings: &HtsmSettings,
-        lights: &[lucent_core::irradiance::Light],
+        (lights, environment): (&[Light], Option<Environment>),
         camera: CameraView,
         tone: ToneMap,
         size: (u32, u32),
     ) {
-        let light = lights
-            .first()
-            .copied()
-            .unwrap_or(Light::Directional { direction: Vec3::NEG_Z, irradiance: Vec3::ONE });
         let inputs = Inputs {
             mesh: mesh.clone(),
             volume: settings.volume.clone(),
             params: HtsmParams { tone, ..settings.params },
             camera,
-            light,
+            lights: lights.to_vec(),
+            environment,
             size: (size.0.max(1), size.1.max(1)),
         };
         if self.last.as_ref().is_some_and(|last| last.same_as(&inputs)) {
             return;
         }
         self.last = Some(inputs.clone());
-        match self.render(ctx, &inputs) {
-            Ok(image) => {
-                let pixels = egui::ColorImage::from_rgba_unmultiplied(
-                    [image.width() as usize, image.height() as usize],
-                    image.as_raw(),
-                );
-                match &mut self.texture {
-                    Some(t) => t.set(pixels, egui::TextureOptions::LINEAR),
-                    None => {
-                        self.texture =
-                            Some(egui_ctx.load_texture("htsm", pixels, egui::TextureOptions::LINEAR))
-                    }
-                }
-                self.error = None;
-            }
-            Err(e) => self.error = Some(format!("{e:#}")),
-        }
+        self.error = self.render(ctx, egui_renderer, &inputs).err().map(|e| format!("{e:#}"));
     }
 
-    fn render(&mut self, ctx: &GpuContext, inputs: &Inputs) -> anyhow::Result<image::RgbaImage> {
+    fn render(
+        &mut self,
+        ctx: &GpuContext,
+        egui_renderer: &mut egui_wgpu::Renderer,
+        inputs: &Inputs,
+    ) -> anyhow::Result<()> {
         inputs.params.validate()?;
-        let stale =
-            !matches!(&self.renderer, Some((m, v, _)) if Arc::ptr_eq(m, &inputs.mesh) && *v == inputs.volume);
+        let mesh = &inputs.mesh;
+        let stale = !matches!(&self.renderer, Some((t, v, _)) if *t == mesh.triangles && *v == inputs.volume);
         if stale {
             self.renderer = None;
             let spec: VolumeSpec = inputs.volume.parse()?;
-            let volume = spec.build(volume_dims_for(&inputs.mesh, VOLUME_RES))?;
-            let renderer = HtsmRenderer::new(ctx, &inputs.mesh, &volume, REFERENCE_SIZE)?;
-            self.renderer = Some((inputs.mesh.clone(), inputs.volume.clone(), renderer));
+            let volume = spec.build(volume_dims_for(mesh, VOLUME_RES))?;
+            let renderer = HtsmRenderer::new(ctx, mesh, &volume, REFERENCE_SIZE)?;
+            self.renderer = Some((mesh.triangles.clone(), inputs.volume.clone(), renderer));
+            self.positions = Some(mesh.clone());
         }
         let (_, _, renderer) = self.renderer.as_mut().expect("made above");
+        if !self.positions.as_ref().is_some_and(|p| Arc::ptr_eq(p, mesh)) {
+            renderer.set_positions(ctx, &mesh.positions)?;
+            self.positions = Some(mesh.clone());
+        }
+        let target = ensure_target(&mut self.target, ctx, egui_renderer, inputs.size);
         let view = HtsmView {
             camera: inputs.camera,
-            lights: vec![inputs.light],
-            environment: None,
+            lights: inputs.lights.clone(),
+            environment: inputs.environment,
             width: inputs.size.0,
             height: inputs.size.1,
         };
         let t = Instant::now();
-        let image = renderer.render(ctx, &view, &inputs.params)?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        renderer.encode_into(ctx, &mut encoder, &target.view, TARGET_FORMAT, &view, &inputs.params)?;
+        ctx.queue.submit([encoder.finish()]);
         self.frame_ms = t.elapsed().as_secs_f64() * 1e3;
-        Ok(image)
+        Ok(())
     }
 
     /// The last HTSM image, if there is one.
     pub fn texture(&self) -> Option<egui::TextureId> {
-        self.texture.as_ref().map(|t| t.id())
+        self.target.as_ref().filter(|_| self.error.is_none()).map(|t| t.id)
     }
+}
+
+/// The target texture of `size`, made (or remade, keeping its egui id) when the size changed.
+fn ensure_target<'a>(
+    target: &'a mut Option<Target>,
+    ctx: &GpuContext,
+    egui_renderer: &mut egui_wgpu::Renderer,
+    size: (u32, u32),
+) -> &'a Target {
+    if target.as_ref().is_none_or(|t| t.size != size) {
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lucent viewer htsm"),
+            size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: TARGET_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let filter = wgpu::FilterMode::Linear;
+        let id = match target.take() {
+            Some(old) => {
+                egui_renderer.update_egui_texture_from_wgpu_texture(&ctx.device, &view, filter, old.id);
+                old.id
+            }
+            None => egui_renderer.register_native_texture(&ctx.device, &view, filter),
+        };
+        *target = Some(Target { view, id, size });
+    }
+    target.as_ref().expect("made above")
 }
 
 /// The panel's HTSM controls.
@@ -190,7 +241,7 @@ pub fn controls(ui: &mut egui::Ui, s: &mut HtsmSettings, panel: &HtsmPanel) {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
         }
         None => {
-            ui.label(format!("HTSM frame {:.1} ms (from the first light)", panel.frame_ms));
+            ui.label(format!("HTSM frame {:.1} ms (every light and the environment)", panel.frame_ms));
         }
     }
 }
