@@ -7,8 +7,9 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::Vec3;
-use lucent_core::irradiance::{Bvh, Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
+use lucent_core::irradiance::{Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
 use lucent_core::mesh::Mesh;
+use lucent_core::mesh::bvh::Bvh;
 use std::f32::consts::PI;
 use std::hint::black_box;
 use std::path::PathBuf;

@@ -16,10 +16,12 @@
 //! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
 //!   reference for the same integral.
 //! * [`limits`]: what lucent reads from files and the memory it spends decoding them.
-//! * [`mesh`]: triangle meshes, file loading and validation, generators and deformers.
+//! * [`mesh`]: triangle meshes, file loading and validation, generators and deformers, and the
+//!   BVH for ray and closest-point queries.
 //! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
-//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes.
+//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes:
+//!   oracle, refinement, and each frame's pull, gather and push.
 //! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
 //!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
 //!   for what changed (§5.5).

@@ -8,7 +8,7 @@ use glam::Vec3;
 use hierarchy_util::check_quad_tree;
 use lucent_core::hierarchy::shrink_wrap::{ShrinkWrapBase, ShrinkWrapError, ShrinkWrapOptions, shrink_wrap};
 use lucent_core::hierarchy::subdivision::{butterfly, octahedron};
-use lucent_core::irradiance::shadow::Bvh;
+use lucent_core::mesh::bvh::Bvh;
 use lucent_core::mesh::{Mesh, embedded, generate};
 use std::time::Instant;
 
@@ -147,7 +147,7 @@ fn torus_open_and_empty_targets_are_rejected() {
 
 #[test]
 fn bvh_nearest_point_and_farthest_hit_agree_with_brute_force() {
-    use lucent_core::irradiance::shadow::closest_on_triangle;
+    use lucent_core::mesh::bvh::closest_on_triangle;
     let target = embedded::bunny();
     let bvh = Bvh::build(&target);
     let (lo, hi) = target.bounds();

@@ -7,9 +7,9 @@ use glam::Vec3;
 use irradiance_util::{merge, plane, torus, twist, uv_sphere};
 use lucent_core::bssrdf::Entry;
 use lucent_core::irradiance::{
-    Bvh, Light, SceneLight, ShadowCaster, Update, face_irradiance, face_irradiance_shadowed,
+    Light, SceneLight, ShadowCaster, Update, face_irradiance, face_irradiance_shadowed,
 };
-use lucent_core::mesh::Mesh;
+use lucent_core::mesh::{Bvh, Mesh};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 

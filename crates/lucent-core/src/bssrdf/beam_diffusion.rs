@@ -123,14 +123,6 @@ pub fn beam_diffusion_single(sigma_s: f64, sigma_a: f64, eta: f64, r: f64) -> f6
     integrate_geometric(first, t_crit + 60.0 / sigma_t, 1.4, true, integrand).max(0.0)
 }
 
-/// The profile of one channel in optical units (`σ_t = 1`) for albedo `rho` at `eta`.
-pub fn optical_profile(rho: f64, eta: f64, r: f64) -> Split {
-    Split {
-        multiple: beam_diffusion_multiple(rho, 1.0 - rho, eta, r),
-        single: beam_diffusion_single(rho, 1.0 - rho, eta, r),
-    }
-}
-
 /// Effective albedo `∫ 2π r R(r) dr` of one channel in optical units, by parts.
 pub fn effective_albedo(rho: f64, eta: f64) -> Split {
     let part = |f: &dyn Fn(f64) -> f64| integrate_geometric(1e-5, 400.0, 1.25, true, |r| 2.0 * PI * r * f(r));

@@ -52,8 +52,7 @@ impl Ord for Merge {
 /// Builds the binary face cluster hierarchy of `mesh` (see the module documentation).
 /// A mesh without faces gives an empty hierarchy.
 pub fn build(mesh: &Mesh) -> Hierarchy {
-    let n = mesh.triangles.len();
-    if n == 0 {
+    if mesh.triangles.is_empty() {
         return Hierarchy {
             nodes: Vec::new(),
             geom: Vec::new(),
@@ -66,155 +65,206 @@ pub fn build(mesh: &Mesh) -> Hierarchy {
             vertex_count: mesh.positions.len(),
         };
     }
-    let cap = 2 * n - 1;
-    let mut children: Vec<Vec<u32>> = Vec::with_capacity(cap);
-    let mut face: Vec<u32> = Vec::with_capacity(cap);
-    let mut area: Vec<f64> = Vec::with_capacity(cap);
-    let mut perimeter: Vec<f64> = Vec::with_capacity(cap);
-    let mut alive: Vec<bool> = Vec::with_capacity(cap);
-    // Dual adjacency: (neighbour id at the time of insertion, shared boundary length).
-    let mut adj: Vec<Vec<(u32, f64)>> = Vec::with_capacity(cap);
-    // Union-find forwarding from merged ids to their current cluster.
-    let mut forward: Vec<u32> = Vec::with_capacity(cap);
+    let mut clusters = Clusters::faces(mesh);
+    clusters.link_dual_edges(mesh);
+    clusters.contract(mesh.triangles.len());
+    let root = clusters.join_components();
+    Hierarchy::from_raw(
+        mesh,
+        RawTree { children: clusters.children, face: clusters.face, polygon: None, root },
+    )
+}
 
-    let edge_len = |a: u32, b: u32| -> f64 {
-        (mesh.positions[a as usize].as_dvec3() - mesh.positions[b as usize].as_dvec3()).length()
-    };
-    for (f, &[a, b, c]) in mesh.triangles.iter().enumerate() {
-        children.push(Vec::new());
-        face.push(f as u32);
-        area.push(mesh.face_area(f) as f64);
-        perimeter.push(edge_len(a, b) + edge_len(b, c) + edge_len(c, a));
-        alive.push(true);
-        adj.push(Vec::new());
-        forward.push(f as u32);
+/// The clusters during the build, by id: the faces first, then one per merge.
+struct Clusters {
+    /// The two clusters each one merged (empty for a face).
+    children: Vec<Vec<u32>>,
+    /// The mesh face of a face cluster, `u32::MAX` for a merged one.
+    face: Vec<u32>,
+    /// Area, mesh units².
+    area: Vec<f64>,
+    /// Boundary length, mesh units (set for the dual-graph contraction only).
+    perimeter: Vec<f64>,
+    /// Whether the cluster is not yet merged into another (dual-graph contraction only).
+    alive: Vec<bool>,
+    /// Dual adjacency: (neighbour id at the time of insertion, shared boundary length).
+    adj: Vec<Vec<(u32, f64)>>,
+    /// Union-find forwarding from merged ids to their current cluster.
+    forward: Vec<u32>,
+}
+
+/// Length of the mesh edge between vertices `a` and `b`.
+fn edge_len(mesh: &Mesh, a: u32, b: u32) -> f64 {
+    (mesh.positions[a as usize].as_dvec3() - mesh.positions[b as usize].as_dvec3()).length()
+}
+
+/// The cost of merging clusters of perimeters `pa` and `pb` that share a boundary of length
+/// `shared`: the merged cluster's `P² / 4π` (see the module documentation).
+fn merge_cost(pa: f64, pb: f64, shared: f64) -> f64 {
+    let p = (pa + pb - 2.0 * shared).max(0.0);
+    p * p / (4.0 * std::f64::consts::PI)
+}
+
+/// The current cluster of id `x` (following merges), compressing the path.
+fn find(forward: &mut [u32], mut x: u32) -> u32 {
+    let mut root = x;
+    while forward[root as usize] != root {
+        root = forward[root as usize];
+    }
+    while forward[x as usize] != root {
+        let nx = forward[x as usize];
+        forward[x as usize] = root;
+        x = nx;
+    }
+    root
+}
+
+impl Clusters {
+    /// One cluster per face, with room for every merge, and no adjacency yet.
+    fn faces(mesh: &Mesh) -> Self {
+        let cap = 2 * mesh.triangles.len() - 1;
+        let mut c = Clusters {
+            children: Vec::with_capacity(cap),
+            face: Vec::with_capacity(cap),
+            area: Vec::with_capacity(cap),
+            perimeter: Vec::with_capacity(cap),
+            alive: Vec::with_capacity(cap),
+            adj: Vec::with_capacity(cap),
+            forward: Vec::with_capacity(cap),
+        };
+        for (f, &[a, b, v]) in mesh.triangles.iter().enumerate() {
+            c.children.push(Vec::new());
+            c.face.push(f as u32);
+            c.area.push(mesh.face_area(f) as f64);
+            c.perimeter.push(edge_len(mesh, a, b) + edge_len(mesh, b, v) + edge_len(mesh, v, a));
+            c.alive.push(true);
+            c.adj.push(Vec::new());
+            c.forward.push(f as u32);
+        }
+        c
     }
 
-    // Dual edges from shared undirected mesh edges.
-    let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * n);
-    for (f, tri) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            if a == b {
-                continue;
+    /// The dual edges: every pair of faces sharing an undirected mesh edge, with its length.
+    fn link_dual_edges(&mut self, mesh: &Mesh) {
+        let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * mesh.triangles.len());
+        for (f, tri) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if a == b {
+                    continue;
+                }
+                let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
+                edges.push((key, f as u32));
             }
-            let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
-            edges.push((key, f as u32));
+        }
+        edges.sort_unstable();
+        let mut i = 0;
+        while i < edges.len() {
+            let mut j = i + 1;
+            while j < edges.len() && edges[j].0 == edges[i].0 {
+                j += 1;
+            }
+            let key = edges[i].0;
+            let len = edge_len(mesh, (key >> 32) as u32, key as u32);
+            for x in i..j {
+                for y in x + 1..j {
+                    let (f, g) = (edges[x].1, edges[y].1);
+                    if f != g {
+                        self.adj[f as usize].push((g, len));
+                        self.adj[g as usize].push((f, len));
+                    }
+                }
+            }
+            i = j;
+        }
+        // Faces sharing two edges (folds) appear twice: combine.
+        for a in self.adj.iter_mut() {
+            combine_duplicates(a);
         }
     }
-    edges.sort_unstable();
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j].0 == edges[i].0 {
-            j += 1;
-        }
-        let key = edges[i].0;
-        let len = edge_len((key >> 32) as u32, key as u32);
-        for x in i..j {
-            for y in x + 1..j {
-                let (f, g) = (edges[x].1, edges[y].1);
-                if f != g {
-                    adj[f as usize].push((g, len));
-                    adj[g as usize].push((f, len));
+
+    /// Greedy contraction of the dual graph of the `n` faces, cheapest merge first, until no
+    /// dual edge is left.
+    fn contract(&mut self, n: usize) {
+        let mut heap = BinaryHeap::with_capacity(3 * n);
+        for a in 0..n {
+            for &(b, shared) in &self.adj[a] {
+                if (a as u32) < b {
+                    heap.push(Merge {
+                        cost: merge_cost(self.perimeter[a], self.perimeter[b as usize], shared),
+                        a: a as u32,
+                        b,
+                    });
                 }
             }
         }
-        i = j;
-    }
-    // Faces sharing two edges (folds) appear twice: combine.
-    for a in adj.iter_mut() {
-        combine_duplicates(a);
-    }
-
-    let merge_cost = |pa: f64, pb: f64, shared: f64| -> f64 {
-        let p = (pa + pb - 2.0 * shared).max(0.0);
-        p * p / (4.0 * std::f64::consts::PI)
-    };
-    let mut heap = BinaryHeap::with_capacity(3 * n);
-    for a in 0..n {
-        for &(b, shared) in &adj[a] {
-            if (a as u32) < b {
-                heap.push(Merge {
-                    cost: merge_cost(perimeter[a], perimeter[b as usize], shared),
-                    a: a as u32,
-                    b,
-                });
+        while let Some(Merge { a, b, .. }) = heap.pop() {
+            if !self.alive[a as usize] || !self.alive[b as usize] {
+                continue;
             }
+            self.merge(a, b, &mut heap);
         }
     }
 
-    fn find(forward: &mut [u32], mut x: u32) -> u32 {
-        let mut root = x;
-        while forward[root as usize] != root {
-            root = forward[root as usize];
-        }
-        while forward[x as usize] != root {
-            let nx = forward[x as usize];
-            forward[x as usize] = root;
-            x = nx;
-        }
-        root
-    }
-
-    while let Some(Merge { a, b, .. }) = heap.pop() {
-        if !alive[a as usize] || !alive[b as usize] {
-            continue;
-        }
-        let c = children.len() as u32;
+    /// Merges the live clusters `a` and `b` into a new one and queues its merges with its
+    /// neighbours.
+    fn merge(&mut self, a: u32, b: u32, heap: &mut BinaryHeap<Merge>) {
+        let c = self.children.len() as u32;
         // Entries may name clusters merged since: resolve them (their lengths add up).
         let mut shared = 0.0;
-        let list = std::mem::take(&mut adj[a as usize]);
+        let list = std::mem::take(&mut self.adj[a as usize]);
         for &(x, len) in &list {
-            if find(&mut forward, x) == b {
+            if find(&mut self.forward, x) == b {
                 shared += len;
             }
         }
-        adj[a as usize] = list;
+        self.adj[a as usize] = list;
         let mut nb: Vec<(u32, f64)> = Vec::new();
         for src in [a, b] {
-            for &(x, len) in &std::mem::take(&mut adj[src as usize]) {
-                let x = find(&mut forward, x);
-                if x != a && x != b && alive[x as usize] {
+            for &(x, len) in &std::mem::take(&mut self.adj[src as usize]) {
+                let x = find(&mut self.forward, x);
+                if x != a && x != b && self.alive[x as usize] {
                     nb.push((x, len));
                 }
             }
         }
         combine_duplicates(&mut nb);
-        alive[a as usize] = false;
-        alive[b as usize] = false;
-        forward[a as usize] = c;
-        forward[b as usize] = c;
-        children.push(vec![a, b]);
-        face.push(u32::MAX);
-        area.push(area[a as usize] + area[b as usize]);
-        let p = (perimeter[a as usize] + perimeter[b as usize] - 2.0 * shared).max(0.0);
-        perimeter.push(p);
-        alive.push(true);
-        forward.push(c);
+        self.alive[a as usize] = false;
+        self.alive[b as usize] = false;
+        self.forward[a as usize] = c;
+        self.forward[b as usize] = c;
+        self.children.push(vec![a, b]);
+        self.face.push(u32::MAX);
+        self.area.push(self.area[a as usize] + self.area[b as usize]);
+        let p = (self.perimeter[a as usize] + self.perimeter[b as usize] - 2.0 * shared).max(0.0);
+        self.perimeter.push(p);
+        self.alive.push(true);
+        self.forward.push(c);
         for &(x, len) in &nb {
-            heap.push(Merge { cost: merge_cost(p, perimeter[x as usize], len), a: x, b: c });
+            heap.push(Merge { cost: merge_cost(p, self.perimeter[x as usize], len), a: x, b: c });
             // The neighbour's own entries for a and b now resolve to c through `forward`.
         }
-        adj.push(nb);
+        self.adj.push(nb);
     }
 
-    // Size-balanced fallback over the remaining roots (components).
-    let mut roots: BinaryHeap<Merge> = (0..children.len() as u32)
-        .filter(|&x| alive[x as usize])
-        .map(|x| Merge { cost: area[x as usize], a: x, b: x })
-        .collect();
-    while roots.len() > 1 {
-        let x = roots.pop().expect("len > 1").a;
-        let y = roots.pop().expect("len > 1").a;
-        let c = children.len() as u32;
-        children.push(vec![x, y]);
-        face.push(u32::MAX);
-        area.push(area[x as usize] + area[y as usize]);
-        roots.push(Merge { cost: area[c as usize], a: c, b: c });
+    /// Size-balanced fallback over the roots left (components, or faces sharing no edge): the
+    /// two smallest by area first. Returns the root.
+    fn join_components(&mut self) -> u32 {
+        let mut roots: BinaryHeap<Merge> = (0..self.children.len() as u32)
+            .filter(|&x| self.alive[x as usize])
+            .map(|x| Merge { cost: self.area[x as usize], a: x, b: x })
+            .collect();
+        while roots.len() > 1 {
+            let x = roots.pop().expect("len > 1").a;
+            let y = roots.pop().expect("len > 1").a;
+            let c = self.children.len() as u32;
+            self.children.push(vec![x, y]);
+            self.face.push(u32::MAX);
+            self.area.push(self.area[x as usize] + self.area[y as usize]);
+            roots.push(Merge { cost: self.area[c as usize], a: c, b: c });
+        }
+        roots.pop().expect("at least one face").a
     }
-    let root = roots.pop().expect("at least one face").a;
-    Hierarchy::from_raw(mesh, RawTree { children, face, polygon: None, root })
 }
 
 /// Sums the lengths of repeated neighbour ids (keeps the first occurrence's position order).

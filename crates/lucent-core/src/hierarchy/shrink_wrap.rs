@@ -37,7 +37,7 @@
 //! smaller than the finest triangles are cut off; [`ShrinkWrapped`] reports the distances.
 
 use super::subdivision::{self, Subdivided, SubdivisionError};
-use crate::irradiance::shadow::Bvh;
+use crate::mesh::bvh::Bvh;
 use crate::mesh::{Mesh, generate};
 use glam::Vec3;
 use rayon::prelude::*;

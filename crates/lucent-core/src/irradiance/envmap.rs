@@ -270,12 +270,6 @@ impl EnvMap {
             .collect();
         EnvMap::new(self.width, self.height, texels)
     }
-
-    /// Texels as a flat `[r, g, b, r, g, b, ...]` `f32` array, row 0 first (for a GPU upload
-    /// as an `Rgba32Float` texture, pad each texel with alpha 1).
-    pub fn to_rgb_f32(&self) -> Vec<f32> {
-        self.texels.iter().flat_map(|t| t.to_array()).collect()
-    }
 }
 
 /// The light probes compiled into lucent, `(name, OpenEXR bytes)`: 1024 x 512 equirectangular,

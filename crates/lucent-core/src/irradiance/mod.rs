@@ -3,7 +3,7 @@
 //! (Fresnel's `F_t(eta, w_i)`, times the half-space albedo ratio of [`crate::bssrdf::Entry`]).
 //!
 //! Sources: point, directional and spot lights ([`lights`]), optionally shadowed by ray casting
-//! against a refitted BVH of the (deforming) mesh ([`shadow`]), and a distant environment given
+//! against a refitted BVH of the (deforming) mesh ([`shadow`], over [`crate::mesh::bvh`]), and a distant environment given
 //! by nine spherical-harmonic coefficients ([`sh`], [`envmap`]), shadowed by the same BVH
 //! ([`occlusion`]; Mertens §5.3 leaves it unshadowed: "shadows cannot be taken into account,
 //! unless we assume rigid objects").
@@ -18,7 +18,7 @@ pub mod shadow;
 pub use envmap::{EnvMap, EnvMapError, equirect_direction, equirect_uv};
 pub use lights::{Incident, Light, LightKind, SceneLight, light_irradiance, spot_falloff};
 pub use sh::{BandWeights, Sh9};
-pub use shadow::{Bvh, ShadowCaster, Update};
+pub use shadow::{ShadowCaster, Update};
 
 use crate::Rgb;
 use crate::bssrdf::Entry;

@@ -78,15 +78,6 @@ impl Sh9 {
         self.coeffs.map(|c| c.to_array())
     }
 
-    /// Adds `radiance * weight * Y_lm(d)` (one quadrature sample of the projection integral;
-    /// `weight` is the sample's solid angle in sr, `d` a unit direction).
-    #[inline]
-    pub fn add_sample(&mut self, d: Vec3, radiance: Rgb, weight: f32) {
-        for (c, y) in self.coeffs.iter_mut().zip(sh_basis(d)) {
-            *c += radiance * (y * weight);
-        }
-    }
-
     /// The band-limited radiance `Σ L_lm Y_lm(d)` at unit direction `d`.
     pub fn radiance(&self, d: Vec3) -> Rgb {
         self.coeffs.iter().zip(sh_basis(d)).map(|(c, y)| *c * y).sum()
@@ -108,11 +99,6 @@ impl Sh9 {
     /// [`Sh9::irradiance`].
     pub fn convolve(&self, n: Vec3, w: &BandWeights) -> Rgb {
         self.coeffs.iter().zip(sh_basis(n)).zip(SH_BAND).map(|((c, y), l)| *c * (y * w.0[l])).sum()
-    }
-
-    /// Coefficients scaled by `s`.
-    pub fn scaled(&self, s: f32) -> Sh9 {
-        Sh9 { coeffs: self.coeffs.map(|c| c * s) }
     }
 }
 

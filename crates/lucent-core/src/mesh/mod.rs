@@ -1,8 +1,10 @@
 //! Triangle meshes: the flat data every later stage reads (positions and index triples),
-//! loading and validation, generators and deformers.
+//! loading and validation, generators and deformers (Mertens §5.1, §6), and the bounding volume
+//! hierarchy that answers ray and closest-point queries against a (deforming) mesh ([`bvh`]).
 
 use glam::Vec3;
 
+pub mod bvh;
 pub mod deform;
 pub mod embedded;
 pub mod generate;
@@ -10,6 +12,7 @@ pub mod io;
 mod io_gltf;
 pub mod validate;
 
+pub use bvh::Bvh;
 pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report};
 pub use io_gltf::load_gltf_volume_params;
 pub use validate::MeshReport;

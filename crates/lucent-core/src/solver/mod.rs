@@ -4,20 +4,29 @@
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
 //!   §5.5) in on-the-fly, render and incremental modes.
+//! * `refine`: its receiver-driven refinement, storing links or handing them to the gather,
+//!   and the incremental relink that keeps what did not change (§3.2, §5.5).
+//! * `gather`: a frame's pull, gather `Σ E F` and push, over the stored links or during the
+//!   on-the-fly traversal (§3.2, §5.5).
+//! * `evaluate`: the transport coefficient of an accepted link: one-point estimate, form
+//!   factor or cubature (§3.1, §4).
 //! * [`link_coef`]: stored link coefficients, 16 bits per channel, and render mode's gather
-//!   over them.
+//!   kernel over them.
 //! * [`link_set`]: the stored links, a run per receiver in a shared base or a per-update
 //!   delta, so that an incremental update writes only what changed (§5.5).
-//! * [`oracle`]: the refinement oracle (§5.2) and the per-link evaluation.
+//! * [`oracle`]: the refinement oracle (§5.2).
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
 pub mod energy;
+mod evaluate;
 pub mod exact;
+mod gather;
 pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
 pub mod oracle;
 pub mod point_sample;
+mod refine;
 
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};

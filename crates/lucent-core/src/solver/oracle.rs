@@ -1,15 +1,14 @@
-//! The refinement oracle (Mertens et al. 2003, §5.2) and the per-link transport evaluation
-//! (§3.1, §3.2): Jensen & Buhler's maximum-solid-angle criteria at the receiver (`ε1`) and the
-//! emitter (`ε2`), the `A'/A` curvature test for near clusters (§5.1.1), and the choice between
-//! a one-point estimate and the semi-analytic form factor (§4).
+//! The refinement oracle (Mertens et al. 2003, §5.2): Jensen & Buhler's maximum-solid-angle
+//! criteria at the receiver (`ε1`) and the emitter (`ε2`), the `A'/A` curvature test for near
+//! clusters (§5.1.1), and the choice between a one-point estimate and the semi-analytic form
+//! factor (§4) for each accepted link, which `solver::evaluate` then evaluates. Two modes
+//! ([`OracleMode`]): the paper's solid angles, and one-point transport estimates (the default).
 
 use super::point_sample::point_samples_from;
 pub use super::point_sample::{DipoleF32, ReceiverSources};
-use crate::bssrdf::{Dipole, ProfileKind};
-use crate::formfactor::montecarlo::sample_estimate;
-use crate::formfactor::{FormFactorOptions, form_factor};
-use crate::hierarchy::{ClusterGeom, Hierarchy};
-use glam::{DVec3, Vec3};
+use crate::bssrdf::ProfileKind;
+use crate::hierarchy::{ClusterGeom, Hierarchy, Node};
+use glam::Vec3;
 
 /// Solid angle standing in for "infinitely close": the point lies inside the cluster's
 /// bounding sphere, so no finite distance describes it.
@@ -198,6 +197,61 @@ impl ReceiverView {
     }
 }
 
+/// A candidate pair `E -> R` as both oracle modes first see it.
+struct Pair<'h> {
+    /// Receiver `R`'s node and geometry.
+    rn: &'h Node,
+    rg: &'h ClusterGeom,
+    /// Emitter `E`'s cluster index, node and geometry.
+    e: usize,
+    en: &'h Node,
+    eg: &'h ClusterGeom,
+    /// Solid angle of `E` from `R`'s midpoint ([`INSIDE`] within `E`'s bounding sphere).
+    w: f32,
+    /// Whether the two bounding spheres are disjoint.
+    separated: bool,
+}
+
+impl<'h> Pair<'h> {
+    #[inline]
+    fn new(h: &'h Hierarchy, r: usize, e: usize) -> Self {
+        let rg = &h.geom[r];
+        let eg = &h.geom[e];
+        let w = solid_angle(rg.midpoint, eg);
+        let separated = w != INSIDE
+            && (rg.midpoint - eg.midpoint).length_squared()
+                > (rg.radius + eg.radius) * (rg.radius + eg.radius);
+        Pair { rn: &h.nodes[r], rg, e, en: &h.nodes[e], eg, w, separated }
+    }
+
+    /// Whether `R` must be opened whatever the mode: it has no usable normal, or it lies
+    /// inside `E`'s bounding sphere.
+    #[inline]
+    fn receiver_degenerate(&self) -> bool {
+        self.rg.normal == Vec3::ZERO || self.w == INSIDE
+    }
+
+    /// Whether a failed receiver test should open the emitter instead: it is an inner
+    /// cluster larger than the receiver (and would be opened anyway).
+    #[inline]
+    fn emitter_first(&self) -> bool {
+        !self.en.is_leaf() && self.eg.area > self.rg.area
+    }
+}
+
+impl Samples {
+    /// Takes the known `f_mid` and clears the outputs of the previous decision.
+    #[inline]
+    fn start(&mut self) -> Option<[f32; 3]> {
+        let known = self.f_mid.take();
+        self.estimate = None;
+        self.recv_scale = None;
+        self.children = None;
+        self.at_children = None;
+        known
+    }
+}
+
 impl Oracle {
     /// Whether the error estimate `err` of transport `f` is within `eps_rel f + eps_abs R_tot`
     /// in every channel.
@@ -222,303 +276,256 @@ impl Oracle {
         e: usize,
         samples: &mut Samples,
     ) -> Decision {
-        let known_f_mid = samples.f_mid.take();
-        let Samples { estimate, recv_scale, children, at_children, .. } = samples;
-        *estimate = None;
-        *recv_scale = None;
-        *children = None;
-        *at_children = None;
-        let rn = &h.nodes[r];
-        let en = &h.nodes[e];
-        let rg = &h.geom[r];
-        let eg = &h.geom[e];
-        if r == e && rn.is_leaf() {
+        let known_f_mid = samples.start();
+        if r == e && h.nodes[r].is_leaf() {
             return Decision::Link(LinkKind::FormFactor);
         }
-        let w = solid_angle(rg.midpoint, eg);
-        let separated = w != INSIDE
-            && (rg.midpoint - eg.midpoint).length_squared()
-                > (rg.radius + eg.radius) * (rg.radius + eg.radius);
-        // Both transport tests stop at `!separated` before reading it.
-        let f_mid = if self.mode == OracleMode::Transport && separated {
-            known_f_mid.unwrap_or_else(|| view.src.point_sample(d, eg.midpoint, eg.area))
-        } else {
-            [0.0; 3]
-        };
-        // Emitter verdict: far (one point sample is enough) or near. Evaluated only when
-        // needed (it costs five point samples).
-        let far_test = |estimate: &mut Option<[f32; 3]>,
-                        children: &mut Option<[[f32; 3]; 4]>,
-                        f_mid: [f32; 3]| match self.mode {
-            OracleMode::SolidAngle => w <= self.eps2,
-            OracleMode::Transport => {
-                // Bounding spheres must be disjoint: one-point estimates at midpoints say
-                // nothing about the near-field where two adjacent clusters touch.
-                separated
-                    && w <= MAX_FAR_SOLID_ANGLE
-                    && view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, 0.0, 0.0)
-                    && {
-                        let f = f_mid;
-                        if en.is_leaf() {
-                            // A face cannot be opened: estimate the one-point (midpoint rule)
-                            // error from R_d's curvature, ~ (σ_tr + 3/d)² r² / 16 relative for a
-                            // face of circumradius r at distance d (a stand-in for Jensen &
-                            // Buhler's sample count that, unlike a solid angle, sees σ_tr).
-                            // The link's coefficient is this very estimate.
-                            *estimate = Some(f);
-                            let dist = view.src.nearest(d, eg.midpoint);
-                            let err: [f32; 3] = std::array::from_fn(|c| {
-                                let k = d.sigma_tr[c] + 3.0 / dist[c];
-                                k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
-                            });
-                            self.within(err, f, self.eps2, view.inv_rtot)
-                        } else {
-                            // Padding lanes have area 0 and add nothing.
-                            let mut pts = [eg.midpoint; 4];
-                            let mut areas = [0.0f32; 4];
-                            for (j, &k) in en.children().iter().enumerate() {
-                                let kg = &h.geom[k as usize];
-                                pts[j] = kg.midpoint;
-                                areas[j] = kg.area;
-                            }
-                            let fk = view.src.point_samples(d, &pts, &areas);
-                            *children = Some(fk);
-                            let sum: [f32; 3] = std::array::from_fn(|c| fk.iter().map(|f| f[c]).sum());
-                            // The link spreads E's *average* irradiance: besides the total, the
-                            // transport must be spread over E's children like their areas, or a
-                            // non-uniform irradiance would be mis-weighted.
-                            let mut err = [0.0f32; 3];
-                            let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
-                            for c in 0..3 {
-                                err[c] = (f[c] - sum[c]).abs();
-                                for j in 0..en.child_count as usize {
-                                    err[c] += (fk[j][c] - areas[j] * inv_a * sum[c]).abs();
-                                }
-                            }
-                            // Keep a better estimate for the link: R_d is convex, so one-point
-                            // estimates fall short systematically, by ~ area x extent² (midpoint
-                            // rule); k children of 1/k the area each err 1/k as much in total, and
-                            // Richardson extrapolation removes the leading term.
-                            let k = en.child_count as f32;
-                            *estimate = Some(std::array::from_fn(|c| {
-                                (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)
-                            }));
-                            self.within(err, sum, self.eps2, view.inv_rtot)
-                        }
-                    }
-            }
-        };
-        if !rn.is_leaf() {
-            let mut split = rg.normal == Vec3::ZERO || w == INSIDE;
-            if !split {
-                match self.mode {
-                    OracleMode::SolidAngle => {
-                        if rg.projected_area < rg.area {
-                            let spread = (2.0 * (1.0 - rg.flatness())).sqrt();
-                            let inv_d = 1.0 / (rg.midpoint - eg.midpoint).length();
-                            let mut sens = 0.0f32;
-                            for c in 0..3 {
-                                sens = sens.max(d.normal_weight * d.z_v[c] * (d.sigma_tr[c] + 3.0 * inv_d));
-                            }
-                            split = spread * sens > self.eps_normal;
-                        }
-                        if !split {
-                            for &c in rn.children() {
-                                let wc = solid_angle(h.geom[c as usize].midpoint, eg);
-                                if wc == INSIDE || (wc - w).abs() > self.eps1 {
-                                    split = true;
-                                    break;
-                                }
-                            }
-                        }
-                    }
-                    OracleMode::Transport
-                        if !separated
-                            || !view.src.clear_of(
-                                d,
-                                eg.midpoint,
-                                SOURCE_MARGIN * eg.radius,
-                                rg.radius,
-                                view.spread,
-                            ) =>
-                    {
-                        split = true
-                    }
-                    // The distance-form profiles do not depend on the receiver's normal, so
-                    // nothing above splits a receiver for its size: estimate the variation of
-                    // `R` over the receiver from its radius, as the emitter test does.
-                    OracleMode::Transport
-                        if d.normal_weight == 0.0 && {
-                            let dist = view.src.nearest(d, eg.midpoint);
-                            let err: [f32; 3] = std::array::from_fn(|c| {
-                                (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius * 0.5 * f_mid[c]
-                            });
-                            !self.within(err, f_mid, self.eps1, view.inv_rtot)
-                        } =>
-                    {
-                        split = true
-                    }
-                    OracleMode::Transport => {
-                        let f = f_mid;
-                        let mut avg = [0.0f32; 3];
-                        let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
-                        let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
-                        *at_children = Some(f_children);
-                        for (k, &c) in rn.children().iter().enumerate() {
-                            let cg = &h.geom[c as usize];
-                            if solid_angle(cg.midpoint, eg) == INSIDE {
-                                split = true;
-                                break;
-                            }
-                            let fc = f_children[k];
-                            let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
-                            if !self.within(diff, f, self.eps1, view.inv_rtot) {
-                                split = true;
-                                break;
-                            }
-                            for c in 0..3 {
-                                avg[c] += fc[c] * cg.area * inv_a;
-                            }
-                        }
-                        if !split {
-                            // R's value goes to all its leaves, so it should be the *average*
-                            // of F over R, which exceeds F at R's midpoint (R_d is convex): as
-                            // at the emitter, extrapolate from the children's average.
-                            let k = rn.child_count as f32;
-                            *recv_scale = Some(std::array::from_fn(|c| {
-                                if f[c] > 0.0 {
-                                    ((avg[c] + (avg[c] - f[c]) / (k - 1.0)) / f[c]).max(0.0)
-                                } else {
-                                    1.0
-                                }
-                            }));
-                        }
-                    }
-                }
-            }
-            if split {
-                if !en.is_leaf() && eg.area > rg.area && !far_test(estimate, children, f_mid) {
-                    *at_children = None;
-                    return Decision::SplitEmitter;
-                }
-                *estimate = None;
-                *children = None;
-                return Decision::SplitReceiver;
-            }
+        let pair = Pair::new(h, r, e);
+        match self.mode {
+            OracleMode::SolidAngle => self.decide_solid_angle(h, d, &pair),
+            OracleMode::Transport => self.decide_transport(h, d, view, &pair, known_f_mid, samples),
         }
-        if far_test(estimate, children, f_mid) {
-            return Decision::Link(LinkKind::PointSample);
-        }
-        if en.is_leaf() {
+    }
+
+    /// The tail both modes share once the emitter is near: a face is integrated with the form
+    /// factor, so is a flat inner cluster seen under at most `eps_near_cluster`; any other
+    /// cluster is opened.
+    #[inline]
+    fn decide_near(&self, h: &Hierarchy, p: &Pair) -> Decision {
+        if p.en.is_leaf() {
             return Decision::Link(LinkKind::FormFactor);
         }
-        if w <= self.eps_near_cluster
-            && eg.flatness() >= self.min_flatness
-            && eg.polygon_area > 0.0
-            && !h.polygon(e).is_empty()
+        if p.w <= self.eps_near_cluster
+            && p.eg.flatness() >= self.min_flatness
+            && p.eg.polygon_area > 0.0
+            && !h.polygon(p.e).is_empty()
         {
             return Decision::Link(LinkKind::FormFactor);
         }
         Decision::SplitEmitter
     }
-}
 
-/// Evaluates links: holds the dipole in both precisions and a scratch polygon buffer.
-pub(crate) struct Evaluator<'a> {
-    pub h: &'a Hierarchy,
-    pub dipole: &'a Dipole,
-    pub d32: DipoleF32,
-    pub opts: FormFactorOptions,
-    /// Near links by uniform point sampling instead of the form factor (Mertens table 5).
-    pub near_point_sampling: bool,
-    /// Semi-analytic form factor evaluations so far.
-    pub form_factors: usize,
-    /// Form factor links evaluated by the `f32` cubature instead, so far.
-    pub cubatures: usize,
-    scratch: Vec<DVec3>,
-}
-
-impl<'a> Evaluator<'a> {
-    pub fn new(h: &'a Hierarchy, dipole: &'a Dipole, opts: FormFactorOptions) -> Self {
-        Evaluator {
-            h,
-            dipole,
-            d32: DipoleF32::new(dipole),
-            opts,
-            near_point_sampling: false,
-            form_factors: 0,
-            cubatures: 0,
-            scratch: Vec::with_capacity(16),
+    /// [`OracleMode::SolidAngle`]: Jensen & Buhler's solid angles as in Mertens §5.2.
+    #[inline]
+    fn decide_solid_angle(&self, h: &Hierarchy, d: &DipoleF32, p: &Pair) -> Decision {
+        let far = p.w <= self.eps2;
+        if !p.rn.is_leaf() && (p.receiver_degenerate() || self.solid_angle_opens_receiver(h, d, p)) {
+            if p.emitter_first() && !far {
+                return Decision::SplitEmitter;
+            }
+            return Decision::SplitReceiver;
         }
+        if far {
+            return Decision::Link(LinkKind::PointSample);
+        }
+        self.decide_near(h, p)
     }
 
-    /// The corners of face `e` when `R_d` from `src` is smooth over it (`k ρ` within
-    /// [`FormFactorOptions::cubature_max_k_rho`]), so that the `f32` cubature stands in for
-    /// the form factor, which would take the same short cut in `f64`.
+    /// The receiver test of [`OracleMode::SolidAngle`] at an inner receiver: the normal
+    /// criterion (`eps_normal`) for a curved receiver, then `ε1` on the solid angles from the
+    /// children's midpoints.
     #[inline]
-    fn smooth_face(&self, src: &ReceiverSources, e: usize) -> Option<[Vec3; 3]> {
-        let eg = &self.h.geom[e];
-        let poly = self.h.polygon(e);
-        (self.h.nodes[e].is_leaf()
-            && !self.near_point_sampling
-            && poly.len() == 3
-            && src.k_rho(&self.d32, eg.midpoint, eg.radius) <= self.opts.cubature_max_k_rho as f32)
-            .then(|| [poly[0], poly[1], poly[2]])
-    }
-
-    /// Whether a form factor link `e -> r` costs a full semi-analytic evaluation (the
-    /// incremental budget counts only those).
-    #[inline]
-    pub fn is_analytic(&self, src: &ReceiverSources, e: usize) -> bool {
-        self.smooth_face(src, e).is_none()
-    }
-
-    /// The transport coefficient of the link `e -> r` (per channel, unitless).
-    #[inline]
-    pub fn eval(&mut self, src: &ReceiverSources, r: usize, e: usize, kind: LinkKind) -> [f32; 3] {
-        let eg = &self.h.geom[e];
-        match kind {
-            LinkKind::PointSample => src.point_sample(&self.d32, eg.midpoint, eg.area),
-            LinkKind::FormFactor => {
-                let rg = &self.h.geom[r];
-                if let Some(tri) = self.smooth_face(src, e) {
-                    self.cubatures += 1;
-                    return src.triangle_cubature(&self.d32, &tri, eg.area);
-                }
-                self.form_factors += 1;
-                self.scratch.clear();
-                self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
-                if self.near_point_sampling {
-                    // Jensen & Buhler 2002 space their samples about one mean free path
-                    // `1/sigma_t'` apart: that many uniform samples over the polygon.
-                    let mfp = self.dipole.z_r.iter().copied().fold(f64::MAX, f64::min);
-                    let n = ((eg.area as f64 / (mfp * mfp)).ceil() as usize).clamp(1, 1 << 16);
-                    let f = sample_estimate(
-                        &self.scratch,
-                        rg.midpoint.as_dvec3(),
-                        rg.normal.as_dvec3(),
-                        self.dipole,
-                        n,
-                        (r as u64) << 32 | e as u64,
-                    );
-                    return f.map(|v| v as f32);
-                }
-                let f = form_factor(
-                    &self.scratch,
-                    rg.midpoint.as_dvec3(),
-                    rg.normal.as_dvec3(),
-                    self.dipole,
-                    &self.opts,
-                );
-                // The projected polygon stands for the cluster's true area (§5.1.1); scale so
-                // that the far field matches the point sample `A R_d`. Leaves: scale 1.
-                let scale = if self.h.nodes[e].is_leaf() || eg.polygon_area <= 0.0 {
-                    1.0
-                } else {
-                    eg.area as f64 / eg.polygon_area as f64
-                };
-                f.map(|v| (v * scale) as f32)
+    fn solid_angle_opens_receiver(&self, h: &Hierarchy, d: &DipoleF32, p: &Pair) -> bool {
+        let (rg, eg) = (p.rg, p.eg);
+        if rg.projected_area < rg.area {
+            let spread = (2.0 * (1.0 - rg.flatness())).sqrt();
+            let inv_d = 1.0 / (rg.midpoint - eg.midpoint).length();
+            let mut sens = 0.0f32;
+            for c in 0..3 {
+                sens = sens.max(d.normal_weight * d.z_v[c] * (d.sigma_tr[c] + 3.0 * inv_d));
+            }
+            if spread * sens > self.eps_normal {
+                return true;
             }
         }
+        p.rn.children().iter().any(|&c| {
+            let wc = solid_angle(h.geom[c as usize].midpoint, eg);
+            wc == INSIDE || (wc - p.w).abs() > self.eps1
+        })
+    }
+
+    /// [`OracleMode::Transport`]: the same two tests on one-point transport estimates.
+    #[inline]
+    fn decide_transport(
+        &self,
+        h: &Hierarchy,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        p: &Pair,
+        known_f_mid: Option<[f32; 3]>,
+        samples: &mut Samples,
+    ) -> Decision {
+        // Both transport tests stop at `!separated` before reading it.
+        let f_mid = if p.separated {
+            known_f_mid.unwrap_or_else(|| view.src.point_sample(d, p.eg.midpoint, p.eg.area))
+        } else {
+            [0.0; 3]
+        };
+        if !p.rn.is_leaf()
+            && (p.receiver_degenerate() || self.transport_opens_receiver(h, d, view, p, f_mid, samples))
+        {
+            if p.emitter_first() && !self.transport_far(h, d, view, p, f_mid, samples) {
+                samples.at_children = None;
+                return Decision::SplitEmitter;
+            }
+            samples.estimate = None;
+            samples.children = None;
+            return Decision::SplitReceiver;
+        }
+        if self.transport_far(h, d, view, p, f_mid, samples) {
+            return Decision::Link(LinkKind::PointSample);
+        }
+        self.decide_near(h, p)
+    }
+
+    /// The receiver test of [`OracleMode::Transport`] at an inner receiver whose estimate from
+    /// the emitter at its midpoint is `f_mid`. Leaves the estimates at the children in
+    /// `samples.at_children` when it makes them, and, when the receiver stays whole, the
+    /// factor to its average in `samples.recv_scale`.
+    #[inline]
+    fn transport_opens_receiver(
+        &self,
+        h: &Hierarchy,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        p: &Pair,
+        f_mid: [f32; 3],
+        samples: &mut Samples,
+    ) -> bool {
+        let (rn, rg, eg) = (p.rn, p.rg, p.eg);
+        if !p.separated
+            || !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, rg.radius, view.spread)
+        {
+            return true;
+        }
+        // The distance-form profiles do not depend on the receiver's normal, so nothing above
+        // splits a receiver for its size: estimate the variation of `R` over the receiver from
+        // its radius, as the emitter test does.
+        if d.normal_weight == 0.0 {
+            let dist = view.src.nearest(d, eg.midpoint);
+            let err: [f32; 3] =
+                std::array::from_fn(|c| (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius * 0.5 * f_mid[c]);
+            if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
+                return true;
+            }
+        }
+        let f = f_mid;
+        let mut avg = [0.0f32; 3];
+        let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
+        let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
+        samples.at_children = Some(f_children);
+        for (k, &c) in rn.children().iter().enumerate() {
+            let cg = &h.geom[c as usize];
+            if solid_angle(cg.midpoint, eg) == INSIDE {
+                return true;
+            }
+            let fc = f_children[k];
+            let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
+            if !self.within(diff, f, self.eps1, view.inv_rtot) {
+                return true;
+            }
+            for c in 0..3 {
+                avg[c] += fc[c] * cg.area * inv_a;
+            }
+        }
+        // R's value goes to all its leaves, so it should be the *average* of F over R, which
+        // exceeds F at R's midpoint (R_d is convex): as at the emitter, extrapolate from the
+        // children's average.
+        let k = rn.child_count as f32;
+        samples.recv_scale = Some(std::array::from_fn(|c| {
+            if f[c] > 0.0 { ((avg[c] + (avg[c] - f[c]) / (k - 1.0)) / f[c]).max(0.0) } else { 1.0 }
+        }));
+        false
+    }
+
+    /// The emitter test of [`OracleMode::Transport`]: whether one point sample is enough for
+    /// `E` (far), given the estimate `f_mid` from its midpoint. Bounding spheres must be
+    /// disjoint: one-point estimates at midpoints say nothing about the near field where two
+    /// adjacent clusters touch. Evaluated only when needed (it costs up to five point samples).
+    #[inline]
+    fn transport_far(
+        &self,
+        h: &Hierarchy,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        p: &Pair,
+        f_mid: [f32; 3],
+        samples: &mut Samples,
+    ) -> bool {
+        p.separated
+            && p.w <= MAX_FAR_SOLID_ANGLE
+            && view.src.clear_of(d, p.eg.midpoint, SOURCE_MARGIN * p.eg.radius, 0.0, 0.0)
+            && if p.en.is_leaf() {
+                self.far_face(d, view, p.eg, f_mid, samples)
+            } else {
+                self.far_cluster(h, d, view, p, f_mid, samples)
+            }
+    }
+
+    /// [`Oracle::transport_far`] for a face, which cannot be opened: estimates the one-point
+    /// (midpoint rule) error from `R_d`'s curvature, ~ `(σ_tr + 3/d)² r² / 16` relative for a
+    /// face of circumradius `r` at distance `d` (a stand-in for Jensen & Buhler's sample count
+    /// that, unlike a solid angle, sees `σ_tr`). The link's coefficient is `f_mid` itself.
+    #[inline]
+    fn far_face(
+        &self,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        eg: &ClusterGeom,
+        f: [f32; 3],
+        samples: &mut Samples,
+    ) -> bool {
+        samples.estimate = Some(f);
+        let dist = view.src.nearest(d, eg.midpoint);
+        let err: [f32; 3] = std::array::from_fn(|c| {
+            let k = d.sigma_tr[c] + 3.0 / dist[c];
+            k * k * eg.radius * eg.radius * (1.0 / 16.0) * f[c]
+        });
+        self.within(err, f, self.eps2, view.inv_rtot)
+    }
+
+    /// [`Oracle::transport_far`] for an inner cluster: `E`'s estimate `f` against the sum of
+    /// its children's, in total and in their spread over the children. Leaves the children's
+    /// estimates in `samples.children` and an extrapolated estimate for the link in
+    /// `samples.estimate`.
+    #[inline]
+    fn far_cluster(
+        &self,
+        h: &Hierarchy,
+        d: &DipoleF32,
+        view: &ReceiverView,
+        p: &Pair,
+        f: [f32; 3],
+        samples: &mut Samples,
+    ) -> bool {
+        let (en, eg) = (p.en, p.eg);
+        // Padding lanes have area 0 and add nothing.
+        let mut pts = [eg.midpoint; 4];
+        let mut areas = [0.0f32; 4];
+        for (j, &k) in en.children().iter().enumerate() {
+            let kg = &h.geom[k as usize];
+            pts[j] = kg.midpoint;
+            areas[j] = kg.area;
+        }
+        let fk = view.src.point_samples(d, &pts, &areas);
+        samples.children = Some(fk);
+        let sum: [f32; 3] = std::array::from_fn(|c| fk.iter().map(|f| f[c]).sum());
+        // The link spreads E's *average* irradiance: besides the total, the transport must be
+        // spread over E's children like their areas, or a non-uniform irradiance would be
+        // mis-weighted.
+        let mut err = [0.0f32; 3];
+        let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
+        for c in 0..3 {
+            err[c] = (f[c] - sum[c]).abs();
+            for j in 0..en.child_count as usize {
+                err[c] += (fk[j][c] - areas[j] * inv_a * sum[c]).abs();
+            }
+        }
+        // Keep a better estimate for the link: R_d is convex, so one-point estimates fall short
+        // systematically, by ~ area x extent² (midpoint rule); k children of 1/k the area each
+        // err 1/k as much in total, and Richardson extrapolation removes the leading term.
+        let k = en.child_count as f32;
+        samples.estimate = Some(std::array::from_fn(|c| (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)));
+        self.within(err, sum, self.eps2, view.inv_rtot)
     }
 }

@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 // The one place the viewer names the tree's module (it is moving to `lucent_core::mesh::bvh`).
-use lucent_core::irradiance::Bvh;
 use lucent_core::mesh::Mesh;
+use lucent_core::mesh::bvh::Bvh;
 use std::sync::Arc;
 
 /// Where a ray first hits the mesh.

@@ -1,0 +1,241 @@
+//! A frame of the hierarchical solve (Mertens et al. 2003, §3.2, §5.5): *pull* (area-weighted
+//! irradiance up the tree), *gather* (`B_R = Σ_E E_E F_ER` along the links into each receiver)
+//! and *push* (a receiver's `B` added to all its leaves). Render mode gathers over the stored
+//! links ([`HierarchicalSolver::solve_render`], with the packed kernel of [`super::link_coef`]);
+//! on-the-fly mode gathers each link as the refinement accepts it and pushes down the traversal
+//! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
+//! the energy bound of [`super::energy`].
+
+use super::energy;
+use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
+use super::link_coef;
+use super::link_set::LinkSet;
+use super::refine::{Cands, Ctx, Deferred, Evaluate};
+use crate::Rgb;
+use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
+use glam::Vec3A;
+use rayon::prelude::*;
+use std::time::Instant;
+
+impl HierarchicalSolver {
+    /// Area-weighted average irradiance of every cluster (the *pull* of §3.2), in parallel
+    /// over subtrees.
+    pub fn pull(&self, face_irradiance: &[Rgb]) -> Vec<Vec3A> {
+        let mut e = vec![Vec3A::ZERO; self.hierarchy.len()];
+        self.pull_into(face_irradiance, &mut e);
+        e
+    }
+
+    /// [`HierarchicalSolver::pull`] into `e` (one entry per cluster).
+    fn pull_into(&self, face_irradiance: &[Rgb], e: &mut [Vec3A]) {
+        let h = &self.hierarchy;
+        assert_eq!(face_irradiance.len(), h.leaf_count());
+        if !h.is_empty() {
+            pull_subtree(h, face_irradiance, 0, e);
+        }
+    }
+
+    /// Render mode: pull, gather over the stored links, push. Links are created on first use.
+    pub fn solve_render(&mut self, face_irradiance: &[Rgb]) -> Solution {
+        if self.links.is_none() {
+            self.link();
+        }
+        let mut solution = self.render_stored(face_irradiance);
+        if self.dipole.bounds_energy() {
+            let t0 = Instant::now();
+            if self.bound.is_none() {
+                let ones = vec![Rgb::ONE; self.hierarchy.leaf_count()];
+                let uniform = self.render_stored(&ones).face_b;
+                self.bound = Some(uniform.into_iter().map(energy::bound).collect());
+            }
+            let bound = self.bound.as_ref().expect("bound made above");
+            solution.face_b.iter_mut().zip(bound).for_each(|(b, s)| *b *= *s);
+            solution.stats.push_ms += ms(t0.elapsed());
+            solution.stats.total_ms += ms(t0.elapsed());
+        }
+        solution
+    }
+
+    /// Render mode over the stored links (which must exist).
+    fn render_stored(&mut self, face_irradiance: &[Rgb]) -> Solution {
+        let t0 = Instant::now();
+        let [mut e_node, mut b_node] = std::mem::take(&mut self.frame);
+        e_node.resize(self.hierarchy.len(), Vec3A::ZERO);
+        b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
+        self.pull_into(face_irradiance, &mut e_node);
+        let t1 = Instant::now();
+        let links = self.links.as_ref().expect("links stored");
+        gather_links(links, &e_node, &mut b_node);
+        let t2 = Instant::now();
+        let face_b = self.push(&mut b_node);
+        let t3 = Instant::now();
+        let links = links.len();
+        self.frame = [e_node, b_node];
+        Solution {
+            face_b,
+            stats: SolveStats {
+                links,
+                pull_ms: ms(t1 - t0),
+                gather_ms: ms(t2 - t1),
+                push_ms: ms(t3 - t2),
+                total_ms: ms(t3 - t0),
+                ..Default::default()
+            },
+        }
+    }
+
+    /// Push: accumulates every cluster's gathered `B` down to its leaves (in parallel over
+    /// subtrees) and returns `B` per original face.
+    fn push(&self, b_node: &mut [Vec3A]) -> Vec<Rgb> {
+        let h = &self.hierarchy;
+        if !h.is_empty() {
+            push_subtree(h, 0, Vec3A::ZERO, b_node);
+        }
+        h.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
+    }
+
+    /// On-the-fly mode: refine from the root's self-link and gather in one parallel traversal,
+    /// storing nothing. Returns `B` per face.
+    pub fn solve_on_the_fly(&self, face_irradiance: &[Rgb]) -> Solution {
+        let t0 = Instant::now();
+        let h = &self.hierarchy;
+        let mut stats = SolveStats::default();
+        if h.is_empty() {
+            return Solution { face_b: Vec::new(), stats };
+        }
+        let e_node = self.pull(face_irradiance);
+        let t1 = Instant::now();
+        let mut leaf_b = vec![[Rgb::ZERO; 2]; h.leaf_count()];
+        let mut ctx = Ctx::new(self);
+        self.otf_rec(&mut ctx, 0, Cands::ROOT, [Vec3A::ZERO; 2], &e_node, &mut leaf_b);
+        let t2 = Instant::now();
+        let bound = self.dipole.bounds_energy();
+        let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
+        for (pos, &f) in h.leaf_faces.iter().enumerate() {
+            let [b, u] = leaf_b[pos];
+            face_b[f as usize] = if bound { b * energy::bound(u) } else { b };
+        }
+        let t3 = Instant::now();
+        ctx.fill(&mut stats);
+        stats.links = stats.form_factors + stats.cubatures + stats.point_samples;
+        stats.pull_ms = ms(t1 - t0);
+        stats.link_ms = ms(t2 - t1);
+        stats.push_ms = ms(t3 - t2);
+        stats.total_ms = ms(t3 - t0);
+        Solution { face_b, stats }
+    }
+
+    /// On-the-fly mode below receiver `r`: refines its candidates `cands`, gathering `E F`
+    /// of every accepted link into `b_acc` (`B` and, for the energy bound, `B` under uniform
+    /// irradiance 1, both with what `r`'s ancestors gathered), and writes the totals at `r`'s
+    /// leaves into `out` (one entry per leaf of the subtree, in leaf order).
+    fn otf_rec(
+        &self,
+        ctx: &mut Ctx,
+        r: usize,
+        cands: Cands,
+        b_acc: [Vec3A; 2],
+        e_node: &[Vec3A],
+        out: &mut [[Rgb; 2]],
+    ) {
+        let mut defer = Deferred::default();
+        // `B` and, for the energy bound, `B` under uniform irradiance 1.
+        let [mut b, mut u] = b_acc;
+        ctx.receive(
+            &self.oracle,
+            r,
+            cands.iter(),
+            &mut defer,
+            &mut Evaluate(|e, _, f| {
+                let f = Vec3A::from_array(f);
+                b += e_node[e] * f;
+                u += f;
+            }),
+        );
+        let b = [b, u];
+        let n = self.hierarchy.nodes[r];
+        if n.is_leaf() {
+            out[0] = b.map(Into::into);
+            return;
+        }
+        let parts = split_leaves(&self.hierarchy.nodes, r, out);
+        if n.leaf_count() > PAR_LEAVES {
+            let subs: Vec<Ctx> = parts
+                .into_par_iter()
+                .enumerate()
+                .map(|(k, (c, o))| {
+                    let mut sub = Ctx::new(self);
+                    self.otf_rec(&mut sub, c, Cands::of_child(&defer, k), b, e_node, o);
+                    sub
+                })
+                .collect();
+            subs.iter().for_each(|s| ctx.absorb(s));
+        } else {
+            for (k, (c, o)) in parts.into_iter().enumerate() {
+                self.otf_rec(ctx, c, Cands::of_child(&defer, k), b, e_node, o);
+            }
+        }
+    }
+}
+
+/// Render mode's gather: `b_node[r] = Σ E(e) F` over receiver `r`'s stored links, for every
+/// cluster `r`, with `e_node` the pulled irradiance; in parallel over runs of receivers.
+fn gather_links(links: &LinkSet, e_node: &[Vec3A], b_node: &mut [Vec3A]) {
+    const CHUNK: usize = 1024;
+    let stored = links.view();
+    b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
+        link_coef::gather(e_node, stored, ci * CHUNK, b);
+    });
+}
+
+/// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children
+/// before parents, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
+fn pull_subtree(h: &Hierarchy, face_irradiance: &[Rgb], r: usize, e: &mut [Vec3A]) {
+    let n = h.nodes[r];
+    if n.leaf_count() > PAR_LEAVES {
+        let (_, rest) = e.split_at_mut(1);
+        split_subtrees(&h.nodes, r, rest)
+            .into_par_iter()
+            .for_each(|(c, s)| pull_subtree(h, face_irradiance, c, s));
+        e[0] = average_children(h, r, |c| e[c - r]);
+        return;
+    }
+    for i in (r..n.subtree_end as usize).rev() {
+        let m = &h.nodes[i];
+        e[i - r] = if m.is_leaf() {
+            face_irradiance[h.leaf_faces[m.leaf_start as usize] as usize].into()
+        } else {
+            average_children(h, i, |c| e[c - r])
+        };
+    }
+}
+
+/// The area-weighted average over cluster `i`'s children of `value(child)`.
+#[inline]
+fn average_children(h: &Hierarchy, i: usize, value: impl Fn(usize) -> Vec3A) -> Vec3A {
+    let n = &h.nodes[i];
+    let area = h.geom[i].area;
+    let mut s = Vec3A::ZERO;
+    for &c in n.children() {
+        let c = c as usize;
+        s += if area > 0.0 { value(c) * (h.geom[c].area / area) } else { value(c) / n.child_count as f32 };
+    }
+    s
+}
+
+/// The push below cluster `r` (subtree `b`, preorder), whose ancestors gathered `above`:
+/// parents before children, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
+fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
+    let n = h.nodes[r];
+    b[0] += above;
+    if n.leaf_count() > PAR_LEAVES {
+        let (own, rest) = b.split_at_mut(1);
+        let own = own[0];
+        split_subtrees(&h.nodes, r, rest).into_par_iter().for_each(|(c, s)| push_subtree(h, c, own, s));
+        return;
+    }
+    for i in r + 1..n.subtree_end as usize {
+        let p = h.nodes[i].parent as usize;
+        b[i - r] += b[p - r];
+    }
+}
