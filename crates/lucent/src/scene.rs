@@ -122,7 +122,7 @@ fn default_mesh() -> String {
     "bunny".into()
 }
 fn default_scale() -> f64 {
-    0.05
+    resolve::DEFAULT_SCALE_M
 }
 fn default_bounces() -> u32 {
     0

@@ -19,7 +19,7 @@ pub enum MaterialSpec {
 
 impl Default for MaterialSpec {
     fn default() -> Self {
-        MaterialSpec::Preset("skimmilk".into())
+        MaterialSpec::Preset(super::resolve::DEFAULT_MATERIAL.into())
     }
 }
 

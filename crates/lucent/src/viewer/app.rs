@@ -7,9 +7,9 @@ use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
+use super::model::ViewModel;
 use super::present::{EguiFrame, Surface, encode_and_submit, save_screenshot, upload_scene};
 use super::render::{self, DrawParams, ViewRenderer};
-use super::scene::Scene;
 use super::screenshot;
 use super::script::{Action, Automation, Step};
 use super::state::{EnvChoice, ViewMethod, ViewState};
@@ -67,7 +67,7 @@ pub struct App {
     size: (u32, u32),
     proxy: EventLoopProxy<WorkerWake>,
     worker: Option<Worker>,
-    scene: Scene,
+    scene: ViewModel,
     framing: Framing,
     input: Input,
     automation: Option<Automation>,
@@ -93,7 +93,7 @@ impl App {
             size: options.size,
             proxy,
             worker: None,
-            scene: Scene::new(options.state),
+            scene: ViewModel::new(options.state),
             framing: Framing::new(options.camera),
             input: Input::default(),
             automation: options.automation,

@@ -9,7 +9,7 @@
 //! * [`ui`]: the egui side panel.
 //! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_gpu::camera`) frames,
 //!   mouse handling, ray picking through the mesh's BVH.
-//! * [`state`], [`scene`]: the editable state and the solve bookkeeping.
+//! * [`state`], [`model`]: the editable state and the solve bookkeeping.
 //! * [`worker`]: the solve thread (coalesced requests).
 //! * [`core_adapter`]: the panel's state mapped onto `lucent-core`'s frame session.
 //! * [`script`], [`screenshot`]: scripted runs and PNG screenshots.
@@ -21,10 +21,10 @@ pub mod framing;
 pub mod gfx;
 pub mod htsm;
 pub mod input;
+pub mod model;
 pub mod pick;
 pub mod present;
 pub mod render;
-pub mod scene;
 pub mod scene_file;
 pub mod screenshot;
 pub mod script;

@@ -5,8 +5,8 @@
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::ViewportRect;
+use super::model::ViewModel;
 use super::render::{DrawParams, ViewRenderer, Viewport};
-use super::scene::Scene;
 use super::screenshot::Offscreen;
 use std::sync::Arc;
 use winit::window::Window;
@@ -59,7 +59,7 @@ impl EguiFrame {
 }
 
 /// Uploads geometry and radiance that changed since the last frame.
-pub(super) fn upload_scene(surface: &mut Surface, scene: &mut Scene) -> anyhow::Result<()> {
+pub(super) fn upload_scene(surface: &mut Surface, scene: &mut ViewModel) -> anyhow::Result<()> {
     let ctx = &surface.gfx.ctx;
     if scene.geometry_dirty {
         if let Some(mesh) = &scene.mesh {

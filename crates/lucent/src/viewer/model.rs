@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Mesh, state and solve bookkeeping.
-pub struct Scene {
+pub struct ViewModel {
     /// The state the UI edits.
     pub state: ViewState,
     /// The loaded, normalised, undeformed mesh (`None` while loading).
@@ -35,10 +35,10 @@ pub struct Scene {
     solve_started: Instant,
 }
 
-impl Scene {
+impl ViewModel {
     /// A scene that starts with `state` and no mesh yet.
     pub fn new(state: ViewState) -> Self {
-        Scene {
+        ViewModel {
             state,
             base: None,
             mesh: None,
@@ -147,7 +147,7 @@ mod tests {
     use std::time::Duration;
 
     /// Polls `scene` until `done` holds (the worker runs on its own thread).
-    fn wait_for(scene: &mut Scene, worker: &Worker, done: impl Fn(&Scene) -> bool) {
+    fn wait_for(scene: &mut ViewModel, worker: &Worker, done: impl Fn(&ViewModel) -> bool) {
         let start = Instant::now();
         while !done(scene) {
             assert!(start.elapsed() < Duration::from_secs(120), "the worker did not reply");
@@ -162,7 +162,7 @@ mod tests {
     fn settles_after_the_latest_state_is_solved_and_drawn() {
         let worker = Worker::spawn(|| {});
         let lights = vec![crate::viewer::ui::point_light(glam::Vec3::new(1.0, 1.1, 1.8))];
-        let mut scene = Scene::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05, lights));
+        let mut scene = ViewModel::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05, lights));
         let bunny = crate::viewer::core_adapter::normalise(lucent_core::mesh::embedded::bunny());
         worker.send(Request::Load(MeshOrigin::Loaded(Box::new(bunny))));
         wait_for(&mut scene, &worker, |s| s.base.is_some());
