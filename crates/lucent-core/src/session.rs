@@ -212,6 +212,17 @@ impl Changes {
     fn any(&self) -> bool {
         self.geometry || self.transport || self.light || self.oracle || self.method
     }
+
+    /// Both sets of changes.
+    fn union(self, o: Changes) -> Changes {
+        Changes {
+            geometry: self.geometry || o.geometry,
+            transport: self.transport || o.transport,
+            light: self.light || o.light,
+            oracle: self.oracle || o.oracle,
+            method: self.method || o.method,
+        }
+    }
 }
 
 /// The CPU side of a translucent object across frames. See the module documentation.
@@ -236,6 +247,8 @@ pub struct FrameSession {
     /// Irradiance at the faces as last computed (reused when only the solver changed).
     irradiance: Vec<Rgb>,
     changes: Changes,
+    /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
+    unsolved: Changes,
     last: Solved,
 }
 
@@ -265,6 +278,7 @@ impl FrameSession {
             caster: None,
             irradiance: Vec::new(),
             changes: Changes::all(),
+            unsolved: Changes::default(),
             last: Solved::default(),
         }
     }
@@ -371,8 +385,10 @@ impl FrameSession {
             self.last.timings = Timings::default();
             return &self.last;
         }
-        let changes = std::mem::take(&mut self.changes);
+        let changes = std::mem::take(&mut self.changes).union(std::mem::take(&mut self.unsolved));
         if self.settings.method == Method::Htsm {
+            // Kept for when a CPU method is chosen again.
+            self.unsolved = changes;
             self.last = Solved { fresh: true, ..Solved::default() };
             return &self.last;
         }

@@ -124,6 +124,23 @@ fn exact_and_htsm() {
     assert!(htsm.fresh && htsm.face_b.is_empty() && htsm.vertex_radiance.is_empty());
 }
 
+/// Changes made while HTSM is chosen reach the CPU solve when it is chosen again.
+#[test]
+fn changes_made_under_htsm_are_solved_later() {
+    let mut s = session(SolveMode::Render);
+    s.solve();
+    s.set_settings(FrameSettings { method: Method::Htsm, ..*s.settings() });
+    s.solve();
+    let bent = deform::twist(Vec3::ZERO, Vec3::Y, 0.8).deformed(&generate::icosphere(2)).positions;
+    s.set_positions(&bent);
+    s.solve();
+    s.set_settings(FrameSettings { method: Method::Hierarchical, ..*s.settings() });
+    let b = s.solve().face_b.clone();
+    let mut fresh = session(SolveMode::Render);
+    fresh.set_positions(&bent);
+    assert_eq!(b, fresh.solve().face_b);
+}
+
 #[test]
 fn names_parse_and_bad_ones_list_the_choices() {
     for m in SolveMode::ALL {
