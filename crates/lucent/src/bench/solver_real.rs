@@ -181,7 +181,7 @@ fn sample_faces(count: usize, n: usize) -> Vec<usize> {
     if n >= count {
         return (0..count).collect();
     }
-    let mut state = 0x5eed_1ce_u64;
+    let mut state = 0x05ee_d1ce_u64;
     let mut next = || {
         state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = state;
