@@ -23,8 +23,9 @@ use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::irradiance::{Environment, SceneLight, ShadowCaster, face_irradiance_shadowed, interreflection};
 use crate::mesh::Mesh;
 use crate::shading;
-use crate::solver::{self, HierarchicalSolver, Oracle};
+use crate::solver::{self, HierarchicalSolver, Oracle, Progress};
 use glam::Vec3;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How the subsurface transport is computed.
@@ -250,6 +251,8 @@ pub struct FrameSession {
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
     last: Solved,
+    /// Where long refinements and exact solves count their progress, if a front end watches.
+    progress: Option<Arc<Progress>>,
 }
 
 impl FrameSession {
@@ -280,6 +283,7 @@ impl FrameSession {
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
+            progress: None,
         }
     }
 
@@ -371,6 +375,15 @@ impl FrameSession {
         }
     }
 
+    /// Counts the progress of long solves (hierarchical refinement: leaves of finished receiver
+    /// subtrees; exact solve: receivers) on `progress`, for a front end to poll; `None` stops.
+    pub fn set_progress(&mut self, progress: Option<Arc<Progress>>) {
+        if let Some(s) = &mut self.solver {
+            s.progress = progress.clone();
+        }
+        self.progress = progress;
+    }
+
     /// True when nothing the solve depends on changed since the last solve.
     pub fn is_current(&self) -> bool {
         !self.changes.any()
@@ -458,7 +471,10 @@ impl FrameSession {
     ) -> (Vec<Rgb>, Option<usize>) {
         if self.settings.method == Method::Exact {
             let t = Instant::now();
-            let b = solver::exact::solve(&self.mesh, &self.dipole, e, &FormFactorOptions::default());
+            let all: Vec<usize> = (0..self.mesh.triangles.len()).collect();
+            let opts = FormFactorOptions::default();
+            let p = self.progress.as_deref();
+            let b = solver::exact::solve_receivers(&self.mesh, &self.dipole, e, &opts, &all, p);
             timings.gather_ms += ms_since(t);
             return (b, None);
         }
@@ -521,6 +537,7 @@ impl FrameSession {
             let h = self.hierarchy.take().unwrap_or_else(|| face_cluster::build(&rest));
             let mut s = HierarchicalSolver::new(rest, h, self.dipole.clone(), self.oracle());
             s.ff_opts = FormFactorOptions::default();
+            s.progress = self.progress.clone();
             self.solver = Some(s);
         }
     }

@@ -3,6 +3,7 @@
 
 mod bench;
 mod cli;
+mod progress;
 mod render;
 mod view;
 mod viewer;

@@ -9,6 +9,7 @@
 //! hundred neighbours), and leaves every result unchanged to well below `f32` precision.
 
 use super::energy;
+use super::progress::Progress;
 use crate::Rgb;
 use crate::bssrdf::Dipole;
 use crate::formfactor::{FormFactorOptions, form_factor};
@@ -18,7 +19,26 @@ use rayon::prelude::*;
 
 /// Per-face `B` (same units as the irradiance) for per-face irradiance `face_irradiance`.
 pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Vec<Rgb> {
+    let all: Vec<usize> = (0..mesh.triangles.len()).collect();
+    solve_receivers(mesh, dipole, face_irradiance, opts, &all, None)
+}
+
+/// `B` at the faces `receivers` only (in that order), each gathered exactly as [`solve`] does
+/// (from every face, with the same form factor and energy bound): O(N) per receiver, a
+/// reference for sampled faces of meshes too large for the whole O(N²) solve. `progress`,
+/// when given, counts receivers done (stage "exact").
+pub fn solve_receivers(
+    mesh: &Mesh,
+    dipole: &Dipole,
+    face_irradiance: &[Rgb],
+    opts: &FormFactorOptions,
+    receivers: &[usize],
+    progress: Option<&Progress>,
+) -> Vec<Rgb> {
     assert_eq!(face_irradiance.len(), mesh.triangles.len());
+    if let Some(p) = progress {
+        p.start("exact", receivers.len());
+    }
     let tris: Vec<[DVec3; 3]> =
         (0..mesh.triangles.len()).map(|f| mesh.corners(f).map(|p| p.as_dvec3())).collect();
     // Bounding sphere of each face (about its vertex average).
@@ -30,9 +50,9 @@ pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormF
         })
         .collect();
     let bound = dipole.bounds_energy();
-    (0..tris.len())
-        .into_par_iter()
-        .map(|o| {
+    receivers
+        .par_iter()
+        .map(|&o| {
             let x_o = mesh.face_centroid(o).as_dvec3();
             let n_o = mesh.face_normal(o).as_dvec3();
             // `B`, and `B` under uniform irradiance 1 for the energy bound.
@@ -52,8 +72,34 @@ pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormF
                     u[c] += f[c];
                 }
             }
+            if let Some(p) = progress {
+                p.add(1);
+            }
             let b = Rgb::new(b[0] as f32, b[1] as f32, b[2] as f32);
             if bound { b * energy::bound(Rgb::new(u[0] as f32, u[1] as f32, u[2] as f32)) } else { b }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bssrdf::Material;
+    use crate::mesh::generate::icosphere;
+
+    #[test]
+    fn receivers_match_the_full_solve_and_count_progress() {
+        let mesh = icosphere(2);
+        let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
+        let e: Vec<Rgb> = (0..mesh.triangles.len()).map(|f| Rgb::splat((f % 7) as f32 * 0.1)).collect();
+        let opts = FormFactorOptions::default();
+        let all = solve(&mesh, &d, &e, &opts);
+        let picks = [5, 0, 17, 63];
+        let p = Progress::new();
+        let some = solve_receivers(&mesh, &d, &e, &opts, &picks, Some(&p));
+        for (&f, b) in picks.iter().zip(&some) {
+            assert_eq!(all[f], *b);
+        }
+        assert_eq!(p.snapshot(), ("exact", 4, 4));
+    }
 }

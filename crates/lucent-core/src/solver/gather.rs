@@ -107,7 +107,9 @@ impl HierarchicalSolver {
         let t1 = Instant::now();
         let mut leaf_b = vec![[Rgb::ZERO; 2]; h.leaf_count()];
         let mut ctx = Ctx::new(self);
+        self.start_progress("on-the-fly");
         self.otf_rec(&mut ctx, 0, Cands::ROOT, [Vec3A::ZERO; 2], &e_node, &mut leaf_b);
+        self.tick_progress(None, 0);
         let t2 = Instant::now();
         let bound = self.dipole.bounds_energy();
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
@@ -166,6 +168,7 @@ impl HierarchicalSolver {
                 .map(|(k, (c, o))| {
                     let mut sub = Ctx::new(self);
                     self.otf_rec(&mut sub, c, Cands::of_child(&defer, k), b, e_node, o);
+                    self.tick_progress(Some(r), c);
                     sub
                 })
                 .collect();
@@ -173,6 +176,7 @@ impl HierarchicalSolver {
         } else {
             for (k, (c, o)) in parts.into_iter().enumerate() {
                 self.otf_rec(ctx, c, Cands::of_child(&defer, k), b, e_node, o);
+                self.tick_progress(Some(r), c);
             }
         }
     }

@@ -20,6 +20,7 @@
 
 use super::link_set::{ChunkPool, LinkSet};
 use super::oracle::Oracle;
+use super::progress::Progress;
 use super::refine::Reuse;
 use crate::Rgb;
 use crate::bssrdf::Dipole;
@@ -27,6 +28,7 @@ use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
 use glam::Vec3A;
+use std::sync::Arc;
 use std::sync::atomic::AtomicI64;
 use std::time::Instant;
 
@@ -81,6 +83,9 @@ pub struct HierarchicalSolver {
     /// path, after Jensen & Buhler 2002) instead of the semi-analytic form factor: the
     /// comparison of Mertens table 5. Default false.
     pub near_point_sampling: bool,
+    /// Where a front end watches long refinements (leaves of finished receiver subtrees out of
+    /// all leaves); `None` (default): not counted.
+    pub progress: Option<Arc<Progress>>,
     pub(super) links: Option<LinkSet>,
     /// The link set an incremental update replaced, kept for its buffers.
     pub(super) spare: Option<LinkSet>,
@@ -108,6 +113,7 @@ impl HierarchicalSolver {
             oracle,
             ff_opts: FormFactorOptions::default(),
             near_point_sampling: false,
+            progress: None,
             links: None,
             spare: None,
             chunk_pool: ChunkPool::default(),
@@ -124,6 +130,7 @@ impl HierarchicalSolver {
     /// Refines from the root's self-link and stores the links (render and incremental modes).
     pub fn link(&mut self) -> SolveStats {
         let t0 = Instant::now();
+        self.start_progress("link");
         let mut stats = self.relink(None);
         stats.link_ms = ms(t0.elapsed());
         stats.total_ms = stats.link_ms;
@@ -188,6 +195,7 @@ impl HierarchicalSolver {
         }
         let remaining = AtomicI64::new(budget.map(|b| b as i64).unwrap_or(i64::MAX));
         let reuse = Reuse { old: &old, changed: &changed, stale: &stale, remaining: &remaining };
+        self.start_progress("incremental");
         let mut stats = self.relink(Some(&reuse));
         self.spare = Some(old.into_spare());
         stats.link_ms = ms(t0.elapsed());
@@ -217,6 +225,33 @@ impl HierarchicalSolver {
         }
     }
 }
+
+impl HierarchicalSolver {
+    /// Starts `stage` on the progress counter, if any, over all leaves.
+    pub(super) fn start_progress(&self, stage: &'static str) {
+        if let Some(p) = &self.progress {
+            p.start(stage, self.hierarchy.leaf_count());
+        }
+    }
+
+    /// Counts child `c`'s subtree (of parent `r`, or the root when `r` is `None`) as finished
+    /// if it is one of the largest with at most [`TICK_LEAVES`] leaves: called by the
+    /// refinements after each child and after the root, so every leaf is counted exactly once,
+    /// one relaxed atomic add per such subtree (never per link).
+    #[inline]
+    pub(super) fn tick_progress(&self, r: Option<usize>, c: usize) {
+        if let Some(p) = &self.progress {
+            let n = self.hierarchy.nodes[c].leaf_count();
+            let above = r.map_or(u32::MAX, |r| self.hierarchy.nodes[r].leaf_count());
+            if n <= TICK_LEAVES && above > TICK_LEAVES {
+                p.add(n as usize);
+            }
+        }
+    }
+}
+
+/// Progress is counted per receiver subtree of at most this many leaves.
+const TICK_LEAVES: u32 = 256;
 
 /// Milliseconds in `d`.
 #[inline]

@@ -16,6 +16,7 @@
 //!   delta, so that an incremental update writes only what changed (§5.5).
 //! * [`oracle`]: the refinement oracle (§5.2).
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
+//! * [`progress`]: a counter a front end polls to show a long solve's progress.
 
 pub mod energy;
 mod evaluate;
@@ -26,8 +27,10 @@ pub mod link_coef;
 pub mod link_set;
 pub mod oracle;
 pub mod point_sample;
+pub mod progress;
 mod refine;
 
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};
+pub use progress::Progress;

@@ -289,6 +289,7 @@ impl HierarchicalSolver {
             let mut ctx = Ctx::new(self);
             chunks.push(self.chunk_pool.take(ChunkPool::subtree(0)));
             self.link_rec(&mut ctx, 0, Cands::ROOT, &[], &mut chunks, reuse);
+            self.tick_progress(None, 0);
             ctx.fill(&mut stats);
         }
         // The set the last update replaced lends its buffers, already paged in: large fresh
@@ -406,6 +407,7 @@ impl HierarchicalSolver {
                     let mut sub_chunks = vec![self.chunk_pool.take(ChunkPool::subtree(c as usize))];
                     let cands = Cands::of_child(&defer, k);
                     self.link_rec(&mut sub, c as usize, cands, &kept_here, &mut sub_chunks, reuse);
+                    self.tick_progress(Some(r), c as usize);
                     (sub, sub_chunks)
                 })
                 .collect();
@@ -417,6 +419,7 @@ impl HierarchicalSolver {
         } else {
             for (k, &c) in n.children().iter().enumerate() {
                 self.link_rec(ctx, c as usize, Cands::of_child(&defer, k), &kept_here, chunks, reuse);
+                self.tick_progress(Some(r), c as usize);
             }
         }
     }

@@ -7,6 +7,7 @@ mod energy;
 mod formfactor;
 mod htsm;
 mod solver;
+mod solver_real;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.what {
@@ -14,6 +15,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Energy => energy::run(args),
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
+        BenchTarget::Solver if args.real => {
+            if args.sweep || args.table5 || args.oracle.is_some() {
+                anyhow::bail!(
+                    "--real takes neither --sweep, --table5 nor --oracle (it uses the profile's default oracle)"
+                );
+            }
+            solver_real::run(args.json)
+        }
         BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle),
     }
 }

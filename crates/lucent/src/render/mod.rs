@@ -144,7 +144,10 @@ fn render_mertens(
     debug_assert_eq!(scene.settings.method, method);
     let mut session = scene.session(SolveMode::OnTheFly);
     session.set_positions(&mesh.positions);
+    let watch = crate::progress::Watch::new();
+    session.set_progress(Some(watch.progress()));
     let solved = session.solve();
+    drop(watch);
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
     let st = &solved.timings;
     log::info!(
