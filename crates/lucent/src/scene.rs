@@ -373,7 +373,7 @@ impl SceneFile {
     }
 
     /// Loads the mesh like [`SceneFile::load_mesh`] with its texture, if its file has one.
-    pub fn load_textured_mesh(&self) -> Result<(Mesh, Option<Texture>)> {
+    pub fn load_textured_mesh(&self) -> Result<TexturedMesh> {
         match self.mesh_source() {
             MeshSource::File(_) => {
                 let path = lucent_core::limits::resolve_inside(&self.dir, &self.mesh)
@@ -495,10 +495,13 @@ pub fn load_mesh_file(path: &Path) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// A mesh with its texture, if it has one.
+pub type TexturedMesh = (Mesh, Option<Texture>);
+
 /// Loads a mesh file like [`load_mesh_file`] with its texture (UVs and the decoded colour
 /// image its material names), if it has one. A missing, corrupt or oversized image is an
 /// error naming the image file.
-pub fn load_textured_mesh_file(path: &Path) -> Result<(Mesh, Option<Texture>)> {
+pub fn load_textured_mesh_file(path: &Path) -> Result<TexturedMesh> {
     let (mesh, report, texture) = lucent_core::mesh::load_textured_mesh(path)?;
     for warning in report.warnings() {
         eprintln!("lucent: warning: {}: {warning}", path.display());

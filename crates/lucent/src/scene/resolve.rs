@@ -3,7 +3,7 @@
 //! wins over the file, the file over the defaults, and every default is written here once.
 //! Everything that can fail (files, numbers, names) fails here, before any output exists.
 
-use super::{LoadedEnvironment, MeshSource, SceneFile};
+use super::{LoadedEnvironment, MeshSource, SceneFile, TexturedMesh};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::bssrdf::{Material, ProfileKind};
@@ -218,10 +218,7 @@ impl Scene {
 
 /// The mesh from `--mesh`, else the file's, else the embedded bunny, with its texture if any:
 /// `(source, (mesh, texture), path)`.
-fn load_mesh(
-    o: &Overrides,
-    file: Option<&SceneFile>,
-) -> Result<(String, (Mesh, Option<Texture>), Option<PathBuf>)> {
+fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, TexturedMesh, Option<PathBuf>)> {
     Ok(match (&o.mesh, file) {
         (Some(path), _) => {
             (path.display().to_string(), super::load_textured_mesh_file(path)?, Some(path.clone()))
