@@ -247,6 +247,8 @@ pub struct FrameSession {
     caster: Option<ShadowCaster>,
     /// Irradiance at the faces as last computed (reused when only the solver changed).
     irradiance: Vec<Rgb>,
+    /// Per-face entry factors of a texture (`sqrt` of its colour over the face), if any.
+    entry: Option<Vec<Rgb>>,
     changes: Changes,
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
@@ -280,6 +282,7 @@ impl FrameSession {
             solver: None,
             caster: None,
             irradiance: Vec::new(),
+            entry: None,
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
@@ -384,6 +387,29 @@ impl FrameSession {
         self.progress = progress;
     }
 
+    /// Sets the texture's entry factor per face (see `mesh::texture`): the irradiance of each
+    /// face is multiplied by it before the solve, which itself stays untextured.
+    ///
+    /// # Panics
+    /// If there is not one factor per face.
+    pub fn set_entry_factors(&mut self, entry: Option<Vec<Rgb>>) {
+        if let Some(f) = &entry {
+            assert_eq!(f.len(), self.mesh.triangles.len(), "one entry factor per face");
+        }
+        if self.entry != entry {
+            self.entry = entry;
+            self.changes.light = true;
+        }
+    }
+
+    /// Irradiance `e` past the texture's entry factors (unchanged without a texture).
+    fn entered(&self, e: &[Rgb]) -> Vec<Rgb> {
+        match &self.entry {
+            Some(f) => e.iter().zip(f).map(|(e, f)| *e * *f).collect(),
+            None => e.to_vec(),
+        }
+    }
+
     /// True when nothing the solve depends on changed since the last solve.
     pub fn is_current(&self) -> bool {
         !self.changes.any()
@@ -413,14 +439,15 @@ impl FrameSession {
         timings.irradiance_ms = ms_since(t);
 
         let e = std::mem::take(&mut self.irradiance);
-        let (mut face_b, links) = self.transport_once(&e, &changes, &mut timings);
+        let (mut face_b, links) = self.transport_once(&self.entered(&e), &changes, &mut timings);
         let t = Instant::now();
         // Each bounce: the light the last solve sent out, caught by facing parts, solved again
         // (the solve is linear in the irradiance; stored links are reused).
         let mut last = face_b.clone();
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
-            let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
+            let e2 =
+                self.entered(&interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole));
             let unchanged = Changes::default();
             last = self.transport_once(&e2, &unchanged, &mut Timings::default()).0;
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);

@@ -10,6 +10,7 @@
 //!   orbit, pan, zoom, picking rays).
 //! * [`mesh_pass`]: per-vertex `B / pi` times the per-pixel exit Fresnel factor, highlights and
 //!   the environment-reflection hook, into an HDR target.
+//! * [`surface_maps`]: the environment and albedo maps the mesh pass samples.
 //! * [`tonemap`]: exposure, gamma curve or ACES fit, background.
 //! * [`offscreen`]: the two passes into offscreen targets and read-back to an image.
 //! * [`htsm`]: Heterogeneous Translucent Shadow Maps (Shopf 2007).
@@ -21,6 +22,7 @@ pub mod htsm;
 pub mod mesh_pass;
 pub mod offscreen;
 pub mod readback;
+pub mod surface_maps;
 pub mod test_support;
 pub mod tonemap;
 

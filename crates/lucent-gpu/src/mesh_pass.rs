@@ -9,11 +9,15 @@
 //! [`crate::tonemap`] turns it into an image. Optionally the environment map itself is drawn
 //! behind the mesh first ([`Shading::background`], alpha 1, tone mapped with the mesh).
 //!
-//! Bind groups: 0 = [`MeshUniforms`] (camera and shading), 1 = environment map and sampler.
+//! Bind groups: 0 = [`MeshUniforms`] (camera and shading), 1 = environment map and sampler,
+//! 2 = albedo map and sampler (a mesh's colour texture: the radiance is multiplied by its
+//! square root per pixel, the exit half of `lucent_core::mesh::texture`'s modulation).
 
 use crate::camera::CameraView;
 use crate::context::{DEPTH_FORMAT, GpuContext, GpuError};
-use glam::Vec3;
+pub use crate::surface_maps::{AlbedoMap, EnvironmentMap};
+use crate::surface_maps::{albedo_bind_group, env_bind_group, texture_layout};
+use glam::{Vec2, Vec3};
 use lucent_core::Rgb;
 use lucent_core::irradiance::Light;
 use wgpu::util::DeviceExt;
@@ -27,6 +31,7 @@ pub const MAX_LIGHTS: usize = 8;
 pub struct GpuMesh {
     geometry: wgpu::Buffer,
     radiance: wgpu::Buffer,
+    uvs: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
     vertex_count: u32,
@@ -54,13 +59,27 @@ impl GpuMesh {
         radiance: &[Rgb],
         triangles: &[[u32; 3]],
     ) -> Result<GpuMesh, GpuError> {
+        Self::with_uvs(ctx, positions, normals, radiance, triangles, &vec![Vec2::ZERO; positions.len()])
+    }
+
+    /// Uploads a mesh like [`GpuMesh::new`] with a texture coordinate per vertex (for the
+    /// albedo map, [`MeshPass::set_albedo`]).
+    pub fn with_uvs(
+        ctx: &GpuContext,
+        positions: &[Vec3],
+        normals: &[Vec3],
+        radiance: &[Rgb],
+        triangles: &[[u32; 3]],
+        uvs: &[Vec2],
+    ) -> Result<GpuMesh, GpuError> {
         let n = positions.len();
-        if normals.len() != n || radiance.len() != n {
+        if normals.len() != n || radiance.len() != n || uvs.len() != n {
             return Err(GpuError::InvalidInput(format!(
-                "mesh upload: {} positions, {} normals, {} radiance values (must be equal)",
+                "mesh upload: {} positions, {} normals, {} radiance values, {} uvs (must be equal)",
                 n,
                 normals.len(),
-                radiance.len()
+                radiance.len(),
+                uvs.len()
             )));
         }
         if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
@@ -87,6 +106,11 @@ impl GpuMesh {
             contents: bytemuck::cast_slice(&flatten(radiance)),
             usage,
         });
+        let uvs = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lucent mesh uvs"),
+            contents: bytemuck::cast_slice(uvs),
+            usage,
+        });
         let indices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lucent mesh indices"),
             contents: bytemuck::cast_slice(triangles),
@@ -96,6 +120,7 @@ impl GpuMesh {
         Ok(GpuMesh {
             geometry,
             radiance,
+            uvs,
             indices,
             index_count: (triangles.len() * 3) as u32,
             vertex_count: n as u32,
@@ -227,6 +252,9 @@ pub struct MeshPass {
     env_layout: wgpu::BindGroupLayout,
     env_group: wgpu::BindGroup,
     sampler: wgpu::Sampler,
+    albedo_layout: wgpu::BindGroupLayout,
+    albedo_group: wgpu::BindGroup,
+    albedo_sampler: wgpu::Sampler,
 }
 
 impl MeshPass {
@@ -256,30 +284,11 @@ impl MeshPass {
                 count: None,
             }],
         });
-        let env_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lucent mesh environment"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let env_layout = texture_layout(device, "lucent mesh environment");
+        let albedo_layout = texture_layout(device, "lucent mesh albedo");
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lucent mesh"),
-            bind_group_layouts: &[Some(&uniform_layout), Some(&env_layout)],
+            bind_group_layouts: &[Some(&uniform_layout), Some(&env_layout), Some(&albedo_layout)],
             immediate_size: 0,
         });
         let buffers = [
@@ -292,6 +301,11 @@ impl MeshPass {
                 array_stride: 12,
                 step_mode: wgpu::VertexStepMode::Vertex,
                 attributes: &wgpu::vertex_attr_array![2 => Float32x3],
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: 8,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![3 => Float32x2],
             }),
         ];
         let target = PassTarget { color_format, sample_count };
@@ -326,6 +340,16 @@ impl MeshPass {
         });
         let black = EnvironmentMap::from_rgba_f32(ctx, 1, 1, &[[0.0; 4]])?;
         let env_group = env_bind_group(device, &env_layout, &black, &sampler);
+        let albedo_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("lucent albedo"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let white = AlbedoMap::from_rgb(ctx, 1, 1, &[Vec3::ONE])?;
+        let albedo_group = albedo_bind_group(device, &albedo_layout, &white, &albedo_sampler);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Device {
                 during: "creating the mesh pipeline".into(),
@@ -341,7 +365,16 @@ impl MeshPass {
             env_layout,
             env_group,
             sampler,
+            albedo_layout,
+            albedo_group,
+            albedo_sampler,
         })
+    }
+
+    /// Sets the albedo map (a mesh's colour texture) the mesh is drawn with; without one, a 1x1
+    /// white map leaves the radiance unchanged.
+    pub fn set_albedo(&mut self, ctx: &GpuContext, map: &AlbedoMap) {
+        self.albedo_group = albedo_bind_group(&ctx.device, &self.albedo_layout, map, &self.albedo_sampler);
     }
 
     /// Sets the environment map the reflection samples (see [`Shading::environment`]).
@@ -401,6 +434,7 @@ impl MeshPass {
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &GpuMesh) {
         pass.set_bind_group(0, &self.uniform_group, &[]);
         pass.set_bind_group(1, &self.env_group, &[]);
+        pass.set_bind_group(2, &self.albedo_group, &[]);
         if self.draw_background.get() {
             pass.set_pipeline(&self.background_pipeline);
             pass.draw(0..3, 0..1);
@@ -408,76 +442,9 @@ impl MeshPass {
         pass.set_pipeline(&self.pipeline);
         pass.set_vertex_buffer(0, mesh.geometry.slice(..));
         pass.set_vertex_buffer(1, mesh.radiance.slice(..));
+        pass.set_vertex_buffer(2, mesh.uvs.slice(..));
         pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..mesh.index_count, 0, 0..1);
-    }
-}
-
-fn env_bind_group(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    env: &EnvironmentMap,
-    sampler: &wgpu::Sampler,
-) -> wgpu::BindGroup {
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("lucent mesh environment"),
-        layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&env.view) },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(sampler) },
-        ],
-    })
-}
-
-/// An equirectangular HDR environment map on the GPU (`Rgba16Float`, one mip). Direction
-/// `d` maps to `u = atan2(d.x, -d.z) / 2pi + 1/2`, `v = acos(d.y) / pi` (v = 0 is straight up).
-pub struct EnvironmentMap {
-    /// The texture.
-    pub texture: wgpu::Texture,
-    /// A view of it.
-    pub view: wgpu::TextureView,
-}
-
-impl EnvironmentMap {
-    /// Uploads `width * height` RGBA radiance texels (rows top first), converted to f16.
-    pub fn from_rgba_f32(
-        ctx: &GpuContext,
-        width: u32,
-        height: u32,
-        texels: &[[f32; 4]],
-    ) -> Result<EnvironmentMap, GpuError> {
-        ctx.check_size(width, height)?;
-        if texels.len() != (width * height) as usize {
-            return Err(GpuError::InvalidInput(format!(
-                "environment map: {} texels for {width}x{height}",
-                texels.len()
-            )));
-        }
-        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("lucent environment"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        let bytes: Vec<u8> =
-            texels.iter().flatten().flat_map(|v| half::f16::from_f32(*v).to_bits().to_le_bytes()).collect();
-        ctx.queue.write_texture(
-            texture.as_image_copy(),
-            &bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(width * 8),
-                rows_per_image: Some(height),
-            },
-            size,
-        );
-        let view = texture.create_view(&Default::default());
-        Ok(EnvironmentMap { texture, view })
     }
 }
 

@@ -47,6 +47,7 @@ use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
 use lucent_core::mesh::deform::Deformation;
+use lucent_core::mesh::texture::Texture;
 use lucent_core::mesh::{Mesh, embedded, generate};
 use lucent_gpu::camera::OrbitCamera;
 use serde::Deserialize;
@@ -371,6 +372,18 @@ impl SceneFile {
         }
     }
 
+    /// Loads the mesh like [`SceneFile::load_mesh`] with its texture, if its file has one.
+    pub fn load_textured_mesh(&self) -> Result<TexturedMesh> {
+        match self.mesh_source() {
+            MeshSource::File(_) => {
+                let path = lucent_core::limits::resolve_inside(&self.dir, &self.mesh)
+                    .map_err(|reason| anyhow::anyhow!("mesh: {reason}"))?;
+                load_textured_mesh_file(&path)
+            }
+            MeshSource::Builtin(name) => Ok((builtin_mesh(&name)?, None)),
+        }
+    }
+
     /// The camera as the renderer's orbit camera.
     pub fn camera(&self) -> OrbitCamera {
         OrbitCamera {
@@ -480,6 +493,21 @@ pub fn load_mesh_file(path: &Path) -> Result<Mesh> {
         eprintln!("lucent: warning: {}: {warning}", path.display());
     }
     Ok(mesh)
+}
+
+/// A mesh with its texture, if it has one.
+pub type TexturedMesh = (Mesh, Option<Texture>);
+
+/// Loads a mesh file like [`load_mesh_file`] with its texture (UVs and the decoded colour
+/// image its material names), if it has one. A missing, corrupt or oversized image is an
+/// error naming the image file.
+pub fn load_textured_mesh_file(path: &Path) -> Result<TexturedMesh> {
+    let (mesh, report, texture) = lucent_core::mesh::load_textured_mesh(path)?;
+    for warning in report.warnings() {
+        eprintln!("lucent: warning: {}: {warning}", path.display());
+    }
+    let texture = texture.map(|t| t.load()).transpose()?.flatten();
+    Ok((mesh, texture))
 }
 
 /// toml's error as one line: `line L, column C: message` (its default rendering quotes the

@@ -24,8 +24,9 @@
 //!   of defence, so their panic text never reaches the user.
 
 use super::Mesh;
-use super::validate::{MeshReport, validate, weld_exact_duplicates};
-use glam::Vec3;
+use super::texture::{MeshTexture, TextureSource};
+use super::validate::{MeshReport, is_degenerate, validate, weld_exact_duplicates};
+use glam::{Vec2, Vec3};
 use std::io::{BufReader, Cursor};
 use std::path::Path;
 
@@ -117,17 +118,29 @@ pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
 /// Loads and validates a mesh like [`load_mesh`], and also returns the [`MeshReport`]:
 /// degenerate faces removed, welded vertices, boundary and non-manifold edges, components.
 pub fn load_mesh_with_report(path: &Path) -> Result<(Mesh, MeshReport), MeshError> {
+    load_inner(path, false).map(|(mesh, report, _)| (mesh, report))
+}
+
+/// Loads a mesh like [`load_mesh_with_report`] and keeps its texture coordinates and the
+/// colour image its material names, if any: OBJ (`vt` with the `.mtl` file's `map_Kd`), glTF
+/// (`TEXCOORD_n` with the first material's `baseColorTexture`) or PLY (`s`,`t` with a
+/// `comment TextureFile`). The image is named, not read: see [`super::texture::load_texture`].
+pub fn load_textured_mesh(path: &Path) -> Result<(Mesh, MeshReport, Option<MeshTexture>), MeshError> {
+    load_inner(path, true)
+}
+
+fn load_inner(path: &Path, textures: bool) -> Result<(Mesh, MeshReport, Option<MeshTexture>), MeshError> {
     let format = MeshFormat::from_path(path)?;
     let name = path.display().to_string();
     let bytes = crate::limits::read_input(path).map_err(|reason| MeshError::invalid(&name, reason))?;
     // `Path::parent` of a bare file name is "": buffers then resolve against the working folder.
-    parse_mesh_inner(&bytes, format, &name, Some(path.parent().unwrap_or(Path::new(""))))
+    parse_mesh_inner(&bytes, format, &name, Some(path.parent().unwrap_or(Path::new(""))), textures)
 }
 
 /// Parses and validates a mesh held in memory. `name` stands for the file in error messages.
 /// glTF data may only reference buffers embedded in the file (GLB chunk or data URIs).
 pub fn parse_mesh(bytes: &[u8], format: MeshFormat, name: &str) -> Result<(Mesh, MeshReport), MeshError> {
-    parse_mesh_inner(bytes, format, name, None)
+    parse_mesh_inner(bytes, format, name, None, false).map(|(mesh, report, _)| (mesh, report))
 }
 
 fn parse_mesh_inner(
@@ -135,18 +148,27 @@ fn parse_mesh_inner(
     format: MeshFormat,
     name: &str,
     base_dir: Option<&Path>,
-) -> Result<(Mesh, MeshReport), MeshError> {
+    textures: bool,
+) -> Result<(Mesh, MeshReport, Option<MeshTexture>), MeshError> {
     let parsed = guard(name, || match format {
-        MeshFormat::Obj => parse_obj(bytes),
-        MeshFormat::Ply => parse_ply(bytes),
-        MeshFormat::Off => parse_off(bytes),
-        MeshFormat::Gltf => super::io_gltf::parse_gltf(bytes, base_dir),
+        MeshFormat::Obj => parse_obj(bytes, base_dir, textures),
+        MeshFormat::Ply => parse_ply(bytes, base_dir, textures),
+        MeshFormat::Off => parse_off(bytes).map(|m| (m, None)),
+        MeshFormat::Gltf => super::io_gltf::parse_gltf(bytes, base_dir, textures),
     })?;
-    let mut mesh = parsed.map_err(|reason| MeshError::invalid(name, reason))?;
+    let (mut mesh, mut texture) = parsed.map_err(|reason| MeshError::invalid(name, reason))?;
     let welded = match format {
         MeshFormat::Obj | MeshFormat::Gltf => weld_exact_duplicates(&mut mesh),
         MeshFormat::Ply | MeshFormat::Off => 0,
     };
+    // Validation drops degenerate faces; their UVs go with them.
+    let n = mesh.positions.len();
+    if let Some(t) = &mut texture
+        && mesh.triangles.iter().flatten().all(|&v| (v as usize) < n)
+    {
+        let mut keep = mesh.triangles.iter().map(|t| !is_degenerate(&mesh.positions, t));
+        t.corner_uvs.retain(|_| keep.next().unwrap_or(false));
+    }
     let (mesh, mut report) = validate(mesh, name)?;
     report.welded_vertices = welded;
     let text = match format {
@@ -156,7 +178,8 @@ fn parse_mesh_inner(
     };
     let last_line = bytes.rsplit(|&b| b == b'\n').next().unwrap_or_default();
     report.unterminated_last_line = text && last_line.iter().any(|b| !b.is_ascii_whitespace());
-    Ok((mesh, report))
+    let texture = texture.filter(|t| t.corner_uvs.len() == mesh.triangles.len());
+    Ok((mesh, report, texture))
 }
 
 /// Runs a third-party parser and turns a panic into an error naming the file.
@@ -175,7 +198,11 @@ fn push_fan(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
 // ---------------------------------------------------------------------------------------------
 // OBJ
 
-fn parse_obj(bytes: &[u8]) -> Result<Mesh, String> {
+fn parse_obj(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    textures: bool,
+) -> Result<(Mesh, Option<MeshTexture>), String> {
     // `..Default` keeps this compiling if another crate enables tobj's optional fields.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -186,10 +213,20 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh, String> {
         ..Default::default()
     };
     let mut reader = BufReader::new(Cursor::new(bytes));
-    // Materials are irrelevant to the geometry: never open .mtl files.
-    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
-        .map_err(|e| format!("not a valid OBJ file: {e}"))?;
+    // The .mtl file is read only for a texture, and only inside the OBJ file's folder; one that
+    // cannot be read leaves the mesh untextured.
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |p| match base_dir {
+        Some(base) if textures => {
+            let path = p.to_str().and_then(|p| crate::limits::resolve_inside(base, p).ok());
+            let bytes = path.and_then(|p| crate::limits::read_input(&p).ok());
+            bytes.map_or(Err(tobj::LoadError::OpenFileFailed), |b| tobj::load_mtl_buf(&mut Cursor::new(b)))
+        }
+        _ => Ok(Default::default()),
+    })
+    .map_err(|e| format!("not a valid OBJ file: {e}"))?;
     let mut mesh = Mesh::default();
+    let mut uvs = Vec::new();
+    let mut image = None;
     for model in &models {
         let m = &model.mesh;
         if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
@@ -204,8 +241,25 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh, String> {
             }
             mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
         }
+        // UVs (v flipped to the image's top-left origin) when every face of every object has them.
+        let (tc, ti) = (&m.texcoords, &m.texcoord_indices);
+        if textures && ti.len() == m.indices.len() && ti.iter().all(|&i| (i as usize) < tc.len() / 2) {
+            let uv = |i: u32| Vec2::new(tc[2 * i as usize], 1.0 - tc[2 * i as usize + 1]);
+            uvs.extend(ti.chunks_exact(3).map(|t| [uv(t[0]), uv(t[1]), uv(t[2])]));
+        }
+        let map_kd = m.material_id.and_then(|id| materials.as_ref().ok()?.get(id)?.diffuse_texture.clone());
+        if let (None, Some(file), Some(base)) = (&image, map_kd, base_dir) {
+            // `map_Kd -o 0 0 0 file.png`: the file name comes last.
+            let file =
+                if file.starts_with('-') { file.split_whitespace().last().unwrap_or("") } else { &file };
+            let path =
+                crate::limits::resolve_inside(base, file).map_err(|e| format!("map_Kd '{file}': {e}"))?;
+            image = Some(TextureSource::File(path));
+        }
     }
-    Ok(mesh)
+    let texture = (uvs.len() == mesh.triangles.len() && !uvs.is_empty())
+        .then_some(MeshTexture { corner_uvs: uvs, image });
+    Ok((mesh, texture))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -216,13 +270,15 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh, String> {
 /// about ten times faster to read.
 struct PlyVertex {
     p: [f32; 3],
+    /// Texture coordinate (`s`/`t`, `u`/`v` or `texture_u`/`texture_v`), bits 3 and 4 of `seen`.
+    uv: [f32; 2],
     /// Bit k set when coordinate k was present.
     seen: u8,
 }
 
 impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
     fn new() -> Self {
-        PlyVertex { p: [0.0; 3], seen: 0 }
+        PlyVertex { p: [0.0; 3], uv: [0.0; 2], seen: 0 }
     }
     fn set_property(
         &mut self,
@@ -234,11 +290,16 @@ impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
             "x" => 0,
             "y" => 1,
             "z" => 2,
+            "s" | "u" | "texture_u" => 3,
+            "t" | "v" | "texture_v" => 4,
             _ => return R::Ignored,
         };
         match property.to_f32_lossy() {
             Some(v) => {
-                self.p[k] = v;
+                match k {
+                    0..3 => self.p[k] = v,
+                    _ => self.uv[k - 3] = v,
+                }
                 self.seen |= 1 << k;
                 R::Set
             }
@@ -303,7 +364,11 @@ impl ply_rs_bw::ply::PropertyAccess for PlyFace {
     }
 }
 
-fn parse_ply(bytes: &[u8]) -> Result<Mesh, String> {
+fn parse_ply(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    textures: bool,
+) -> Result<(Mesh, Option<MeshTexture>), String> {
     use ply_rs_bw::parser::{Parser, Reader};
     use ply_rs_bw::ply::DefaultElement;
 
@@ -340,7 +405,7 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh, String> {
 
     let mut positions = Vec::with_capacity(vertices.len());
     for (i, v) in vertices.iter().enumerate() {
-        if v.seen != 0b111 {
+        if v.seen & 0b111 != 0b111 {
             let missing = ["x", "y", "z"][(!v.seen).trailing_zeros().min(2) as usize];
             return Err(format!("PLY vertex {i} has no '{missing}' property"));
         }
@@ -370,7 +435,23 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh, String> {
         }
         push_fan(&polygon, &mut triangles);
     }
-    Ok(Mesh::new(positions, triangles))
+    let mut texture = None;
+    if textures && !vertices.is_empty() && vertices.iter().all(|v| v.seen & 0b11000 == 0b11000) {
+        // v flipped to the image's top-left origin; indices are checked by validation.
+        let uv = |i: u32| vertices.get(i as usize).map_or(Vec2::ZERO, |v| Vec2::new(v.uv[0], 1.0 - v.uv[1]));
+        let corner_uvs = triangles.iter().map(|t| t.map(uv)).collect();
+        // MeshLab's convention: `comment TextureFile name.png`.
+        let file = header.comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile ").map(str::trim));
+        let image = match (file, base_dir) {
+            (Some(file), Some(base)) => Some(TextureSource::File(
+                crate::limits::resolve_inside(base, file)
+                    .map_err(|e| format!("TextureFile '{file}': {e}"))?,
+            )),
+            _ => None,
+        };
+        texture = Some(MeshTexture { corner_uvs, image });
+    }
+    Ok((Mesh::new(positions, triangles), texture))
 }
 
 // ---------------------------------------------------------------------------------------------

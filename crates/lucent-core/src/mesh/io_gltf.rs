@@ -6,18 +6,26 @@
 
 use super::Mesh;
 use super::io::{MeshError, guard};
-use glam::{Mat4, Vec3};
+use super::texture::{MeshTexture, TextureSource};
+use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
 
 /// All triangle-mode primitives of the default scene (or the first scene; or every mesh
 /// untransformed when there is no scene), with each node's world transform applied.
 /// Primitives of other modes (points, lines, strips, fans) are skipped.
-pub(super) fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, String> {
+/// With `textures`, also the UVs (the set the material's `baseColorTexture` names) when every
+/// primitive has them, and the first `baseColorTexture` image.
+pub(super) fn parse_gltf(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    textures: bool,
+) -> Result<(Mesh, Option<MeshTexture>), String> {
     let gltf = read_gltf(bytes)?;
     let document = gltf.document;
     let buffers = gltf_buffers(&document, base_dir, gltf.blob)?;
 
     let mut mesh = Mesh::default();
+    let (mut uvs, mut all_uvs, mut image) = (Vec::new(), textures, None);
     let mut add = |m: gltf::Mesh<'_>, world: Mat4| -> Result<(), String> {
         // A mirroring transform turns counter-clockwise faces clockwise (glTF spec §3.7.4).
         let flip = world.determinant() < 0.0;
@@ -51,6 +59,25 @@ pub(super) fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, 
                     [b + t[0], b + t[1], b + t[2]]
                 });
             }
+            if !all_uvs {
+                continue;
+            }
+            let info = prim.material().pbr_metallic_roughness().base_color_texture();
+            let set = info.as_ref().map_or(0, |i| i.tex_coord());
+            let tc: Option<Vec<[f32; 2]>> = reader.read_tex_coords(set).map(|r| r.into_f32().collect());
+            match tc.filter(|tc| tc.len() == count as usize) {
+                Some(tc) => {
+                    let uv = |i: u32| Vec2::from_array(tc[i as usize]);
+                    let tris = indices.chunks_exact(3).map(|t| {
+                        if flip { [uv(t[0]), uv(t[2]), uv(t[1])] } else { [uv(t[0]), uv(t[1]), uv(t[2])] }
+                    });
+                    uvs.extend(tris);
+                }
+                None => all_uvs = false,
+            }
+            if let (None, Some(info)) = (&image, info) {
+                image = Some(image_source(&info.texture().source(), &buffers, base_dir)?);
+            }
         }
         Ok(())
     };
@@ -79,7 +106,40 @@ pub(super) fn parse_gltf(bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, 
             }
         }
     }
-    Ok(mesh)
+    let texture = (all_uvs && uvs.len() == mesh.triangles.len() && !uvs.is_empty())
+        .then_some(MeshTexture { corner_uvs: uvs, image });
+    Ok((mesh, texture))
+}
+
+/// Where a glTF image's bytes are: a buffer view, a `data:` URI, or a file inside `base_dir`
+/// (read later, by `texture::load_texture`).
+fn image_source(
+    img: &gltf::Image<'_>,
+    buffers: &[Vec<u8>],
+    base_dir: Option<&Path>,
+) -> Result<TextureSource, String> {
+    let name = format!("glTF image {}", img.index());
+    match img.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data = buffers.get(view.buffer().index()).map(|b| &b[..]).unwrap_or_default();
+            let bytes = data
+                .get(view.offset()..view.offset().saturating_add(view.length()))
+                .ok_or_else(|| format!("{name}: its buffer view lies outside its buffer"))?;
+            Ok(TextureSource::Embedded { name, bytes: bytes.to_vec() })
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            let bytes = read_buffer_uri(uri, None).map_err(|e| format!("{name}: {e}"))?;
+            Ok(TextureSource::Embedded { name, bytes })
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let relative = percent_decode(uri).map_err(|e| format!("{name}: {e}"))?;
+            let Some(base) = base_dir else {
+                return Err(format!("{name}: external images cannot be read for a model held in memory"));
+            };
+            let path = crate::limits::resolve_inside(base, &relative).map_err(|e| format!("{name}: {e}"))?;
+            Ok(TextureSource::File(path))
+        }
+    }
 }
 
 /// The data of every buffer: the GLB binary chunk, a `data:` URI, or a file named by a relative
@@ -183,7 +243,25 @@ fn check_accessor_types(mesh: usize, prim: &gltf::Primitive<'_>) -> Result<(), S
             a.dimensions()
         ));
     }
-    for a in prim.get(&gltf::Semantic::Positions).into_iter().chain(prim.indices()) {
+    for (semantic, a) in prim.attributes() {
+        let gltf::Semantic::TexCoords(_) = semantic else { continue };
+        let ok = match a.data_type() {
+            DataType::F32 => true,
+            DataType::U8 | DataType::U16 => a.normalized(),
+            _ => false,
+        };
+        if !ok || a.dimensions() != Dimensions::Vec2 {
+            return Err(format!(
+                "{}: TEXCOORD must be float or normalized unsigned VEC2, not {:?} {:?}",
+                where_(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    let texcoords =
+        prim.attributes().filter(|(s, _)| matches!(s, gltf::Semantic::TexCoords(_))).map(|(_, a)| a);
+    for a in prim.get(&gltf::Semantic::Positions).into_iter().chain(prim.indices()).chain(texcoords) {
         let (Some(view), count) = (a.view(), a.count()) else { continue };
         let stride = view.stride().unwrap_or(a.size());
         let needed = (a.offset() as u128) + (stride as u128) * (count.max(1) as u128 - 1) + a.size() as u128;

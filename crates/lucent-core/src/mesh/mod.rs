@@ -10,10 +10,11 @@ pub mod embedded;
 pub mod generate;
 pub mod io;
 mod io_gltf;
+pub mod texture;
 pub mod validate;
 
 pub use bvh::Bvh;
-pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report};
+pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report, load_textured_mesh};
 pub use io_gltf::load_gltf_volume_params;
 pub use validate::MeshReport;
 

@@ -37,12 +37,18 @@ struct Uniforms {
 // Environment hook: an equirectangular HDR map (1x1 black until one is set).
 @group(1) @binding(0) var env_map: texture_2d<f32>;
 @group(1) @binding(1) var env_sampler: sampler;
+// A mesh's colour texture, linear RGB (1x1 white without one): the radiance is multiplied by its
+// square root per pixel, the exit half of the texture's modulation (the entry half scaled the
+// irradiance before the solve).
+@group(2) @binding(0) var albedo_map: texture_2d<f32>;
+@group(2) @binding(1) var albedo_sampler: sampler;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     // B / pi: diffuse exitant radiance before the exit Fresnel factor (HDR).
     @location(2) radiance: vec3<f32>,
+    @location(3) uv: vec2<f32>,
 };
 
 struct VertexOut {
@@ -50,6 +56,7 @@ struct VertexOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) radiance: vec3<f32>,
+    @location(3) uv: vec2<f32>,
 };
 
 @vertex
@@ -59,6 +66,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.world = v.position;
     o.normal = v.normal;
     o.radiance = v.radiance;
+    o.uv = v.uv;
     return o;
 }
 
@@ -109,8 +117,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     }
     let v = normalize(u.eye.xyz - in.world);
     let cos_o = dot(n, v);
-    // L = F_t(eta, w_o) B / pi (Mertens eq. 3, §5.4).
-    var l = (1.0 - fresnel_dielectric(cos_o, eta)) * max(in.radiance, vec3<f32>(0.0));
+    // L = F_t(eta, w_o) B / pi (Mertens eq. 3, §5.4), times sqrt(texture) at exit.
+    let albedo = sqrt(max(textureSampleLevel(albedo_map, albedo_sampler, in.uv, 0.0).rgb, vec3<f32>(0.0)));
+    var l = (1.0 - fresnel_dielectric(cos_o, eta)) * max(in.radiance, vec3<f32>(0.0)) * albedo;
 
     // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the
     // half vector (the light the surface reflects is the light it does not transmit).

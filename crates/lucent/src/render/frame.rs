@@ -9,9 +9,10 @@ use anyhow::Result;
 use lucent_core::Rgb;
 use lucent_core::irradiance::SceneLight;
 use lucent_core::mesh::Mesh;
+use lucent_core::mesh::texture::UvSplit;
 use lucent_gpu::GpuContext;
 use lucent_gpu::camera::CameraView;
-use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, Shading};
+use lucent_gpu::mesh_pass::{AlbedoMap, EnvironmentMap, GpuMesh, Shading};
 use lucent_gpu::offscreen::OffscreenRenderer;
 use lucent_gpu::tonemap::ToneMap;
 
@@ -20,11 +21,14 @@ pub struct GpuFrame {
     ctx: GpuContext,
     renderer: OffscreenRenderer,
     mesh: GpuMesh,
+    /// The mesh split at its UV seams, for a textured mesh (per-vertex data is copied through it).
+    split: Option<UvSplit>,
     camera: CameraView,
     shading: Shading,
     tone: ToneMap,
-    // Kept alive for the mesh pass's bind group.
+    // Kept alive for the mesh pass's bind groups.
     _environment: Option<EnvironmentMap>,
+    _albedo: Option<AlbedoMap>,
 }
 
 impl GpuFrame {
@@ -42,8 +46,19 @@ impl GpuFrame {
         env_background: bool,
     ) -> Result<Self> {
         let normals = mesh.vertex_normals();
-        let gpu_mesh = GpuMesh::new(&ctx, &mesh.positions, &normals, radiance, &mesh.triangles)?;
         let mut renderer = OffscreenRenderer::new(&ctx, width, height)?;
+        let (gpu_mesh, split, albedo) = match &scene.texture {
+            Some(t) => {
+                let split = UvSplit::new(mesh, &t.corner_uvs);
+                let (p, n, r) =
+                    (split.gather(&mesh.positions), split.gather(&normals), split.gather(radiance));
+                let gpu_mesh = GpuMesh::with_uvs(&ctx, &p, &n, &r, &split.triangles, &split.uvs)?;
+                let map = AlbedoMap::from_rgb(&ctx, t.image.width, t.image.height, &t.image.texels)?;
+                renderer.mesh_pass_mut().set_albedo(&ctx, &map);
+                (gpu_mesh, Some(split), Some(map))
+            }
+            None => (GpuMesh::new(&ctx, &mesh.positions, &normals, radiance, &mesh.triangles)?, None, None),
+        };
         let (center, radius) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
         let camera = scene.camera.frame(center, radius, width as f32 / height as f32);
         let mut shading = Shading {
@@ -67,7 +82,17 @@ impl GpuFrame {
             }
             None => None,
         };
-        Ok(GpuFrame { ctx, renderer, mesh: gpu_mesh, camera, shading, tone, _environment: environment })
+        Ok(GpuFrame {
+            ctx,
+            renderer,
+            mesh: gpu_mesh,
+            split,
+            camera,
+            shading,
+            tone,
+            _environment: environment,
+            _albedo: albedo,
+        })
     }
 
     /// Draws the mesh with new per-vertex `radiance`, new geometry (`mesh`, when it moved) and
@@ -80,10 +105,18 @@ impl GpuFrame {
         lights: &[SceneLight],
         format: ImageFormat,
     ) -> Result<Frame> {
-        if let Some(m) = mesh {
-            self.mesh.update_geometry(&self.ctx, &m.positions, &m.vertex_normals())?;
+        match (mesh, &self.split) {
+            (Some(m), Some(s)) => {
+                let (p, n) = (s.gather(&m.positions), s.gather(&m.vertex_normals()));
+                self.mesh.update_geometry(&self.ctx, &p, &n)?
+            }
+            (Some(m), None) => self.mesh.update_geometry(&self.ctx, &m.positions, &m.vertex_normals())?,
+            (None, _) => {}
         }
-        self.mesh.update_radiance(&self.ctx, radiance)?;
+        match &self.split {
+            Some(s) => self.mesh.update_radiance(&self.ctx, &s.gather(radiance))?,
+            None => self.mesh.update_radiance(&self.ctx, radiance)?,
+        }
         self.shading.lights = lights.iter().map(|l| l.light).collect();
         if format == ImageFormat::Exr {
             // The background would cover alpha and bleed into the object's edge pixels.

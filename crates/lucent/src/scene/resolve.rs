@@ -3,7 +3,7 @@
 //! wins over the file, the file over the defaults, and every default is written here once.
 //! Everything that can fail (files, numbers, names) fails here, before any output exists.
 
-use super::{LoadedEnvironment, MeshSource, SceneFile};
+use super::{LoadedEnvironment, MeshSource, SceneFile, TexturedMesh};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::bssrdf::{Material, ProfileKind};
@@ -11,6 +11,7 @@ use lucent_core::hierarchy::Hierarchy;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
+use lucent_core::mesh::texture::Texture;
 use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Transport};
 use lucent_core::solver::Oracle;
 use lucent_gpu::camera::OrbitCamera;
@@ -83,6 +84,9 @@ pub struct Scene {
     pub mesh: Mesh,
     /// The mesh file, when the mesh came from one (HTSM reads glTF volume parameters from it).
     pub mesh_path: Option<PathBuf>,
+    /// The mesh's colour texture, when its file names one: it scales the irradiance at entry
+    /// (the session) and the radiance at exit (the GPU), the square root each.
+    pub texture: Option<Texture>,
     /// Material, model scale, profile and single scattering.
     pub transport: Transport,
     /// Lights (mesh units) with whether each casts shadows.
@@ -116,7 +120,7 @@ impl Scene {
             Some(p) => e.context(format!("scene file {}", p.display())),
             None => e,
         };
-        let (source, mesh, mesh_path) = load_mesh(o, file.as_ref()).map_err(in_file)?;
+        let (source, (mesh, texture), mesh_path) = load_mesh(o, file.as_ref()).map_err(in_file)?;
         let transport = transport(o, file.as_ref())?;
         let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
         let environment = environment(o, file.as_ref()).map_err(in_file)?;
@@ -149,6 +153,7 @@ impl Scene {
             source,
             mesh,
             mesh_path,
+            texture,
             transport,
             lights,
             environment,
@@ -189,6 +194,7 @@ impl Scene {
         );
         s.set_lights(self.lights.clone());
         s.set_environment(self.environment.as_ref().map(|e| e.environment));
+        s.set_entry_factors(self.texture.as_ref().map(Texture::entry_factors));
         s
     }
 
@@ -210,18 +216,21 @@ impl Scene {
     }
 }
 
-/// The mesh from `--mesh`, else the file's, else the embedded bunny: `(source, mesh, path)`.
-fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, Mesh, Option<PathBuf>)> {
+/// The mesh from `--mesh`, else the file's, else the embedded bunny, with its texture if any:
+/// `(source, (mesh, texture), path)`.
+fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, TexturedMesh, Option<PathBuf>)> {
     Ok(match (&o.mesh, file) {
-        (Some(path), _) => (path.display().to_string(), super::load_mesh_file(path)?, Some(path.clone())),
+        (Some(path), _) => {
+            (path.display().to_string(), super::load_textured_mesh_file(path)?, Some(path.clone()))
+        }
         (None, Some(f)) => {
-            let mesh = f.load_mesh()?;
+            let mesh = f.load_textured_mesh()?;
             match f.mesh_source() {
                 MeshSource::File(p) => (p.display().to_string(), mesh, Some(p)),
                 MeshSource::Builtin(name) => (format!("built-in {name}"), mesh, None),
             }
         }
-        (None, None) => ("embedded bunny".to_string(), lucent_core::mesh::embedded::bunny(), None),
+        (None, None) => ("embedded bunny".to_string(), (lucent_core::mesh::embedded::bunny(), None), None),
     })
 }
 
