@@ -141,9 +141,10 @@ impl Uniforms {
     }
 }
 
-/// A shader module: `htsm_common.wgsl` followed by `body`.
+/// A shader module: `spot.wgsl` and `htsm_common.wgsl` followed by `body`.
 pub(super) fn shader(device: &wgpu::Device, label: &str, body: &str) -> wgpu::ShaderModule {
-    let source = format!("{}\n{}", include_str!("../shaders/htsm_common.wgsl"), body);
+    let common = concat!(include_str!("../shaders/spot.wgsl"), include_str!("../shaders/htsm_common.wgsl"));
+    let source = format!("{common}\n{body}");
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),

@@ -88,20 +88,7 @@ fn fresnel_schlick(cos_theta: f32, f0: f32) -> f32 {
     return f0 + (1.0 - f0) * m * m * m * m * m;
 }
 
-// lucent_core::irradiance::spot_falloff: 1 inside cone * (1 - soft), 0 outside the cone, a
-// smoothstep in angle between.
-fn spot_falloff(cos_angle: f32, cone: f32, soft_edge: f32) -> f32 {
-    let angle = acos(clamp(cos_angle, -1.0, 1.0));
-    let inner = cone * (1.0 - clamp(soft_edge, 0.0, 1.0));
-    if (angle >= cone) {
-        return 0.0;
-    }
-    if (angle <= inner) {
-        return 1.0;
-    }
-    let t = (cone - angle) / (cone - inner);
-    return t * t * (3.0 - 2.0 * t);
-}
+// spot_falloff: spot.wgsl, prepended.
 
 // Unit direction from p towards the light, and the light's irradiance on a surface facing it.
 struct LightAt {

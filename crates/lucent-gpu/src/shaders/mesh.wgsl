@@ -84,23 +84,7 @@ fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return 0.5 * (r_par * r_par + r_perp * r_perp);
 }
 
-// The spot's angular falloff, as lucent-core's irradiance::spot_falloff: 1 inside the inner
-// angle cone * (1 - soft_edge), 0 outside the cone, a smoothstep in angle between.
-fn spot_falloff(cos_angle: f32, cone: f32, soft_edge: f32) -> f32 {
-    if (cone > PI) {
-        return 1.0;
-    }
-    let angle = acos(clamp(cos_angle, -1.0, 1.0));
-    let inner = cone * (1.0 - clamp(soft_edge, 0.0, 1.0));
-    if (angle >= cone) {
-        return 0.0;
-    }
-    if (angle <= inner) {
-        return 1.0;
-    }
-    let t = (cone - angle) / (cone - inner);
-    return t * t * (3.0 - 2.0 * t);
-}
+// spot_falloff: spot.wgsl, prepended.
 
 fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
     let u_ = atan2(d.x, -d.z) / (2.0 * PI) + 0.5;
