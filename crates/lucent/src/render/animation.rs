@@ -47,12 +47,12 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     if scene.deform.is_empty() && !args.orbit_light {
         bail!("--frames animates a deformation (--deform or the scene's) or the lights (--orbit-light)");
     }
-    // Incremental by default: the links made on the first frame are updated, not rebuilt.
-    let mode = args.mode.unwrap_or(SolveMode::Incremental);
     let format = image_format(args);
     let mut ctx = Some(GpuContext::new()?);
     let started = Instant::now();
+    // Incremental by default: the links made on the first frame are updated, not rebuilt.
     let mut session = scene.session(SolveMode::Incremental);
+    let mode = session.settings().mode;
     let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
