@@ -160,6 +160,7 @@ impl App {
             load_error: s.load_error.clone(),
             solving: s.solving(),
             solving_for_s: s.solving_for_s(),
+            progress: s.solve_progress(),
             timings: s.solution.timings,
             links: s.solution.links,
             solver: s.solution.solver,
@@ -527,9 +528,9 @@ impl ApplicationHandler<WorkerWake> for App {
             return;
         }
         if !self.animating() {
-            // Only waiting for the worker: its reply wakes the loop; redraw once a second for
-            // the elapsed-time display.
-            event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_secs(1)));
+            // Only waiting for the worker: its reply wakes the loop; redraw four times a second
+            // for the elapsed time and the progress bar.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(250)));
             return;
         }
         let next = self.stats.last_frame + FRAME_INTERVAL;

@@ -9,7 +9,7 @@ use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::{self, Deformer as _};
 pub use lucent_core::session::Timings;
 use lucent_core::session::{FrameSession, FrameSettings, Method, Transport};
-use lucent_core::solver::HierarchicalSolver;
+use lucent_core::solver::{HierarchicalSolver, Progress};
 use std::sync::Arc;
 
 /// What one solve returns.
@@ -68,6 +68,8 @@ pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
 pub struct SolverSession {
     session: Option<FrameSession>,
     environment: EnvCache,
+    /// Where long solves count their progress for the panel.
+    progress: Option<Arc<Progress>>,
 }
 
 /// The environment of the panel's choice, its SH projection made when the choice changes.
@@ -95,6 +97,11 @@ impl EnvCache {
 }
 
 impl SolverSession {
+    /// A session whose long solves count their progress on `progress`.
+    pub fn with_progress(progress: Arc<Progress>) -> Self {
+        SolverSession { progress: Some(progress), ..Default::default() }
+    }
+
     /// Solves for the per-vertex radiance of `mesh` (the session's rest mesh or a deformation
     /// of it; a new topology starts a new session) under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
@@ -116,7 +123,9 @@ impl SolverSession {
             s.mesh().triangles == mesh.triangles && s.mesh().positions.len() == mesh.positions.len()
         });
         if !same_topology {
-            self.session = Some(FrameSession::new((**mesh).clone(), None, transport.clone(), settings));
+            let mut session = FrameSession::new((**mesh).clone(), None, transport.clone(), settings);
+            session.set_progress(self.progress.clone());
+            self.session = Some(session);
         }
         let session = self.session.as_mut().expect("made above");
         session.set_positions(&mesh.positions);

@@ -7,6 +7,7 @@
 use super::core_adapter::{self, Solution};
 use super::state::{Deformations, SolveParams, ViewState};
 use super::worker::{Reply, Request, Worker};
+use crate::progress::{StageClock, StageView};
 use lucent_core::mesh::Mesh;
 use std::sync::Arc;
 use std::time::Instant;
@@ -33,6 +34,7 @@ pub struct ViewModel {
     received_generation: u64,
     drawn_generation: u64,
     solve_started: Instant,
+    stages: StageClock,
 }
 
 impl ViewModel {
@@ -52,11 +54,13 @@ impl ViewModel {
             received_generation: 0,
             drawn_generation: 0,
             solve_started: Instant::now(),
+            stages: StageClock::default(),
         }
     }
 
     /// Takes the worker's replies; returns true if anything arrived.
     pub fn receive(&mut self, worker: &Worker) -> bool {
+        self.stages.observe(worker.progress());
         let mut any = false;
         while let Some(reply) = worker.try_recv() {
             any = true;
@@ -128,6 +132,11 @@ impl ViewModel {
         if self.solving() { self.solve_started.elapsed().as_secs_f64() } else { 0.0 }
     }
 
+    /// The stage of the solve in progress (link, on-the-fly, exact) once it has run a second.
+    pub fn solve_progress(&self) -> Option<StageView> {
+        self.solving().then(|| self.stages.shown()).flatten()
+    }
+
     /// True when the image on screen is the solution of the current state.
     pub fn settled(&self) -> bool {
         self.mesh.is_some()
@@ -171,6 +180,11 @@ mod tests {
         wait_for(&mut scene, &worker, |s| !s.solving());
         let n = scene.mesh.as_ref().unwrap().positions.len();
         assert_eq!(scene.solution.vertex_radiance.len(), n);
+        // The first solve links every face, counted where the panel's progress bar reads it.
+        let (stage, done, total) = worker.progress().snapshot();
+        assert_eq!((stage, done), ("link", total), "the link stage counted to its end");
+        assert_eq!(total, scene.mesh.as_ref().unwrap().triangles.len());
+        assert_eq!(scene.solve_progress(), None, "nothing shown once solved");
         assert!(!scene.settled(), "not drawn yet");
         scene.mark_drawn();
         assert!(scene.settled());

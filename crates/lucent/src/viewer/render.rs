@@ -20,6 +20,10 @@ pub const BACKGROUND: [f32; 3] = [0.055, 0.06, 0.07];
 /// Samples per pixel of the mesh pass.
 const MSAA_SAMPLES: u32 = 4;
 
+/// Radiance `B/pi` a new mesh is drawn with before its first solution: a dim grey that shows
+/// its shape against the background.
+pub const PLACEHOLDER_RADIANCE: Rgb = Rgb::splat(0.03);
+
 /// Viewport rectangle in physical pixels of the colour target.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Viewport {
@@ -120,7 +124,8 @@ impl ViewRenderer {
     }
 
     /// Uploads `mesh`'s positions and normals: in place when the topology is unchanged
-    /// (deformation), else as a new GPU mesh with zero radiance.
+    /// (deformation), else as a new GPU mesh shown in [`PLACEHOLDER_RADIANCE`] until its first
+    /// solve arrives (a large mesh's first link can take seconds).
     pub fn set_geometry(&mut self, ctx: &GpuContext, mesh: &Mesh) -> anyhow::Result<()> {
         let normals = mesh.vertex_normals();
         let topology = (mesh.positions.len(), mesh.triangles.len());
@@ -129,8 +134,8 @@ impl ViewRenderer {
                 gpu.update_geometry(ctx, &mesh.positions, &normals)?;
             }
             _ => {
-                let zeros = vec![Rgb::ZERO; mesh.positions.len()];
-                self.mesh = Some(GpuMesh::new(ctx, &mesh.positions, &normals, &zeros, &mesh.triangles)?);
+                let grey = vec![PLACEHOLDER_RADIANCE; mesh.positions.len()];
+                self.mesh = Some(GpuMesh::new(ctx, &mesh.positions, &normals, &grey, &mesh.triangles)?);
                 self.topology = topology;
             }
         }

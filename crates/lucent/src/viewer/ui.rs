@@ -5,7 +5,8 @@
 use super::core_adapter::{Timings, level_colour};
 use super::htsm::HtsmPanel;
 use super::state::{EnvChoice, SolveMode, Tool, ViewMethod, ViewState};
-use egui::{Color32, ComboBox, Slider, Ui};
+use crate::progress::StageView;
+use egui::{Color32, ComboBox, Slider, SliderClamping, Ui};
 use glam::{Vec2, Vec3};
 use lucent_core::bssrdf::ProfileKind;
 use lucent_core::bssrdf::{Material, PRESETS};
@@ -27,6 +28,8 @@ pub struct Status {
     pub solving: bool,
     /// Seconds the current solve has been running.
     pub solving_for_s: f64,
+    /// The current solve's stage, once it has run a second.
+    pub progress: Option<StageView>,
     /// Timings of the solve shown.
     pub timings: Timings,
     /// Link count of the solve shown (hierarchical solver only).
@@ -105,6 +108,10 @@ fn header(ui: &mut Ui, status: &Status, req: &mut UiRequests) {
                     ui.small(format!("solving {:.1} s", status.solving_for_s));
                 }
             });
+            if let Some(p) = &status.progress {
+                let text = format!("{} {}/{} faces ({:.0}/s)", p.stage, p.done, p.total, p.per_s);
+                ui.add(egui::ProgressBar::new(p.done as f32 / p.total as f32).text(text));
+            }
         }
     }
     ui.horizontal(|ui| {
@@ -127,19 +134,29 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
     let before = m.clone();
     ui.label("reduced scattering σs' (1/mm)");
     for (v, c) in m.sigma_s_prime.iter_mut().zip(["R", "G", "B"]) {
-        ui.add(Slider::new(v, 0.01..=50.0).logarithmic(true).text(c));
+        ui.add(Slider::new(v, 0.01..=50.0).logarithmic(true).text(c).clamping(SliderClamping::Edits));
     }
     ui.label("absorption σa (1/mm)");
     for (v, c) in m.sigma_a.iter_mut().zip(["R", "G", "B"]) {
-        ui.add(Slider::new(v, 1e-4..=10.0).logarithmic(true).text(c));
+        ui.add(Slider::new(v, 1e-4..=10.0).logarithmic(true).text(c).clamping(SliderClamping::Edits));
     }
-    ui.add(Slider::new(&mut m.eta, 1.0..=2.0).text("η"));
+    ui.add(Slider::new(&mut m.eta, 1.0..=2.0).text("η").clamping(SliderClamping::Edits));
     if *m != before && !m.name.ends_with(" (edited)") {
         m.name = format!("{} (edited)", m.name);
     }
     by_colour(ui, state);
-    ui.add(Slider::new(&mut state.params.scale_m, 0.001..=2.0).logarithmic(true).text("scale (m)"));
-    ui.add(Slider::new(&mut state.exposure, 0.05..=50.0).logarithmic(true).text("exposure"));
+    ui.add(
+        Slider::new(&mut state.params.scale_m, 0.001..=2.0)
+            .logarithmic(true)
+            .text("scale (m)")
+            .clamping(SliderClamping::Edits),
+    );
+    ui.add(
+        Slider::new(&mut state.exposure, 0.05..=50.0)
+            .logarithmic(true)
+            .text("exposure")
+            .clamping(SliderClamping::Edits),
+    );
 }
 
 /// The material by colour and distance: a colour picker for the slab albedo, distance sliders,
@@ -154,7 +171,7 @@ fn by_colour(ui: &mut Ui, state: &mut ViewState) {
         });
         ui.label("mean free path (mm)");
         for (v, name) in c.mfp_mm.iter_mut().zip(["R", "G", "B"]) {
-            ui.add(Slider::new(v, 0.01..=100.0).logarithmic(true).text(name));
+            ui.add(Slider::new(v, 0.01..=100.0).logarithmic(true).text(name).clamping(SliderClamping::Edits));
         }
         if ui.button("apply").clicked() {
             let (albedo, mfp) = (c.albedo.map(f64::from), c.mfp_mm.map(f64::from));
@@ -215,7 +232,12 @@ fn lights(ui: &mut Ui, lights: &mut Vec<Light>) {
                 ui.add(Slider::new(&mut deg, 1.0..=90.0).text("cone (°)"));
                 *cone_angle = deg.to_radians();
             }
-            ui.add(Slider::new(&mut new_power, 0.01..=100.0).logarithmic(true).text("power"));
+            ui.add(
+                Slider::new(&mut new_power, 0.01..=100.0)
+                    .logarithmic(true)
+                    .text("power")
+                    .clamping(SliderClamping::Edits),
+            );
             l.set_power(Vec3::from_array(colour) * new_power);
             ui.separator();
         });

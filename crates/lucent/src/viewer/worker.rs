@@ -6,6 +6,7 @@
 use super::core_adapter::{Solution, SolverSession};
 use super::state::SolveParams;
 use lucent_core::mesh::Mesh;
+use lucent_core::solver::Progress;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::thread::JoinHandle;
@@ -49,6 +50,7 @@ pub enum Reply {
 pub struct Worker {
     requests: Sender<Request>,
     replies: Receiver<Reply>,
+    progress: Arc<Progress>,
     _thread: JoinHandle<()>,
 }
 
@@ -57,12 +59,19 @@ impl Worker {
     pub fn spawn(wake: impl Fn() + Send + 'static) -> Self {
         let (req_tx, req_rx) = channel();
         let (rep_tx, rep_rx) = channel();
+        let progress = Arc::new(Progress::new());
+        let session = SolverSession::with_progress(progress.clone());
         let thread = std::thread::Builder::new()
             .name("lucent-solve".into())
             .stack_size(crate::STACK_BYTES)
-            .spawn(move || run(req_rx, rep_tx, wake))
+            .spawn(move || run(session, req_rx, rep_tx, wake))
             .expect("spawning the solve thread");
-        Worker { requests: req_tx, replies: rep_rx, _thread: thread }
+        Worker { requests: req_tx, replies: rep_rx, progress, _thread: thread }
+    }
+
+    /// The counter the solve in progress adds to (the panel's progress bar reads it).
+    pub fn progress(&self) -> &Progress {
+        &self.progress
     }
 
     /// Queues a request (never blocks).
@@ -78,8 +87,7 @@ impl Worker {
     }
 }
 
-fn run(requests: Receiver<Request>, replies: Sender<Reply>, wake: impl Fn()) {
-    let mut session = SolverSession::default();
+fn run(mut session: SolverSession, requests: Receiver<Request>, replies: Sender<Reply>, wake: impl Fn()) {
     while let Some(request) = next_coalesced(&requests) {
         let reply = match request {
             Request::Load(origin) => Reply::Loaded(load(origin)),
