@@ -20,7 +20,7 @@ use crate::Rgb;
 use crate::bssrdf::{Dipole, Material, ProfileKind};
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, face_cluster};
-use crate::irradiance::{Environment, SceneLight, ShadowCaster, face_irradiance_shadowed, interreflection};
+use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering, interreflection};
 use crate::mesh::Mesh;
 use crate::shading;
 use crate::solver::{self, HierarchicalSolver, Oracle, Progress};
@@ -246,7 +246,7 @@ pub struct FrameSession {
     solver: Option<HierarchicalSolver>,
     caster: Option<ShadowCaster>,
     /// Irradiance at the faces as last computed (reused when only the solver changed).
-    irradiance: Vec<Rgb>,
+    irradiance: Vec<Entering>,
     /// Per-face entry factors of a texture (`sqrt` of its colour over the face), if any.
     entry: Option<Vec<Rgb>>,
     changes: Changes,
@@ -402,11 +402,25 @@ impl FrameSession {
         }
     }
 
-    /// Irradiance `e` past the texture's entry factors (unchanged without a texture).
-    fn entered(&self, e: &[Rgb]) -> Vec<Rgb> {
+    /// The carried part of `e` past the texture's entry factors (unchanged without a texture).
+    fn entered_carried(&self, e: &[Entering]) -> Vec<Rgb> {
         match &self.entry {
-            Some(f) => e.iter().zip(f).map(|(e, f)| *e * *f).collect(),
-            None => e.to_vec(),
+            Some(f) => e.iter().zip(f).map(|(e, f)| e.carried * *f).collect(),
+            None => e.iter().map(|e| e.carried).collect(),
+        }
+    }
+
+    /// Adds to `b` the light an oblique beam returns at its entry face (`bssrdf::entry`): the
+    /// local part of `e`, past the texture's entry factors, times the profile's total diffuse
+    /// reflectance.
+    fn add_local(&self, b: &mut [Rgb], e: &[Entering]) {
+        if !self.dipole.entry.has_local() {
+            return;
+        }
+        let r = Rgb::from_array(self.dipole.total_diffuse_reflectance().map(|v| v as f32));
+        for (f, (b, e)) in b.iter_mut().zip(e).enumerate() {
+            let texture = self.entry.as_ref().map_or(Rgb::ONE, |t| t[f]);
+            *b += e.local * texture * r;
         }
     }
 
@@ -439,17 +453,18 @@ impl FrameSession {
         timings.irradiance_ms = ms_since(t);
 
         let e = std::mem::take(&mut self.irradiance);
-        let (mut face_b, links) = self.transport_once(&self.entered(&e), &changes, &mut timings);
+        let (mut face_b, links) = self.transport_once(&self.entered_carried(&e), &changes, &mut timings);
         let t = Instant::now();
+        self.add_local(&mut face_b, &e);
         // Each bounce: the light the last solve sent out, caught by facing parts, solved again
         // (the solve is linear in the irradiance; stored links are reused).
         let mut last = face_b.clone();
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
-            let e2 =
-                self.entered(&interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole));
+            let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
             let unchanged = Changes::default();
-            last = self.transport_once(&e2, &unchanged, &mut Timings::default()).0;
+            last = self.transport_once(&self.entered_carried(&e2), &unchanged, &mut Timings::default()).0;
+            self.add_local(&mut last, &e2);
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
         }
         self.irradiance = e;
@@ -461,7 +476,7 @@ impl FrameSession {
 
     /// Fresnel-transmitted irradiance at the faces (§5.3), refitting the shadow BVH first when
     /// the mesh `moved`.
-    fn face_irradiance(&mut self, moved: bool) -> Vec<Rgb> {
+    fn face_irradiance(&mut self, moved: bool) -> Vec<Entering> {
         let shadows = self.lights.iter().any(|l| l.shadows)
             || (self.environment.is_some() && self.settings.environment_shadows);
         let need_caster = shadows || self.settings.bounces > 0;
@@ -475,14 +490,13 @@ impl FrameSession {
         // Lights shadow per their own flag; the environment only when asked.
         let caster = self.caster.as_ref().filter(|_| shadows);
         let env = self.environment.filter(|_| caster.is_none() || self.settings.environment_shadows);
-        let mut e =
-            face_irradiance_shadowed(&self.mesh, &self.lights, env.as_ref(), &self.dipole.entry, caster);
+        let mut e = face_entering(&self.mesh, &self.lights, env.as_ref(), &self.dipole.entry, caster);
         if caster.is_some()
             && !self.settings.environment_shadows
             && let Some(env) = &self.environment
         {
             // Shadowed lights with an unshadowed environment: add the open environment.
-            let open = face_irradiance_shadowed(&self.mesh, &[], Some(env), &self.dipole.entry, None);
+            let open = face_entering(&self.mesh, &[], Some(env), &self.dipole.entry, None);
             e.iter_mut().zip(open).for_each(|(e, o)| *e += o);
         }
         e

@@ -10,8 +10,8 @@
 //! of another face `k` bring its exitant radiance `B_k F_t(η, μ_k) / (c π)` (the exit lobe of
 //! [`crate::shading`]), through the receiver's entry term.
 
-use super::ShadowCaster;
 use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, cosine_rays};
+use super::{Entering, ShadowCaster};
 use crate::Rgb;
 use crate::bssrdf::{Dipole, fresnel_transmittance};
 use crate::mesh::Mesh;
@@ -19,8 +19,13 @@ use rayon::prelude::*;
 
 /// Transmitted irradiance per face from the light the other faces emit, given their exitant
 /// radiosity `face_b` (per face, the solve's `B`) under the profile `dipole` (its exit term and
-/// entry term). Zero where a face sees no other face's front.
-pub fn bounced_irradiance(mesh: &Mesh, caster: &ShadowCaster, face_b: &[Rgb], dipole: &Dipole) -> Vec<Rgb> {
+/// entry term, in both its parts). Zero where a face sees no other face's front.
+pub fn bounced_irradiance(
+    mesh: &Mesh,
+    caster: &ShadowCaster,
+    face_b: &[Rgb],
+    dipole: &Dipole,
+) -> Vec<Entering> {
     assert_eq!(face_b.len(), mesh.triangles.len());
     let exit = (dipole.exit_normalization() / std::f64::consts::PI) as f32;
     let eta = dipole.eta;
@@ -30,7 +35,7 @@ pub fn bounced_irradiance(mesh: &Mesh, caster: &ShadowCaster, face_b: &[Rgb], di
         .map(|f| {
             let (p, n) = (mesh.face_centroid(f), mesh.face_normal(f));
             let origin = p + n * eps;
-            let mut e = Rgb::ZERO;
+            let mut e = Entering::default();
             for (dir, cos) in cosine_rays(n, f) {
                 let Some((_, k)) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY) else {
                     continue;
@@ -39,10 +44,11 @@ pub fn bounced_irradiance(mesh: &Mesh, caster: &ShadowCaster, face_b: &[Rgb], di
                 if mu_k > 0.0 {
                     let radiance =
                         face_b[k as usize] * (exit * fresnel_transmittance(mu_k as f64, eta) as f32);
-                    e += radiance * dipole.entry.at(cos);
+                    e.add(radiance, &dipole.entry, cos);
                 }
             }
-            e * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
+            let k = std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32;
+            Entering { carried: e.carried * k, local: e.local * k }
         })
         .collect()
 }
@@ -90,7 +96,7 @@ mod tests {
         let d = Dipole::with_profile(&m, 10.0, crate::bssrdf::ProfileKind::Pbd, true);
         let b = vec![Rgb::ONE; sphere.triangles.len()];
         let e = bounced_irradiance(&sphere, &ShadowCaster::new(&sphere), &b, &d);
-        assert!(e.iter().all(|v| *v == Rgb::ZERO));
+        assert!(e.iter().all(|v| *v == Entering::default()));
 
         // Two large parallel plates facing each other at a small gap, B = 1 on both, eta = 1:
         // the exit lobe integrates to 1, so each plate's centre receives the whole hemisphere's
@@ -105,7 +111,8 @@ mod tests {
         let centre = (0..plates.triangles.len())
             .min_by(|&a, &c| plates.face_centroid(a).length().total_cmp(&plates.face_centroid(c).length()))
             .unwrap();
-        let want = d1.entry.band_weights(0)[0] / std::f32::consts::PI;
-        assert!(want > 1.0 && (e[centre].x / want - 1.0).abs() < 0.03, "{} vs {want}", e[centre]);
+        let want = (d1.entry.band_weights(0)[0] + d1.entry.local_band_weights(0)[0]) / std::f32::consts::PI;
+        let got = e[centre].carried.x + e[centre].local.x;
+        assert!(want > 1.0 && (got / want - 1.0).abs() < 0.03, "{got} vs {want}");
     }
 }

@@ -62,13 +62,59 @@ impl Environment {
     /// albedo ratio), per channel. Exact for the 9-coefficient radiance: the kernel is zonal
     /// (see [`sh`]). Clamped at zero, where ringing of the truncated expansion could dip below it.
     pub fn transmitted_irradiance(&self, n: Vec3, entry: &Entry) -> Rgb {
+        self.transmitted(n, entry).carried
+    }
+
+    /// [`Environment::transmitted_irradiance`] in both parts of the entry term.
+    pub fn transmitted(&self, n: Vec3, entry: &Entry) -> Entering {
         let d = self.to_map_frame(n);
-        let e = Rgb::new(
-            self.sh.convolve(d, &BandWeights(entry.band_weights(0))).x,
-            self.sh.convolve(d, &BandWeights(entry.band_weights(1))).y,
-            self.sh.convolve(d, &BandWeights(entry.band_weights(2))).z,
-        );
-        (e * self.intensity).max(Rgb::ZERO)
+        let part = |bands: &dyn Fn(usize) -> [f32; 3]| {
+            let e = Rgb::new(
+                self.sh.convolve(d, &BandWeights(bands(0))).x,
+                self.sh.convolve(d, &BandWeights(bands(1))).y,
+                self.sh.convolve(d, &BandWeights(bands(2))).z,
+            );
+            (e * self.intensity).max(Rgb::ZERO)
+        };
+        Entering { carried: part(&|c| entry.band_weights(c)), local: part(&|c| entry.local_band_weights(c)) }
+    }
+}
+
+/// Transmitted irradiance at a face in the two parts of the [`Entry`] term: what the profile
+/// carries away, and what an oblique beam returns at the face itself (per channel, irradiance
+/// units; see `bssrdf::entry`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Entering {
+    /// Irradiance the diffusion profile spreads.
+    pub carried: Rgb,
+    /// Irradiance returned at the entry face (times the profile's total reflectance).
+    pub local: Rgb,
+}
+
+impl Entering {
+    /// Adds light of irradiance `e` (already times its cosine) arriving at cosine `cos`.
+    #[inline]
+    pub fn add(&mut self, e: Rgb, entry: &Entry, cos: f32) {
+        self.carried += e * entry.at(cos);
+        self.local += e * entry.local_at(cos);
+    }
+}
+
+impl std::ops::Sub for Entering {
+    type Output = Entering;
+    /// Part by part, clamped at zero.
+    fn sub(self, o: Entering) -> Entering {
+        Entering {
+            carried: (self.carried - o.carried).max(Rgb::ZERO),
+            local: (self.local - o.local).max(Rgb::ZERO),
+        }
+    }
+}
+
+impl std::ops::AddAssign for Entering {
+    fn add_assign(&mut self, o: Entering) {
+        self.carried += o.carried;
+        self.local += o.local;
     }
 }
 
@@ -96,15 +142,27 @@ pub fn face_irradiance_shadowed(
     entry: &Entry,
     caster: Option<&ShadowCaster>,
 ) -> Vec<Rgb> {
+    face_entering(mesh, lights, environment, entry, caster).into_iter().map(|e| e.carried).collect()
+}
+
+/// [`face_irradiance_shadowed`] in both parts of the entry term (what the profile carries, and
+/// what returns at the face).
+pub fn face_entering(
+    mesh: &Mesh,
+    lights: &[SceneLight],
+    environment: Option<&Environment>,
+    entry: &Entry,
+    caster: Option<&ShadowCaster>,
+) -> Vec<Entering> {
     (0..mesh.triangles.len())
         .into_par_iter()
         .map(|f| {
             let p = mesh.face_centroid(f);
             let n = mesh.face_normal(f);
-            let mut e = environment.map_or(Rgb::ZERO, |env| {
-                let open = env.transmitted_irradiance(n, entry);
+            let mut e = environment.map_or(Entering::default(), |env| {
+                let open = env.transmitted(n, entry);
                 match caster {
-                    Some(c) => (open - occlusion::blocked_environment(env, entry, c, p, n, f)).max(Rgb::ZERO),
+                    Some(c) => open - occlusion::blocked_environment(env, entry, c, p, n, f),
                     None => open,
                 }
             });
@@ -119,7 +177,7 @@ pub fn face_irradiance_shadowed(
                 if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
                     continue;
                 }
-                e += inc.irradiance * cos * entry.at(cos);
+                e.add(inc.irradiance * cos, entry, cos);
             }
             e
         })

@@ -11,7 +11,7 @@
 //! occluded part is estimated. The jitter is a hash of the face and the stratum, so the result is
 //! the same every run.
 
-use super::{Environment, Incident, ShadowCaster};
+use super::{Entering, Environment, Incident, ShadowCaster};
 use crate::Rgb;
 use crate::bssrdf::Entry;
 use glam::Vec3;
@@ -23,7 +23,7 @@ const STRATA: usize = 8;
 
 /// The transmitted environment irradiance the mesh blocks at point `p` with unit normal `n`
 /// (face `face`, which seeds the jitter): subtract it from
-/// [`Environment::transmitted_irradiance`]. Per channel, >= 0.
+/// [`Environment::transmitted`], in both parts of the entry term. Per channel, >= 0.
 pub fn blocked_environment(
     env: &Environment,
     entry: &Entry,
@@ -31,16 +31,17 @@ pub fn blocked_environment(
     p: Vec3,
     n: Vec3,
     face: usize,
-) -> Rgb {
-    let mut blocked = Rgb::ZERO;
+) -> Entering {
+    let mut blocked = Entering::default();
     for (dir, cos) in cosine_rays(n, face) {
         let ray = Incident { to_light: dir, distance: f32::INFINITY, irradiance: Rgb::ZERO };
         if !caster.visible(p, n, &ray) {
             let radiance = env.sh.radiance(env.to_map_frame(dir)).max(Rgb::ZERO) * env.intensity;
-            blocked += radiance * entry.at(cos);
+            blocked.add(radiance, entry, cos);
         }
     }
-    blocked * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
+    let k = std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32;
+    Entering { carried: blocked.carried * k, local: blocked.local * k }
 }
 
 /// [`ENVIRONMENT_SHADOW_RAYS`] cosine-weighted directions about the unit normal `n`, stratified
@@ -97,7 +98,7 @@ mod tests {
         for f in (0..sphere.triangles.len()).step_by(37) {
             let b =
                 blocked_environment(&env, &entry, &caster, sphere.face_centroid(f), sphere.face_normal(f), f);
-            assert_eq!(b, Rgb::ZERO, "face {f}");
+            assert_eq!(b, Entering::default(), "face {f}");
         }
         // A point just outside the sphere, facing along the surface (normal tangent to it):
         // the sphere fills close to half of its hemisphere.
@@ -105,7 +106,7 @@ mod tests {
         let b = blocked_environment(&env, &entry, &caster, p, Vec3::X, 0);
         let open = env.transmitted_irradiance(Vec3::X, &entry);
         assert!((open.x - std::f32::consts::PI).abs() < 5e-3, "{open}");
-        let fraction = b.x / open.x;
+        let fraction = b.carried.x / open.x;
         assert!(fraction > 0.35 && fraction < 0.5, "{fraction}");
     }
 }
