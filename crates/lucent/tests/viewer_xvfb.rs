@@ -127,3 +127,19 @@ fn switching_to_htsm_draws_the_object_differently() {
     let fraction = check_object_and_change(&dir, &stdout, "mertens.png", "htsm.png");
     assert!(fraction > 0.05, "only {:.3}% of the 3D view changed", 100.0 * fraction);
 }
+
+/// The panel's "save material" as the script's `save:`: the scene file it writes reads back
+/// (as `lucent render --scene` reads it) to the material the viewer had.
+#[test]
+fn saved_material_reads_back_as_a_scene() {
+    let dir = fresh_dir("viewer_xvfb_save", &["saved.toml", "last.png"]);
+    if run_viewer(&dir, "albedo:0.7,0.5,0.3,2,1,0.5;scale:0.08;save:saved.toml", "last.png").is_none() {
+        return;
+    }
+    let overrides = lucent::scene::Overrides { scene: Some(dir.join("saved.toml")), ..Default::default() };
+    let scene = lucent::scene::Scene::resolve(&overrides).unwrap();
+    let albedo = [0.7f32, 0.5, 0.3].map(f64::from);
+    let want = lucent_core::bssrdf::Material::from_albedo_mfp("colour", albedo, [2.0, 1.0, 0.5], 1.3).unwrap();
+    assert_eq!(scene.material(), &want);
+    assert_eq!(scene.scale(), 0.08);
+}

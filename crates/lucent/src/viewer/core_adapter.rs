@@ -68,6 +68,8 @@ pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
 pub struct SolverSession {
     session: Option<FrameSession>,
     environment: EnvCache,
+    /// The mesh texture's entry factor per face (irradiance times it before the solve), if any.
+    entry: Option<Vec<lucent_core::Rgb>>,
 }
 
 /// The environment of the panel's choice, its SH projection made when the choice changes.
@@ -95,6 +97,13 @@ impl EnvCache {
 }
 
 impl SolverSession {
+    /// Sets the texture's entry factor per face of the meshes solved from now on (their
+    /// topology is the loaded mesh's: deformations move vertices only).
+    pub fn set_entry_factors(&mut self, entry: Option<Vec<lucent_core::Rgb>>) {
+        self.entry = entry;
+        self.session = None;
+    }
+
     /// Solves for the per-vertex radiance of `mesh` (the session's rest mesh or a deformation
     /// of it; a new topology starts a new session) under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
@@ -116,7 +125,9 @@ impl SolverSession {
             s.mesh().triangles == mesh.triangles && s.mesh().positions.len() == mesh.positions.len()
         });
         if !same_topology {
-            self.session = Some(FrameSession::new((**mesh).clone(), None, transport.clone(), settings));
+            let mut session = FrameSession::new((**mesh).clone(), None, transport.clone(), settings);
+            session.set_entry_factors(self.entry.clone().filter(|e| e.len() == mesh.triangles.len()));
+            self.session = Some(session);
         }
         let session = self.session.as_mut().expect("made above");
         session.set_positions(&mesh.positions);

@@ -46,6 +46,8 @@ pub struct UiRequests {
     pub screenshot: bool,
     /// Reset the camera.
     pub reset_camera: bool,
+    /// Save the material to a new scene file ([`ViewState::save`]).
+    pub save_material: bool,
 }
 
 /// Width of the side panel, points.
@@ -58,7 +60,7 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status, htsm: &Ht
         egui::ScrollArea::vertical().show(ui, |ui| {
             header(ui, status, &mut req);
             section(ui, "Method", true, |ui| method(ui, state, htsm));
-            section(ui, "Material", true, |ui| material(ui, state));
+            section(ui, "Material", true, |ui| req.save_material = material(ui, state));
             section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights));
             section(ui, "Environment", false, |ui| environment(ui, state));
             section(ui, "Solver", true, |ui| solver(ui, state));
@@ -113,7 +115,8 @@ fn header(ui: &mut Ui, status: &Status, req: &mut UiRequests) {
     });
 }
 
-fn material(ui: &mut Ui, state: &mut ViewState) {
+/// The material editor; true when "save material" was clicked.
+fn material(ui: &mut Ui, state: &mut ViewState) -> bool {
     let m = &mut state.params.material;
     ComboBox::from_label("preset").selected_text(m.name.clone()).show_ui(ui, |ui| {
         for (name, _, _) in PRESETS {
@@ -140,6 +143,29 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
     by_colour(ui, state);
     ui.add(Slider::new(&mut state.params.scale_m, 0.001..=2.0).logarithmic(true).text("scale (m)"));
     ui.add(Slider::new(&mut state.exposure, 0.05..=50.0).logarithmic(true).text("exposure"));
+    save_button(ui, state)
+}
+
+/// "save material": writes the material, scale, profile and exposure to a new scene file
+/// (never over an existing one) and shows where, or why not.
+fn save_button(ui: &mut Ui, state: &ViewState) -> bool {
+    let clicked = ui
+        .button("save material")
+        .on_hover_text(format!(
+            "writes a scene file that lucent render --scene reads back: {} (or the next free name)",
+            state.save.path.display()
+        ))
+        .clicked();
+    match &state.save.message {
+        Some(Ok(path)) => {
+            ui.small(format!("saved to {path}"));
+        }
+        Some(Err(e)) => {
+            ui.colored_label(Color32::LIGHT_RED, e);
+        }
+        None => {}
+    }
+    clicked
 }
 
 /// The material by colour and distance: a colour picker for the slab albedo, distance sliders,
