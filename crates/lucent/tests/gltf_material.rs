@@ -144,7 +144,8 @@ fn explicit_materials_win_and_plain_files_keep_the_default() {
     assert_eq!(Scene::resolve(&scene("with.toml")).unwrap().material().name, "Wax");
     assert_eq!(Scene::resolve(&scene("without.toml")).unwrap().material().name, "glTF material 0");
     // No subsurface extension: the default material.
-    let plain = write_gltf(&dir, "plain.gltf", r#"{"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.6,0.4,1]}}"#);
+    let plain =
+        write_gltf(&dir, "plain.gltf", r#"{"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.6,0.4,1]}}"#);
     assert_eq!(resolve(&plain).unwrap().material().name, "Skimmilk");
 }
 

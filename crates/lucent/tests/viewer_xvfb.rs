@@ -139,7 +139,8 @@ fn saved_material_reads_back_as_a_scene() {
     let overrides = lucent::scene::Overrides { scene: Some(dir.join("saved.toml")), ..Default::default() };
     let scene = lucent::scene::Scene::resolve(&overrides).unwrap();
     let albedo = [0.7f32, 0.5, 0.3].map(f64::from);
-    let want = lucent_core::bssrdf::Material::from_albedo_mfp("colour", albedo, [2.0, 1.0, 0.5], 1.3).unwrap();
+    let want =
+        lucent_core::bssrdf::Material::from_albedo_mfp("colour", albedo, [2.0, 1.0, 0.5], 1.3).unwrap();
     assert_eq!(scene.material(), &want);
     assert_eq!(scene.scale(), 0.08);
 }

@@ -139,7 +139,10 @@ fn read_material(m: &gltf::Material<'_>, count: usize) -> Result<GltfMaterial, S
             let multiscatter_color = colour_field(v, "multiscatterColor", &at)?.unwrap_or([0.0; 3]);
             let anisotropy = field(v, "scatterAnisotropy", &at)?.unwrap_or(0.0);
             if !(anisotropy > -1.0 && anisotropy < 1.0) {
-                return Err(format!("{} {anisotropy} must be within -1..1 (exclusive)", at("scatterAnisotropy")));
+                return Err(format!(
+                    "{} {anisotropy} must be within -1..1 (exclusive)",
+                    at("scatterAnisotropy")
+                ));
             }
             Some(GltfVolumeScatter { multiscatter_color, anisotropy })
         }

@@ -75,11 +75,18 @@ pub fn map(g: &GltfMaterial, mm_per_unit: f64, fallback: &Material) -> Result<Op
             let g_aniso = g.volume_scatter.as_ref().map_or(0.0, |s| s.anisotropy);
             let reduced: [f64; 3] = std::array::from_fn(|c| {
                 let sigma_t = -v.attenuation_color[c].ln() / v.attenuation_distance;
-                let rho_ss = g.volume_scatter.as_ref().map_or(0.0, |s| single_scatter_albedo(s.multiscatter_color[c]));
+                let rho_ss =
+                    g.volume_scatter.as_ref().map_or(0.0, |s| single_scatter_albedo(s.multiscatter_color[c]));
                 sigma_t * (1.0 - g_aniso * rho_ss)
             });
             let raw = reduced.map(|s| mm_per_unit / s);
-            let mfp = raw.map(|d| if d.is_nan() { *MEAN_FREE_PATH_MM.end() } else { d.clamp(*MEAN_FREE_PATH_MM.start(), *MEAN_FREE_PATH_MM.end()) });
+            let mfp = raw.map(|d| {
+                if d.is_nan() {
+                    *MEAN_FREE_PATH_MM.end()
+                } else {
+                    d.clamp(*MEAN_FREE_PATH_MM.start(), *MEAN_FREE_PATH_MM.end())
+                }
+            });
             let how = match &g.volume_scatter {
                 Some(s) => format!("reduced by scatterAnisotropy {}", s.anisotropy),
                 None => "all attenuation taken as extinction (no KHR_materials_volume_scatter)".to_string(),
@@ -88,7 +95,7 @@ pub fn map(g: &GltfMaterial, mm_per_unit: f64, fallback: &Material) -> Result<Op
                 "mfp {} mm from KHR_materials_volume attenuationColor {} over attenuationDistance {} units ({how}){}",
                 join3(mfp),
                 join3(v.attenuation_color),
-                v.attenuation_distance,
+                num(v.attenuation_distance),
                 clamped(raw, mfp)
             ));
             mfp
@@ -107,7 +114,10 @@ pub fn map(g: &GltfMaterial, mm_per_unit: f64, fallback: &Material) -> Result<Op
     let ior = g.ior.unwrap_or(GLTF_DEFAULT_IOR);
     let eta = if ior == 0.0 { 3.0 } else { ior.clamp(1.0, 3.0) };
     let from = if g.ior.is_some() { "KHR_materials_ior" } else { "glTF's default" };
-    notes.push(format!("eta {eta} from {from}{}", if eta != ior { format!(" (ior {ior} clamped to 1..=3)") } else { String::new() }));
+    notes.push(format!(
+        "eta {eta} from {from}{}",
+        if eta != ior { format!(" (ior {ior} clamped to 1..=3)") } else { String::new() }
+    ));
 
     if let Some(dt) = &g.diffuse_transmission {
         notes.push(format!(
@@ -118,7 +128,7 @@ pub fn map(g: &GltfMaterial, mm_per_unit: f64, fallback: &Material) -> Result<Op
         ));
     }
     if let Some(v) = g.volume.as_ref().filter(|v| v.thickness > 0.0) {
-        notes.push(format!("thicknessFactor {} ignored (the mesh is the volume)", v.thickness));
+        notes.push(format!("thicknessFactor {} ignored (the mesh is the volume)", num(v.thickness)));
     }
     if g.count > 1 {
         notes.push(format!("first of {} materials used for the whole mesh", g.count));
@@ -129,13 +139,18 @@ pub fn map(g: &GltfMaterial, mm_per_unit: f64, fallback: &Material) -> Result<Op
     Ok(Some(MappedMaterial { material, albedo, mfp_mm, note }))
 }
 
-/// Three numbers, four decimals (or two significant figures below 0.01), for the note.
-fn join3(v: [f64; 3]) -> String {
-    let one = |x: f64| match x {
+/// A number for the note: four decimals, or two significant figures below 0.01 (glTF's numbers
+/// are `f32`: `0.1` arrives as `0.10000000149...`).
+fn num(x: f64) -> String {
+    match x {
         x if x != 0.0 && x.abs() < 0.01 => format!("{x:.1e}"),
         x => format!("{}", (x * 1e4).round() / 1e4),
-    };
-    v.map(one).join(",")
+    }
+}
+
+/// Three numbers as [`num`] writes them.
+fn join3(v: [f64; 3]) -> String {
+    v.map(num).join(",")
 }
 
 fn clamped(before: [f64; 3], after: [f64; 3]) -> String {

@@ -238,7 +238,12 @@ fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, Texture
 /// `--albedo`/`--mfp`, else the scene file's `material` key, else a glTF mesh's subsurface
 /// extensions (see [`super::gltf_material`]), else the default. A colour-and-distance or glTF
 /// material says on stdout what it became.
-fn transport(o: &Overrides, file: Option<&SceneFile>, mesh: &Mesh, mesh_path: Option<&Path>) -> Result<Transport> {
+fn transport(
+    o: &Overrides,
+    file: Option<&SceneFile>,
+    mesh: &Mesh,
+    mesh_path: Option<&Path>,
+) -> Result<Transport> {
     let scale_m = o.scale.or(file.map(|f| f.scale)).unwrap_or(DEFAULT_SCALE_M);
     let file_material = file.filter(|f| f.material.is_some());
     let material = match (&o.material, o.colour, file_material) {

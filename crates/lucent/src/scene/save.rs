@@ -59,14 +59,12 @@ pub fn scene_toml(s: &SavedScene<'_>) -> String {
 /// Writes `text` to `path`, which must not exist yet (created atomically with `create_new`, so
 /// a file appearing meanwhile is not overwritten either). Errors name the path.
 pub fn write_new(path: &Path, text: &str) -> Result<()> {
-    let mut f = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(path)
-        .with_context(|| match path.exists() {
+    let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(path).with_context(|| {
+        match path.exists() {
             true => format!("{} exists; not overwritten (choose another name)", path.display()),
             false => format!("cannot create {}", path.display()),
-        })?;
+        }
+    })?;
     f.write_all(text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))
 }
 
@@ -95,7 +93,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lucent-save-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let m = Material::from_albedo_mfp("clay \"edited\"", [0.8, 0.6, 0.4], [1.0, 0.5, 0.25], 1.37).unwrap();
+        let m =
+            Material::from_albedo_mfp("clay \"edited\"", [0.8, 0.6, 0.4], [1.0, 0.5, 0.25], 1.37).unwrap();
         let saved = SavedScene {
             material: &m,
             scale_m: 0.073,
@@ -111,7 +110,10 @@ mod tests {
         let scene = Scene::resolve(&Overrides { scene: Some(path.clone()), ..Default::default() }).unwrap();
         assert_eq!(scene.material(), &m);
         assert_eq!((scene.scale(), scene.exposure), (0.073, 1.5));
-        assert_eq!((scene.transport.profile, scene.transport.single_scattering), (ProfileKind::Dipole, false));
+        assert_eq!(
+            (scene.transport.profile, scene.transport.single_scattering),
+            (ProfileKind::Dipole, false)
+        );
         // Never overwritten: the second write fails naming the file; free_path finds m_2.toml.
         let e = write_new(&path, "x").unwrap_err().to_string();
         assert!(e.contains("m.toml") && e.contains("not overwritten"), "{e}");

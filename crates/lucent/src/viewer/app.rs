@@ -340,6 +340,7 @@ impl App {
             Action::Save(path) => {
                 let written = super::scene_file::save_material(state, Some(&path))?;
                 println!("lucent: material saved to {}", written.display());
+                state.save.message = Some(Ok(written.display().to_string()));
             }
             Action::Albedo(albedo, mfp) => {
                 let (a, d) = (albedo.map(f64::from), mfp.map(f64::from));

@@ -83,7 +83,9 @@ pub fn save_material(state: &ViewState, to: Option<&Path>) -> anyhow::Result<std
 /// given.
 pub fn save_target(scene: Option<&Path>, mesh: Option<&Path>) -> super::state::SaveTarget {
     let inside = |p: &Path| {
-        p.is_relative() && p.components().all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
+        p.is_relative()
+            && p.components()
+                .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
     };
     let (path, mesh) = match (scene, mesh) {
         (Some(s), m) => {
