@@ -170,3 +170,47 @@ fn malformed_values_are_one_line_errors_naming_file_and_value() {
         assert!(e.contains(&name) && e.contains(value) && !e.contains('\n'), "{extensions}: {e}");
     }
 }
+
+/// On the command line: the note and the coefficients on stdout; a malformed value is one
+/// `lucent: error:` line naming the file and the value, exit 1, and no image (the material is
+/// resolved before any GPU work, so this needs no adapter).
+#[test]
+fn cli_prints_the_note_and_refuses_bad_values_in_one_line() {
+    let dir = scratch("cli");
+    let bad =
+        write_gltf(&dir, "bad.gltf", r#"{"extensions":{"KHR_materials_volume":{"attenuationDistance":-3}}}"#);
+    let out = dir.join("bad.png");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_lucent"))
+        .args(["render", "--mesh"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("lucent: error:")).collect();
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(errors[0].contains("bad.gltf") && errors[0].contains("attenuationDistance -3"), "{stderr}");
+    assert!(!out.exists());
+    // A good file: the note (printed before any GPU work, so whether or not an adapter exists).
+    let good = write_gltf(
+        &dir,
+        "good.gltf",
+        r#"{"extensions":{"KHR_materials_diffuse_transmission":{"diffuseTransmissionFactor":0.5}}}"#,
+    );
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_lucent"))
+        .args(["render", "--width", "64", "--height", "48", "--mesh"])
+        .arg(&good)
+        .arg("--out")
+        .arg(dir.join("good.png"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let note = stdout
+        .lines()
+        .find(|l| l.contains("good.gltf: glTF material 0:"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(note.contains("diffuseTransmissionFactor 0.5") && note.contains("not modelled"), "{note}");
+    assert!(stdout.contains("lucent: material: albedo 0.999,0.999,0.999"), "{stdout}");
+}

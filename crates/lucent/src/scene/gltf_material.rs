@@ -38,9 +38,10 @@ pub const GLTF_DEFAULT_IOR: f64 = 1.5;
 pub struct MappedMaterial {
     /// The material (named `glTF material N`).
     pub material: Material,
-    /// Slab albedo per channel, as requested of [`Material::from_albedo_mfp`].
+    /// Slab albedo per linear RGB channel (unitless, 0.001..=0.999), as requested of
+    /// [`Material::from_albedo_mfp`].
     pub albedo: [f64; 3],
-    /// Reduced mean free path per channel, mm.
+    /// Reduced mean free path `1 / sigma_t'` per channel, mm (0.0001..=1000).
     pub mfp_mm: [f64; 3],
     /// One line: where each value came from and what was approximated.
     pub note: String,

@@ -15,13 +15,15 @@ use std::path::{Path, PathBuf};
 pub struct SavedScene<'a> {
     /// The material.
     pub material: &'a Material,
-    /// Model scale, metres (the largest bounding-box side).
+    /// Model scale: the mesh's largest bounding-box side, metres (within
+    /// [`crate::ranges::SCALE_M`], checked when the file is read back).
     pub scale_m: f64,
     /// Diffusion profile.
     pub profile: ProfileKind,
     /// Whether single scattering is on.
     pub single_scattering: bool,
-    /// Exposure multiplier.
+    /// Exposure multiplier before tone mapping (unitless, > 0, within
+    /// [`crate::ranges::EXPOSURE`]).
     pub exposure: f32,
     /// The `mesh` key to write (a built-in name or a path relative to the saved file's
     /// folder), if known; else the file renders the default bunny.
