@@ -83,11 +83,17 @@ impl GltfMaterial {
 pub fn load_gltf_material(path: &Path) -> Result<Option<GltfMaterial>, MeshError> {
     let name = path.display().to_string();
     let bytes = crate::limits::read_input(path).map_err(|reason| MeshError::invalid(&name, reason))?;
-    guard(&name, || {
-        let gltf = super::io_gltf::read_gltf(&bytes).map_err(|reason| MeshError::invalid(&name, reason))?;
+    parse_gltf_material(&bytes, &name)
+}
+
+/// [`load_gltf_material`] on glTF JSON or GLB bytes held in memory; `name` stands for the file
+/// in messages.
+pub fn parse_gltf_material(bytes: &[u8], name: &str) -> Result<Option<GltfMaterial>, MeshError> {
+    guard(name, || {
+        let gltf = super::io_gltf::read_gltf(bytes).map_err(|reason| MeshError::invalid(name, reason))?;
         let count = gltf.document.materials().len();
         match gltf.document.materials().next() {
-            Some(m) => read_material(&m, count).map(Some).map_err(|reason| MeshError::invalid(&name, reason)),
+            Some(m) => read_material(&m, count).map(Some).map_err(|reason| MeshError::invalid(name, reason)),
             None => Ok(None),
         }
     })?
