@@ -25,8 +25,8 @@ pub const TARGETS: &[Target] = &[
     Target { name: "ply-ascii", run: |b| mesh(b, MeshFormat::Ply), seeds: ply_ascii_seeds },
     Target { name: "ply-binary", run: |b| mesh(b, MeshFormat::Ply), seeds: ply_binary_seeds },
     Target { name: "off", run: |b| mesh(b, MeshFormat::Off), seeds: off_seeds },
-    Target { name: "gltf", run: |b| mesh(b, MeshFormat::Gltf), seeds: gltf_seeds },
-    Target { name: "glb", run: |b| mesh(b, MeshFormat::Gltf), seeds: glb_seeds },
+    Target { name: "gltf", run: gltf, seeds: gltf_seeds },
+    Target { name: "glb", run: gltf, seeds: glb_seeds },
     Target { name: "hdr", run: |b| envmap(b, "hdr"), seeds: hdr_seeds },
     Target { name: "exr", run: |b| envmap(b, "exr"), seeds: exr_seeds },
     Target { name: "scene", run: scene, seeds: scene_seeds },
@@ -43,6 +43,15 @@ fn mesh(bytes: &[u8], format: MeshFormat) -> Result<String, String> {
     parse_mesh(bytes, format, "fuzz")
         .map(|(m, r)| format!("{} {}", m.triangles.len(), r))
         .map_err(|e| e.to_string())
+}
+
+/// The mesh and the first material's subsurface extensions (`mesh::gltf_material`).
+fn gltf(bytes: &[u8]) -> Result<String, String> {
+    let material = match lucent_core::mesh::parse_gltf_material(bytes, "fuzz") {
+        Ok(m) => format!("material {}", m.map_or(0, |m| m.count)),
+        Err(e) => e.to_string(),
+    };
+    mesh(bytes, MeshFormat::Gltf).map(|m| format!("{m} {material}"))
 }
 
 fn envmap(bytes: &[u8], ext: &str) -> Result<String, String> {
@@ -176,7 +185,7 @@ fn gltf_json(uri: Option<String>) -> (String, Vec<u8>) {
     let (lo, hi) = m.bounds();
     let uri = uri.map(|u| format!(r#""uri":"{u}","#)).unwrap_or_default();
     let json = format!(
-        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"children":[1]}},{{"mesh":0,"translation":[2,0,0],"scale":[1,-1,1]}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"mode":4}}]}}],"buffers":[{{{uri}"byteLength":{}}}],"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{positions_len}}},{{"buffer":0,"byteOffset":{positions_len},"byteLength":{}}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}},{{"bufferView":1,"componentType":5123,"count":{},"type":"SCALAR"}}],"materials":[{{"extensions":{{"KHR_materials_volume":{{"attenuationColor":[0.9,0.5,0.3],"attenuationDistance":0.5}}}}}}]}}"#,
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"children":[1]}},{{"mesh":0,"translation":[2,0,0],"scale":[1,-1,1]}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"mode":4}}]}}],"buffers":[{{{uri}"byteLength":{}}}],"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{positions_len}}},{{"buffer":0,"byteOffset":{positions_len},"byteLength":{}}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}},{{"bufferView":1,"componentType":5123,"count":{},"type":"SCALAR"}}],"materials":[{{"extensions":{{"KHR_materials_volume":{{"attenuationColor":[0.9,0.5,0.3],"attenuationDistance":0.5}},"KHR_materials_diffuse_transmission":{{"diffuseTransmissionFactor":0.5,"diffuseTransmissionColorFactor":[1,0.9,0.8]}},"KHR_materials_volume_scatter":{{"multiscatterColor":[0.5,0.4,0.3],"scatterAnisotropy":0.2}},"KHR_materials_ior":{{"ior":1.4}}}}}}]}}"#,
         bin.len(),
         bin.len() - positions_len,
         m.positions.len(),

@@ -193,7 +193,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub mesh: Option<PathBuf>,
     /// Material preset (case-insensitive): apple, chicken1, chicken2, cream, ketchup, marble,
-    /// potato, skimmilk, skin1, skin2, wholemilk, wax. Default: the scene's, else skimmilk.
+    /// potato, skimmilk, skin1, skin2, wholemilk, wax. Default: the scene's, else a glTF mesh's own (README), else skimmilk.
     #[arg(long)]
     pub material: Option<String>,
     /// Material by colour: the albedo R,G,B a flat, thick slab of it shows under uniform light
@@ -527,7 +527,7 @@ pub enum BenchTarget {
     Script actions (separated by ';'; each runs once the previous one's solution is drawn):\n  \
     dent:x,y,z  light:x,y,z  twist:k  material:NAME  scale:M  camera:YAW,PITCH,DIST\n  \
     exposure:K  clusters:x,y,z  method:htsm|mertens  shot:PATH  animate:SECONDS\n  \
-    albedo:R,G,B,MFP_R,MFP_G,MFP_B (slab albedo, mean free paths in mm)\n\
+    albedo:R,G,B,MFP_R,MFP_G,MFP_B (slab albedo, mean free paths in mm)  save:NEW.toml (material as a scene)\n\
     Positions are in normalised mesh units: the mesh is centred with a bounding-box side of 1.")]
 pub struct ViewArgs {
     /// Mesh file (OBJ, PLY, OFF, glTF/GLB); the built-in mesh when absent.

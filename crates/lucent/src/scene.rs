@@ -53,8 +53,10 @@ use lucent_gpu::camera::OrbitCamera;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
+pub mod gltf_material;
 mod material;
 mod resolve;
+pub mod save;
 pub use material::{CustomMaterial, MaterialSpec};
 pub use resolve::{Overrides, Scene, default_lights, orbit_lights, parse_light, parse_three};
 
@@ -71,9 +73,10 @@ pub struct SceneFile {
     pub mesh: String,
     /// The material: a preset name (`"skimmilk"`, `"marble"`, `"wax"`, ...) or a table with
     /// `sigma_s_prime` and `sigma_a` (mm^-1, per RGB channel), optional `eta` (default 1.3) and
-    /// optional `name`. Default `"skimmilk"`.
+    /// optional `name`. Default: a glTF mesh's own material (see [`gltf_material`]), else
+    /// `"skimmilk"`.
     #[serde(default)]
-    pub material: MaterialSpec,
+    pub material: Option<MaterialSpec>,
     /// Model scale: the largest side of the mesh's bounding box, in metres (> 0). Default 0.05.
     #[serde(default = "default_scale")]
     pub scale: f64,
@@ -333,11 +336,12 @@ impl SceneFile {
         Ok(())
     }
 
-    /// The material, validated.
+    /// The material, validated (the default preset when the file names none).
     pub fn material(&self) -> Result<Material> {
         Ok(match &self.material {
-            MaterialSpec::Preset(name) => Material::by_name(name)?,
-            MaterialSpec::Custom(c) => c.resolve()?,
+            None => Material::by_name(resolve::DEFAULT_MATERIAL)?,
+            Some(MaterialSpec::Preset(name)) => Material::by_name(name)?,
+            Some(MaterialSpec::Custom(c)) => c.resolve()?,
         })
     }
 

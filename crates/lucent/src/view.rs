@@ -45,7 +45,9 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     let start = scene_file::start(&Scene::resolve(&overrides)?)?;
     // A scene file's `[camera]` as it is; without one, the viewer's home view.
     let camera = args.scene.is_some().then_some(start.camera);
-    let (mesh, state) = (MeshOrigin::Loaded(Box::new(start.mesh)), start.state);
+    let entry = start.texture.as_ref().map(|t| t.entry_factors());
+    let (mesh, mut state) = (MeshOrigin::Loaded(Box::new(start.mesh), entry), start.state);
+    state.save = scene_file::save_target(args.scene.as_deref(), args.mesh.as_deref());
     let actions = match &args.script {
         Some(s) => script::parse(s)?,
         None => Vec::new(),
@@ -53,5 +55,5 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
     let scripted = args.frames.is_some() || args.script.is_some() || args.screenshot.is_some();
     let automation =
         scripted.then(|| Automation::new(args.frames.unwrap_or(10), actions, args.screenshot.clone()));
-    Ok(Options { mesh, state, camera, automation, size: (args.width, args.height) })
+    Ok(Options { mesh, texture: start.texture, state, camera, automation, size: (args.width, args.height) })
 }

@@ -280,7 +280,7 @@ fn check_accessor_types(mesh: usize, prim: &gltf::Primitive<'_>) -> Result<(), S
 /// Parses and validates glTF JSON or GLB. gltf-json 1.4.1's validation indexes the accessor
 /// array with a primitive's POSITION index unchecked (a panic on a bad file), so that index is
 /// checked first.
-fn read_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+pub(super) fn read_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     let invalid = |e: gltf::Error| format!("not a valid glTF file: {e}");
     let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     let root = raw.document.into_json();

@@ -8,12 +8,14 @@ pub mod bvh;
 pub mod deform;
 pub mod embedded;
 pub mod generate;
+pub mod gltf_material;
 pub mod io;
 mod io_gltf;
 pub mod texture;
 pub mod validate;
 
 pub use bvh::Bvh;
+pub use gltf_material::{GltfMaterial, load_gltf_material, parse_gltf_material};
 pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report, load_textured_mesh};
 pub use io_gltf::load_gltf_volume_params;
 pub use validate::MeshReport;

@@ -121,7 +121,7 @@ impl Scene {
             None => e,
         };
         let (source, (mesh, texture), mesh_path) = load_mesh(o, file.as_ref()).map_err(in_file)?;
-        let transport = transport(o, file.as_ref())?;
+        let transport = transport(o, file.as_ref(), &mesh, mesh_path.as_deref())?;
         let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
         let environment = environment(o, file.as_ref()).map_err(in_file)?;
         let mut lights: Vec<SceneLight> = if !o.lights.is_empty() {
@@ -234,18 +234,33 @@ fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, Texture
     })
 }
 
-/// Material, scale, profile and single scattering. A colour-and-distance material (flags, else
-/// scene keys) says on stdout what it became.
-fn transport(o: &Overrides, file: Option<&SceneFile>) -> Result<Transport> {
-    let material = match (&o.material, o.colour, file) {
+/// Material, scale, profile and single scattering. The material: `--material`, else
+/// `--albedo`/`--mfp`, else the scene file's `material` key, else a glTF mesh's subsurface
+/// extensions (see [`super::gltf_material`]), else the default. A colour-and-distance or glTF
+/// material says on stdout what it became.
+fn transport(
+    o: &Overrides,
+    file: Option<&SceneFile>,
+    mesh: &Mesh,
+    mesh_path: Option<&Path>,
+) -> Result<Transport> {
+    let scale_m = o.scale.or(file.map(|f| f.scale)).unwrap_or(DEFAULT_SCALE_M);
+    let file_material = file.filter(|f| f.material.is_some());
+    let material = match (&o.material, o.colour, file_material) {
         (Some(name), _, _) => Material::by_name(name)?,
         (None, Some((albedo, mfp)), _) => Material::from_albedo_mfp("custom", albedo, mfp, DEFAULT_ETA)?,
         (None, None, Some(f)) => f.material()?,
-        (None, None, None) => Material::by_name(DEFAULT_MATERIAL)?,
+        (None, None, None) => {
+            let default = Material::by_name(DEFAULT_MATERIAL)?;
+            match mesh_path.filter(|p| is_gltf(p)) {
+                Some(path) => gltf_material(path, mesh, scale_m, default)?,
+                None => default,
+            }
+        }
     };
     let by_colour = match &o.material {
         Some(_) => None,
-        None => o.colour.or_else(|| file.and_then(|f| f.material.by_colour())),
+        None => o.colour.or_else(|| file_material.and_then(|f| f.material.as_ref()?.by_colour())),
     };
     if let Some((albedo, mfp)) = by_colour {
         println!("lucent: {}", colour_material_line(albedo, mfp, &material));
@@ -259,8 +274,34 @@ fn transport(o: &Overrides, file: Option<&SceneFile>) -> Result<Transport> {
         .single_scattering
         .or(file.and_then(|f| f.single_scattering))
         .unwrap_or(profile.single_scattering_by_default());
-    let scale_m = o.scale.or(file.map(|f| f.scale)).unwrap_or(DEFAULT_SCALE_M);
     Ok(Transport { material, scale_m, profile, single_scattering })
+}
+
+/// Whether `path` names a glTF or GLB file.
+fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// The material a glTF file's first material maps to (printing what was approximated and the
+/// coefficients it became), or `default` when it has no subsurface extension. Errors name the
+/// file and the value.
+fn gltf_material(path: &Path, mesh: &Mesh, scale_m: f64, default: Material) -> Result<Material> {
+    let Some(g) = lucent_core::mesh::load_gltf_material(path)? else {
+        return Ok(default);
+    };
+    let mm_per_unit = scale_m * 1e3 / f64::from(mesh.extent()).max(1e-30);
+    let mapped = super::gltf_material::map(&g, mm_per_unit, &default)
+        .with_context(|| format!("{}: glTF material {}", path.display(), g.index))?;
+    Ok(match mapped {
+        Some(m) => {
+            println!("lucent: {}: {}", path.display(), m.note);
+            println!("lucent: {}", colour_material_line(m.albedo, m.mfp_mm, &m.material));
+            m.material
+        }
+        None => default,
+    })
 }
 
 /// `--env` (with `--env-rotation`), else the file's environment.

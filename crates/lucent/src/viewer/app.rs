@@ -37,6 +37,8 @@ pub struct WorkerWake;
 pub struct Options {
     /// Where the mesh comes from.
     pub mesh: MeshOrigin,
+    /// The mesh's colour texture, if it has one (drawn by the mesh pass; HTSM stays untextured).
+    pub texture: Option<lucent_core::mesh::texture::Texture>,
     /// Initial state (material, scale, lights...).
     pub state: ViewState,
     /// The scene file's camera (degrees, radii of the mesh's bounding sphere), framed as
@@ -64,6 +66,7 @@ struct FrameStats {
 /// The application.
 pub struct App {
     mesh_origin: Option<MeshOrigin>,
+    texture: Option<lucent_core::mesh::texture::Texture>,
     size: (u32, u32),
     proxy: EventLoopProxy<WorkerWake>,
     worker: Option<Worker>,
@@ -90,6 +93,7 @@ impl App {
     pub fn new(options: Options, proxy: EventLoopProxy<WorkerWake>) -> Self {
         App {
             mesh_origin: Some(options.mesh),
+            texture: options.texture,
             size: options.size,
             proxy,
             worker: None,
@@ -132,7 +136,10 @@ impl App {
             Some(gfx.ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&gfx.ctx.device, gfx.config.format, Default::default());
-        let renderer = ViewRenderer::new(&gfx.ctx, gfx.config.format)?;
+        let mut renderer = ViewRenderer::new(&gfx.ctx, gfx.config.format)?;
+        if let Some(texture) = &self.texture {
+            renderer.set_texture(&gfx.ctx, texture)?;
+        }
         let htsm = HtsmPanel::default();
         self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, renderer, htsm });
         Ok(())
@@ -217,6 +224,11 @@ impl App {
         }
         if requests.screenshot {
             self.pending_shot = Some(screenshot::timestamped_path());
+        }
+        if requests.save_material {
+            let state = &mut self.scene.state;
+            let saved = super::scene_file::save_material(state, None);
+            state.save.message = Some(saved.map(|p| p.display().to_string()).map_err(|e| format!("{e:#}")));
         }
         self.scene.sync(worker);
         self.framing.update(self.scene.base.as_ref(), self.scene.mesh.as_ref());
@@ -326,6 +338,11 @@ impl App {
             }
             Action::Htsm(on) => state.method = if on { ViewMethod::Htsm } else { ViewMethod::Mertens },
             Action::Shot(path) => self.pending_shot = Some(path),
+            Action::Save(path) => {
+                let written = super::scene_file::save_material(state, Some(&path))?;
+                println!("lucent: material saved to {}", written.display());
+                state.save.message = Some(Ok(written.display().to_string()));
+            }
             Action::Albedo(albedo, mfp) => {
                 let (a, d) = (albedo.map(f64::from), mfp.map(f64::from));
                 state.params.material = Material::from_albedo_mfp("colour", a, d, state.params.material.eta)?;

@@ -70,6 +70,8 @@ pub struct SolverSession {
     environment: EnvCache,
     /// Where long solves count their progress for the panel.
     progress: Option<Arc<Progress>>,
+    /// The mesh texture's entry factor per face (irradiance times it before the solve), if any.
+    entry: Option<Vec<lucent_core::Rgb>>,
 }
 
 /// The environment of the panel's choice, its SH projection made when the choice changes.
@@ -102,6 +104,13 @@ impl SolverSession {
         SolverSession { progress: Some(progress), ..Default::default() }
     }
 
+    /// Sets the texture's entry factor per face of the meshes solved from now on (their
+    /// topology is the loaded mesh's: deformations move vertices only).
+    pub fn set_entry_factors(&mut self, entry: Option<Vec<lucent_core::Rgb>>) {
+        self.entry = entry;
+        self.session = None;
+    }
+
     /// Solves for the per-vertex radiance of `mesh` (the session's rest mesh or a deformation
     /// of it; a new topology starts a new session) under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
@@ -125,6 +134,7 @@ impl SolverSession {
         if !same_topology {
             let mut session = FrameSession::new((**mesh).clone(), None, transport.clone(), settings);
             session.set_progress(self.progress.clone());
+            session.set_entry_factors(self.entry.clone().filter(|e| e.len() == mesh.triangles.len()));
             self.session = Some(session);
         }
         let session = self.session.as_mut().expect("made above");

@@ -9,8 +9,9 @@ use super::state::EnvChoice;
 use lucent_core::Rgb;
 use lucent_core::irradiance::EnvMap;
 use lucent_core::mesh::Mesh;
+use lucent_core::mesh::texture::{Texture, UvSplit};
 use lucent_gpu::camera::CameraView;
-use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, MeshPass, Shading};
+use lucent_gpu::mesh_pass::{AlbedoMap, EnvironmentMap, GpuMesh, MeshPass, Shading};
 use lucent_gpu::tonemap::{ToneMap, ToneMapPass};
 use lucent_gpu::{DEPTH_FORMAT, GpuContext, HDR_FORMAT};
 
@@ -69,6 +70,19 @@ pub struct ViewRenderer {
     env_map: Option<(EnvChoice, Option<EnvMap>)>,
     /// The choice and rotation (in map columns) on the GPU now.
     env_uploaded: Option<(EnvChoice, i64)>,
+    /// The mesh's colour texture, if it has one.
+    texture: Option<Textured>,
+}
+
+/// A colour texture as the mesh pass draws it: the radiance times its square root per pixel
+/// (the exit half of `lucent_core::mesh::texture`; the worker's session applies the entry half).
+struct Textured {
+    /// UV of each corner of each triangle of the loaded mesh.
+    corner_uvs: Vec<[glam::Vec2; 3]>,
+    /// The GPU mesh's vertices: the mesh's split at its UV seams (for the current topology).
+    split: Option<UvSplit>,
+    /// Kept alive for the mesh pass's bind group.
+    _map: AlbedoMap,
 }
 
 /// Size of the map copy the reflection samples (mirror reflection of a smooth surface: detail
@@ -87,7 +101,19 @@ impl ViewRenderer {
             srgb_target: format.is_srgb(),
             env_map: None,
             env_uploaded: None,
+            texture: None,
         })
+    }
+
+    /// Draws meshes with `texture` (its UVs must fit the mesh given to
+    /// [`ViewRenderer::set_geometry`]; a mesh of another topology is drawn untextured).
+    pub fn set_texture(&mut self, ctx: &GpuContext, texture: &Texture) -> anyhow::Result<()> {
+        let image = &texture.image;
+        let map = AlbedoMap::from_rgb(ctx, image.width, image.height, &image.texels)?;
+        self.mesh_pass.set_albedo(ctx, &map);
+        self.texture = Some(Textured { corner_uvs: texture.corner_uvs.clone(), split: None, _map: map });
+        self.mesh = None;
+        Ok(())
     }
 
     /// Whether the last [`ViewRenderer::set_environment`] set a map.
@@ -129,13 +155,33 @@ impl ViewRenderer {
     pub fn set_geometry(&mut self, ctx: &GpuContext, mesh: &Mesh) -> anyhow::Result<()> {
         let normals = mesh.vertex_normals();
         let topology = (mesh.positions.len(), mesh.triangles.len());
-        match &self.mesh {
-            Some(gpu) if self.topology == topology => {
+        let split = self.texture.as_ref().and_then(|t| t.split.as_ref());
+        match (&self.mesh, split) {
+            (Some(gpu), Some(s)) if self.topology == topology => {
+                gpu.update_geometry(ctx, &s.gather(&mesh.positions), &s.gather(&normals))?;
+            }
+            (Some(gpu), None) if self.topology == topology => {
                 gpu.update_geometry(ctx, &mesh.positions, &normals)?;
             }
             _ => {
-                let grey = vec![PLACEHOLDER_RADIANCE; mesh.positions.len()];
-                self.mesh = Some(GpuMesh::new(ctx, &mesh.positions, &normals, &grey, &mesh.triangles)?);
+                let fits = |t: &&mut Textured| t.corner_uvs.len() == mesh.triangles.len();
+                self.mesh = Some(match self.texture.as_mut().filter(fits) {
+                    Some(t) => {
+                        let s = UvSplit::new(mesh, &t.corner_uvs);
+                        let (p, n) = (s.gather(&mesh.positions), s.gather(&normals));
+                        let grey = vec![PLACEHOLDER_RADIANCE; p.len()];
+                        let gpu = GpuMesh::with_uvs(ctx, &p, &n, &grey, &s.triangles, &s.uvs)?;
+                        t.split = Some(s);
+                        gpu
+                    }
+                    None => {
+                        if let Some(t) = self.texture.as_mut() {
+                            t.split = None;
+                        }
+                        let grey = vec![PLACEHOLDER_RADIANCE; mesh.positions.len()];
+                        GpuMesh::new(ctx, &mesh.positions, &normals, &grey, &mesh.triangles)?
+                    }
+                });
                 self.topology = topology;
             }
         }
@@ -148,7 +194,10 @@ impl ViewRenderer {
         if let Some(gpu) = &self.mesh
             && radiance.len() == self.topology.0
         {
-            gpu.update_radiance(ctx, radiance)?;
+            match self.texture.as_ref().and_then(|t| t.split.as_ref()) {
+                Some(s) => gpu.update_radiance(ctx, &s.gather(radiance))?,
+                None => gpu.update_radiance(ctx, radiance)?,
+            }
         }
         Ok(())
     }

@@ -18,6 +18,8 @@ pub struct SceneStart {
     pub mesh: Mesh,
     /// Material, scale, lights and environment of the scene.
     pub state: ViewState,
+    /// The mesh's colour texture (its UVs per triangle corner fit `mesh`), if it has one.
+    pub texture: Option<lucent_core::mesh::texture::Texture>,
     /// The `[camera]` table as it is: the viewer frames the mesh's bounding sphere as
     /// `lucent render` does (see [`super::framing`]).
     pub camera: lucent_gpu::camera::OrbitCamera,
@@ -48,7 +50,58 @@ pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
         state.params.env_rotation_deg = env.environment.rotation_deg;
         state.params.env_strength = env.environment.intensity;
     }
-    Ok(SceneStart { mesh: core_adapter::normalise(rest), state, camera: scene.camera })
+    let texture = scene.texture.clone();
+    Ok(SceneStart { mesh: core_adapter::normalise(rest), texture, state, camera: scene.camera })
+}
+
+/// Writes the state's material (with scale, profile, single scattering and exposure) to a new
+/// scene file: `to` exactly (a scripted `save:PATH`; an existing file is an error), else the
+/// next free name at [`super::state::SaveTarget::path`]. Returns the path written.
+pub fn save_material(state: &ViewState, to: Option<&Path>) -> anyhow::Result<std::path::PathBuf> {
+    use crate::scene::save::{SavedScene, free_path, scene_toml, write_new};
+    let path = match to {
+        Some(p) => p.to_path_buf(),
+        None => free_path(&state.save.path),
+    };
+    let p = &state.params;
+    let text = scene_toml(&SavedScene {
+        material: &p.material,
+        scale_m: p.scale_m,
+        profile: p.profile,
+        single_scattering: p.single_scattering,
+        exposure: state.exposure,
+        mesh: state.save.mesh.clone(),
+    });
+    write_new(&path, &text)?;
+    Ok(path)
+}
+
+/// Where "save material" writes for a viewer started from `scene` (a scene file) or `mesh`:
+/// beside the scene file as `STEM_material.toml` with the scene's mesh key, else
+/// `lucent_material.toml` in the working folder with the mesh path if it is relative and
+/// stays inside that folder (a scene file may name no other), else `bunny` when no mesh was
+/// given.
+pub fn save_target(scene: Option<&Path>, mesh: Option<&Path>) -> super::state::SaveTarget {
+    let inside = |p: &Path| {
+        p.is_relative()
+            && p.components()
+                .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
+    };
+    let (path, mesh) = match (scene, mesh) {
+        (Some(s), m) => {
+            let stem = s.file_stem().and_then(|x| x.to_str()).unwrap_or("scene");
+            let file_mesh = crate::scene::SceneFile::load(s).ok().map(|f| f.mesh);
+            // A --mesh flag overrides the file's, but is relative to the working folder.
+            let mesh = match m {
+                Some(_) => None,
+                None => file_mesh,
+            };
+            (s.with_file_name(format!("{stem}_material.toml")), mesh)
+        }
+        (None, Some(m)) => ("lucent_material.toml".into(), inside(m).then(|| m.display().to_string())),
+        (None, None) => ("lucent_material.toml".into(), Some("bunny".to_string())),
+    };
+    super::state::SaveTarget { path, mesh, message: None }
 }
 
 /// A light given in the scene's mesh units, in the viewer's normalised frame: positions mapped,

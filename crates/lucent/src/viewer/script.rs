@@ -18,6 +18,7 @@
 //! | `method:htsm` / `method:mertens` | switch the 3D view's method (HTSM: Shopf 2007) |
 //! | `shot:path` | save a screenshot now |
 //! | `albedo:r,g,b,mr,mg,mb` | material by slab albedo and mean free paths (mm), as the panel's "apply" |
+//! | `save:path` | write the material (with scale, profile, exposure) to a new scene file; an existing file is an error, never overwritten |
 //! | `animate:s` | for `s` seconds: noise deformation flowing, the first light orbiting (soak tests) |
 
 use anyhow::{Context as _, bail};
@@ -53,6 +54,8 @@ pub enum Action {
     Animate(f64),
     /// Material by colour and distance: slab albedo, then mean free paths in mm.
     Albedo([f32; 3], [f32; 3]),
+    /// Save the material to this new scene file.
+    Save(PathBuf),
 }
 
 /// Parses a script (see the module docs); the error names the bad action.
@@ -105,10 +108,11 @@ fn parse_action(s: &str) -> anyhow::Result<Action> {
             }
             Action::Animate(seconds)
         }
-        "shot" => bail!("shot needs a file name"),
+        "save" if !arg.trim().is_empty() => Action::Save(PathBuf::from(arg.trim())),
+        "shot" | "save" => bail!("{} needs a file name", name.trim()),
         other => bail!(
             "unknown action '{other}' (known: dent, light, twist, material, scale, camera, \
-             exposure, clusters, shot)"
+             exposure, clusters, method, shot, albedo, save, animate)"
         ),
     })
 }
@@ -184,6 +188,8 @@ mod tests {
     #[test]
     fn parses_the_documented_example() {
         let a = parse("dent:0.1,0.2,0.3; light:0,1,-2;shot:a.png").unwrap();
+        assert_eq!(parse("save: m.toml").unwrap(), vec![Action::Save("m.toml".into())]);
+        assert!(parse("save:").is_err());
         assert_eq!(
             a,
             vec![

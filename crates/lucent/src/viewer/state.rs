@@ -141,6 +141,27 @@ pub struct ViewState {
     pub htsm: super::htsm::HtsmSettings,
     /// The panel's colour-and-distance material editor.
     pub by_colour: ByColour,
+    /// Where "save material" writes, and what the last save said.
+    pub save: SaveTarget,
+}
+
+/// Where the panel's "save material" writes a scene file (see `lucent::scene::save`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SaveTarget {
+    /// The file name to write; an existing file is never overwritten: the next free
+    /// `NAME_2.toml`, `NAME_3.toml`, ... is taken instead. Default `lucent_material.toml` in
+    /// the working folder, or `SCENE_material.toml` beside a scene file.
+    pub path: std::path::PathBuf,
+    /// The `mesh` key written (valid relative to `path`'s folder), if known.
+    pub mesh: Option<String>,
+    /// The last save: the path written, or why it failed.
+    pub message: Option<Result<String, String>>,
+}
+
+impl Default for SaveTarget {
+    fn default() -> Self {
+        SaveTarget { path: "lucent_material.toml".into(), mesh: None, message: None }
+    }
 }
 
 /// A material as colour and distance, being edited (`Material::from_albedo_mfp`).
@@ -211,6 +232,7 @@ impl ViewState {
             method: ViewMethod::Mertens,
             htsm: Default::default(),
             by_colour: ByColour::default(),
+            save: SaveTarget::default(),
         }
     }
 }

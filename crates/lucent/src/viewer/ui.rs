@@ -49,6 +49,8 @@ pub struct UiRequests {
     pub screenshot: bool,
     /// Reset the camera.
     pub reset_camera: bool,
+    /// Save the material to a new scene file ([`ViewState::save`]).
+    pub save_material: bool,
 }
 
 /// Width of the side panel, points.
@@ -61,7 +63,7 @@ pub fn side_panel(ui: &mut Ui, state: &mut ViewState, status: &Status, htsm: &Ht
         egui::ScrollArea::vertical().show(ui, |ui| {
             header(ui, status, &mut req);
             section(ui, "Method", true, |ui| method(ui, state, htsm));
-            section(ui, "Material", true, |ui| material(ui, state));
+            section(ui, "Material", true, |ui| req.save_material = material(ui, state));
             section(ui, "Lights", true, |ui| lights(ui, &mut state.params.lights));
             section(ui, "Environment", false, |ui| environment(ui, state));
             section(ui, "Solver", true, |ui| solver(ui, state));
@@ -120,7 +122,8 @@ fn header(ui: &mut Ui, status: &Status, req: &mut UiRequests) {
     });
 }
 
-fn material(ui: &mut Ui, state: &mut ViewState) {
+/// The material editor; true when "save material" was clicked.
+fn material(ui: &mut Ui, state: &mut ViewState) -> bool {
     let m = &mut state.params.material;
     ComboBox::from_label("preset").selected_text(m.name.clone()).show_ui(ui, |ui| {
         for (name, _, _) in PRESETS {
@@ -157,6 +160,29 @@ fn material(ui: &mut Ui, state: &mut ViewState) {
             .text("exposure")
             .clamping(SliderClamping::Edits),
     );
+    save_button(ui, state)
+}
+
+/// "save material": writes the material, scale, profile and exposure to a new scene file
+/// (never over an existing one) and shows where, or why not.
+fn save_button(ui: &mut Ui, state: &ViewState) -> bool {
+    let clicked = ui
+        .button("save material")
+        .on_hover_text(format!(
+            "writes a scene file that lucent render --scene reads back: {} (or the next free name)",
+            state.save.path.display()
+        ))
+        .clicked();
+    match &state.save.message {
+        Some(Ok(path)) => {
+            ui.small(format!("saved to {path}"));
+        }
+        Some(Err(e)) => {
+            ui.colored_label(Color32::LIGHT_RED, e);
+        }
+        None => {}
+    }
+    clicked
 }
 
 /// The material by colour and distance: a colour picker for the slab albedo, distance sliders,

@@ -28,8 +28,9 @@ pub enum Request {
 
 /// Where the mesh comes from.
 pub enum MeshOrigin {
-    /// A mesh already loaded (by the resolved scene) and normalised.
-    Loaded(Box<Mesh>),
+    /// A mesh already loaded (by the resolved scene) and normalised, with its texture's entry
+    /// factor per face (`lucent_core::mesh::texture`), if it has a texture.
+    Loaded(Box<Mesh>, Option<Vec<lucent_core::Rgb>>),
 }
 
 /// A reply from the worker.
@@ -90,7 +91,7 @@ impl Worker {
 fn run(mut session: SolverSession, requests: Receiver<Request>, replies: Sender<Reply>, wake: impl Fn()) {
     while let Some(request) = next_coalesced(&requests) {
         let reply = match request {
-            Request::Load(origin) => Reply::Loaded(load(origin)),
+            Request::Load(origin) => Reply::Loaded(load(origin, &mut session)),
             Request::Solve { generation, mesh, params } => {
                 let solution = session.solve(&mesh, &params);
                 let t = &solution.timings;
@@ -129,11 +130,12 @@ fn next_coalesced(requests: &Receiver<Request>) -> Option<Request> {
     }
 }
 
-fn load(origin: MeshOrigin) -> Result<Mesh, String> {
-    let MeshOrigin::Loaded(mesh) = origin;
+fn load(origin: MeshOrigin, session: &mut SolverSession) -> Result<Mesh, String> {
+    let MeshOrigin::Loaded(mesh, entry) = origin;
     if mesh.triangles.is_empty() {
         return Err("the mesh has no triangles".into());
     }
+    session.set_entry_factors(entry.filter(|e| e.len() == mesh.triangles.len()));
     Ok(*mesh)
 }
 
