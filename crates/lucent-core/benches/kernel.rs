@@ -6,7 +6,8 @@
 //!   throughput (elements/s) counts three-channel estimates: Gelem/s is estimates per ns.
 //! * `gather/<isa>`: render mode's `Σ E F` (§5.5) over 8M stored links (32 a receiver, 96 MB
 //!   of coefficients and emitter words, more than the caches), one core. Gelem/s is links per
-//!   ns.
+//!   ns. `gather/stream` reads the same 12 bytes a link and does nothing with them: the
+//!   bandwidth bound.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{Vec3, Vec3A};
@@ -67,6 +68,18 @@ fn gather(c: &mut Criterion) {
     let mut group = c.benchmark_group("gather");
     group.sample_size(20);
     group.throughput(Throughput::Elements(emitter.len() as u64));
+    // The roofline: the same bytes streamed and summed, no `E` fetched, nothing converted.
+    let words: Vec<u64> = (0..coef.len() as u64).map(|i| i.wrapping_mul(0x9e37_79b9_7f4a_7c15)).collect();
+    group.bench_function("stream", |b| {
+        b.iter(|| {
+            let (mut s0, mut s1) = (0u64, 0u64);
+            for (e, w) in emitter.chunks_exact(2).zip(words.chunks_exact(2)) {
+                s0 = s0.wrapping_add(e[0] as u64 ^ w[0]);
+                s1 = s1.wrapping_add(e[1] as u64 ^ w[1]);
+            }
+            black_box(s0 ^ s1)
+        })
+    });
     for isa in Isa::available() {
         group.bench_function(isa.name(), |b| {
             b.iter(|| {
