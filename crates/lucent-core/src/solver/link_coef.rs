@@ -15,13 +15,15 @@
 //! of at most `2^-39` times the largest. The terms of the sum are non-negative, so the same
 //! bounds hold for `B`.
 //!
-//! With one running sum the gather is bound by the latency of the add; it keeps two. Where
-//! the CPU has `f16c` and `fma` (x86-64 since 2013; detected at run time, as neither is in the
-//! x86-64 baseline) a link is one conversion and one fused multiply-add; elsewhere the halves
-//! are decoded with integer shifts (exact, as the hardware conversion). At 131K triangles
-//! (11.3M links, 136 MB) the gather takes about 8 ms on the CI machine, twice the time it takes
-//! to merely stream the link arrays; 256-bit registers (two links per operation) gained
-//! nothing there.
+//! The gather runs on [`Isa::best`]'s instruction set: AVX-512 converts four links' halves
+//! in one instruction and fuses four multiply-adds in one 512-bit register, AVX2 two in a
+//! 256-bit one (both with F16C and FMA); the portable path decodes the halves with integer
+//! shifts (exact, as the hardware conversion), one link per 128-bit operation. Each keeps two
+//! running sums, as one is bound by the add's latency. All three stream 12 bytes a link
+//! (emitter word and coefficients) and fetch the emitter's `E` (16 bytes, mostly cached): on
+//! the CI and the development machine they run at the same speed, that of streaming the
+//! links from memory (`benches/kernel.rs`, `gather/stream`), so the wide paths buy nothing
+//! measurable there and fewer links are what speeds render mode up.
 
 use super::link_set::StoredLinks;
 use crate::simd::Isa;

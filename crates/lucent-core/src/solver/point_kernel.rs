@@ -180,8 +180,15 @@ fn batch<M: Madd, const N: usize>(
     for c in 0..3 {
         for j in 0..4 {
             s2_r[4 * c + j] = dist2::<M>(pole_r(j, c), p(j));
-            s2_v[4 * c + j] = dist2::<M>(pole_v(j, c), p(j));
             a[4 * c + j] = area(j);
+        }
+    }
+    // A table alone (PBD) needs only the distance to the receiver point.
+    if k.analytic {
+        for c in 0..3 {
+            for j in 0..4 {
+                s2_v[4 * c + j] = dist2::<M>(pole_v(j, c), p(j));
+            }
         }
     }
     let v = lanes::<M, N, WIDTH>(k, &k.batch, &s2_r, &s2_v, &a);
