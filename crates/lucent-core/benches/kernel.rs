@@ -56,7 +56,8 @@ fn gather(c: &mut Criterion) {
     const PER_RECEIVER: usize = 32;
     const RECEIVERS: usize = 1 << 18;
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
-    let e_node: Vec<Vec3A> = (0..NODES).map(|_| Vec3A::new(rng.random(), rng.random(), rng.random())).collect();
+    let e_node: Vec<Vec3A> =
+        (0..NODES).map(|_| Vec3A::new(rng.random(), rng.random(), rng.random())).collect();
     // Emitters near the receiver in the node order, as a hierarchy's links mostly are.
     let emitter: Vec<u32> = (0..RECEIVERS * PER_RECEIVER)
         .map(|i| ((i / PER_RECEIVER + rng.random_range(0..4096)) % NODES) as u32)

@@ -41,8 +41,8 @@ pub mod irradiance;
 pub mod limits;
 pub mod mesh;
 pub mod session;
-pub mod simd;
 pub mod shading;
+pub mod simd;
 pub mod solver;
 pub mod volume;
 

@@ -19,11 +19,12 @@
 //! in one instruction and fuses four multiply-adds in one 512-bit register, AVX2 two in a
 //! 256-bit one (both with F16C and FMA); the portable path decodes the halves with integer
 //! shifts (exact, as the hardware conversion), one link per 128-bit operation. Each keeps two
-//! running sums, as one is bound by the add's latency. All three stream 12 bytes a link
-//! (emitter word and coefficients) and fetch the emitter's `E` (16 bytes, mostly cached): on
-//! the CI and the development machine they run at the same speed, that of streaming the
-//! links from memory (`benches/kernel.rs`, `gather/stream`), so the wide paths buy nothing
-//! measurable there and fewer links are what speeds render mode up.
+//! running sums, as one is bound by the add's latency. A link is 12 bytes streamed (emitter
+//! word and coefficients) plus a 16-byte fetch of the emitter's `E` at an index read from the
+//! stream. On the development machine (Zen 4, `benches/kernel.rs`) all three paths run at
+//! 0.4-0.65 links per ns, while streaming the same bytes alone runs at 1.3-1.7: the gather is
+//! bound by the dependent fetch of `E`, not by bandwidth or arithmetic, so the wider paths
+//! gain little and fewer links are what speeds render mode up.
 
 use super::link_set::StoredLinks;
 use crate::simd::Isa;
@@ -217,7 +218,10 @@ mod wide {
                 let p = coef.as_ptr().add(k) as *const __m128i;
                 (_mm256_cvtph_ps(_mm_loadu_si128(p)), _mm256_cvtph_ps(_mm_loadu_si128(p.add(1))))
             };
-            let e0 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e_of(e_node, emitter[k])), e_of(e_node, emitter[k + 1]));
+            let e0 = _mm256_insertf128_ps::<1>(
+                _mm256_castps128_ps256(e_of(e_node, emitter[k])),
+                e_of(e_node, emitter[k + 1]),
+            );
             let e1 = _mm256_insertf128_ps::<1>(
                 _mm256_castps128_ps256(e_of(e_node, emitter[k + 2])),
                 e_of(e_node, emitter[k + 3]),

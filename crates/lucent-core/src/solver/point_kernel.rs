@@ -153,7 +153,8 @@ fn lanes<M: Madd, const N: usize, const W: usize>(
         for i in 0..N {
             let sig = l.sigma_tr[i];
             out[i] = l.k[i]
-                * (pole::<M>(l.z_r[i], sig, s2_r[i] + l.off_r[i]) + pole::<M>(l.z_v[i], sig, s2_v[i] + l.off_v[i]));
+                * (pole::<M>(l.z_r[i], sig, s2_r[i] + l.off_r[i])
+                    + pole::<M>(l.z_v[i], sig, s2_v[i] + l.off_v[i]));
         }
     }
     if let Some(t) = &k.table {
@@ -219,7 +220,12 @@ pub(super) fn from_point<M: Madd, const N: usize>(
 
 /// `A R` from one receiver's poles to one point (`N` of 3 or 4).
 #[inline(always)]
-pub(super) fn to_point<M: Madd, const N: usize>(k: &Profile32, src: &ReceiverSources, p: Vec3, area: f32) -> [f32; 3] {
+pub(super) fn to_point<M: Madd, const N: usize>(
+    k: &Profile32,
+    src: &ReceiverSources,
+    p: Vec3,
+    area: f32,
+) -> [f32; 3] {
     let s2_r = std::array::from_fn(|i| dist2::<M>(src.x_r[single_channel(i)], p));
     let s2_v = std::array::from_fn(|i| dist2::<M>(src.x_v[single_channel(i)], p));
     let v = lanes::<M, N, 4>(k, &k.single, &s2_r, &s2_v, &[area; N]);
@@ -257,7 +263,12 @@ macro_rules! isa_kernels {
             }
 
             #[target_feature(enable = $features)]
-            pub(in crate::solver) fn to_point(k: &Profile32, src: &ReceiverSources, p: Vec3, area: f32) -> [f32; 3] {
+            pub(in crate::solver) fn to_point(
+                k: &Profile32,
+                src: &ReceiverSources,
+                p: Vec3,
+                area: f32,
+            ) -> [f32; 3] {
                 super::to_point::<Fused, 4>(k, src, p, area)
             }
         }

@@ -76,7 +76,11 @@ impl DipoleF32 {
             off_r,
             off_v,
             near_off,
-            kernel: Profile32::new([sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor], d.has_analytic(), table),
+            kernel: Profile32::new(
+                [sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor],
+                d.has_analytic(),
+                table,
+            ),
             isa: Isa::best(),
         }
     }
@@ -296,7 +300,8 @@ mod tests {
                             for c in 0..3 {
                                 let (g, w) = (got[j][c], want[j][c]);
                                 assert!(
-                                    (g - w).abs() <= 2e-5 * w.abs() + 1e-30 || (g.is_infinite() && w.is_infinite()),
+                                    (g - w).abs() <= 2e-5 * w.abs() + 1e-30
+                                        || (g.is_infinite() && w.is_infinite()),
                                     "{name} {kind} {isa:?} {j} {c}: {g} vs {w}"
                                 );
                             }
