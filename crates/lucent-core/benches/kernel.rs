@@ -1,17 +1,26 @@
-//! The one-point estimate kernel (`solver::point_sample`): `A R(d)` for four emitters and one
-//! receiver, three channels each, per profile. Criterion reports the time per call of
-//! `point_samples` over 1,024 emitter batches; divide by 4,096 for one three-channel estimate.
+//! The solver's two hot kernels, per instruction set ([`lucent_core::simd::Isa`]: scalar,
+//! AVX2, AVX-512, those this CPU has):
+//!
+//! * `point_samples/<profile>/<isa>`: the one-point estimate `A R(d)` (Mertens §4.2) for four
+//!   emitters and one receiver, three channels each, over 1,024 batches of four. Criterion's
+//!   throughput (elements/s) counts three-channel estimates: Gelem/s is estimates per ns.
+//! * `gather/<isa>`: render mode's `Σ E F` (§5.5) over 8M stored links (32 a receiver, 96 MB
+//!   of coefficients and emitter words, more than the caches), one core. Gelem/s is links per
+//!   ns. `gather/stream` reads the same 12 bytes a link and does nothing with them: the
+//!   bandwidth bound.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::simd::Isa;
+use lucent_core::solver::link_coef::{LinkCoef, gather_sum, receiver_scale};
 use lucent_core::solver::point_sample::{DipoleF32, ReceiverSources};
 use rand::{Rng, SeedableRng};
 use std::hint::black_box;
 
 const BATCHES: usize = 1024;
 
-fn kernel(c: &mut Criterion) {
+fn point_samples(c: &mut Criterion) {
     let m = Material::by_name("marble").unwrap();
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
     let mut point = || Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
@@ -22,15 +31,62 @@ fn kernel(c: &mut Criterion) {
     let mut group = c.benchmark_group("point_samples");
     group.throughput(Throughput::Elements((4 * BATCHES) as u64));
     for kind in ProfileKind::ALL {
-        // Marble at 10 cm on a unit mesh: distances span the profile's whole range.
-        let d = DipoleF32::new(&Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens));
-        let src = ReceiverSources::new(&d, x_o, n_o);
-        group.bench_function(kind.name(), |b| {
+        for isa in Isa::available() {
+            // Marble at 10 cm on a unit mesh: distances span the profile's whole range.
+            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
+            let d = DipoleF32::new(&dip).with_isa(isa);
+            let src = ReceiverSources::new(&d, x_o, n_o);
+            group.bench_function(format!("{}/{}", kind.name(), isa.name()), |b| {
+                b.iter(|| {
+                    let mut acc = 0.0f32;
+                    for p in &emitters {
+                        let v = src.point_samples(&d, black_box(p), &areas);
+                        acc += v[0][0] + v[1][1] + v[2][2] + v[3][0];
+                    }
+                    black_box(acc)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn gather(c: &mut Criterion) {
+    const NODES: usize = 1 << 18;
+    const PER_RECEIVER: usize = 32;
+    const RECEIVERS: usize = 1 << 18;
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+    let e_node: Vec<Vec3A> =
+        (0..NODES).map(|_| Vec3A::new(rng.random(), rng.random(), rng.random())).collect();
+    // Emitters near the receiver in the node order, as a hierarchy's links mostly are.
+    let emitter: Vec<u32> = (0..RECEIVERS * PER_RECEIVER)
+        .map(|i| ((i / PER_RECEIVER + rng.random_range(0..4096)) % NODES) as u32)
+        .collect();
+    let scale = receiver_scale(1.0);
+    let coef: Vec<LinkCoef> = (0..emitter.len())
+        .map(|_| LinkCoef::pack(Vec3A::new(rng.random(), rng.random(), rng.random()), scale))
+        .collect();
+    let mut group = c.benchmark_group("gather");
+    group.sample_size(20);
+    group.throughput(Throughput::Elements(emitter.len() as u64));
+    // The roofline: the same bytes streamed and summed, no `E` fetched, nothing converted.
+    let words: Vec<u64> = (0..coef.len() as u64).map(|i| i.wrapping_mul(0x9e37_79b9_7f4a_7c15)).collect();
+    group.bench_function("stream", |b| {
+        b.iter(|| {
+            let (mut s0, mut s1) = (0u64, 0u64);
+            for (e, w) in emitter.chunks_exact(2).zip(words.chunks_exact(2)) {
+                s0 = s0.wrapping_add(e[0] as u64 ^ w[0]);
+                s1 = s1.wrapping_add(e[1] as u64 ^ w[1]);
+            }
+            black_box(s0 ^ s1)
+        })
+    });
+    for isa in Isa::available() {
+        group.bench_function(isa.name(), |b| {
             b.iter(|| {
-                let mut acc = 0.0f32;
-                for p in &emitters {
-                    let v = src.point_samples(&d, black_box(p), &areas);
-                    acc += v[0][0] + v[1][1] + v[2][2] + v[3][0];
+                let mut acc = Vec3A::ZERO;
+                for (e, c) in emitter.chunks_exact(PER_RECEIVER).zip(coef.chunks_exact(PER_RECEIVER)) {
+                    acc += gather_sum(isa, &e_node, e, c);
                 }
                 black_box(acc)
             })
@@ -39,5 +95,5 @@ fn kernel(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernel);
+criterion_group!(benches, point_samples, gather);
 criterion_main!(benches);

@@ -4,22 +4,33 @@
 //! and `2^k` written into the exponent bits. Unlike the C library's `exp` they inline, and
 //! the compiler vectorises loops over them.
 
+use crate::simd::{Madd, Separate};
+
 /// `e^x` for `x ≤ 0` to about 2e-7 relative (`x < -87` gives `e^-87`): range reduction by
 /// `ln 2` and a degree-6 Taylor polynomial on `|r| ≤ ln 2 / 2`, branch free so that it
 /// vectorises.
 #[inline(always)]
 pub fn exp_neg(x: f32) -> f32 {
+    exp_neg_with::<Separate>(x)
+}
+
+/// [`exp_neg`] with its multiply-adds fused or not (`M`), for the kernels compiled per
+/// instruction set ([`crate::simd`]).
+#[inline(always)]
+pub fn exp_neg_with<M: Madd>(x: f32) -> f32 {
     const LOG2E: f32 = std::f32::consts::LOG2_E;
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
     // Adding and subtracting 1.5 · 2^23 rounds to the nearest integer in f32.
     const ROUND: f32 = 12_582_912.0;
     let x = x.clamp(-87.0, 0.0);
-    let shifted = x * LOG2E + ROUND;
+    let shifted = M::madd(x, LOG2E, ROUND);
     let k = shifted - ROUND;
-    let r = x - k * LN2_HI - k * LN2_LO;
-    let p = 1.0
-        + r * (1.0 + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
+    let r = M::madd(-k, LN2_LO, M::madd(-k, LN2_HI, x));
+    let mut p = 1.0 / 720.0;
+    for c in [1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0] {
+        p = M::madd(p, r, c);
+    }
     // `k` as an integer from the bits of `shifted` (an `as i32` cast saturates, which does
     // not vectorise): 2^k has exponent field `k + 127`.
     let k_int = shifted.to_bits().wrapping_sub(ROUND.to_bits());
@@ -79,6 +90,14 @@ mod tests {
         }
         assert!(worst < 3e-7, "worst relative error {worst:e}");
         assert_eq!(exp_neg(0.0), 1.0);
+        let worst_fused = (0..=20_000)
+            .map(|i| {
+                let x = (-87.0 * i as f64 / 20_000.0) as f32;
+                let want = (x as f64).exp();
+                ((exp_neg_with::<crate::simd::Fused>(x) as f64 - want) / want).abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(worst_fused < 3e-7, "fused: worst relative error {worst_fused:e}");
         assert!(exp_neg(-1000.0) > 0.0 && exp_neg(-1000.0) < 1e-37);
     }
 

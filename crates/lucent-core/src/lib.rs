@@ -25,6 +25,7 @@
 //! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
 //!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
 //!   for what changed (§5.5).
+//! * [`simd`]: run-time choice of AVX2 / AVX-512 / portable code for the solver's hot kernels.
 //! * [`shading`]: exitant radiance `L = F_t B / pi` and the final per-vertex colour (§5.4).
 //! * [`volume`]: density volumes for the heterogeneous method (Shopf 2007, §4.2).
 //!
@@ -41,6 +42,7 @@ pub mod limits;
 pub mod mesh;
 pub mod session;
 pub mod shading;
+pub mod simd;
 pub mod solver;
 pub mod volume;
 

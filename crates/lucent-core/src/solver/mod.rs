@@ -26,6 +26,7 @@ pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
 pub mod oracle;
+mod point_kernel;
 pub mod point_sample;
 pub mod progress;
 mod refine;

@@ -4,20 +4,17 @@
 //!
 //! The oracle asks for the estimate between a receiver and an emitter, then between the
 //! receiver and the emitter's children, then between the receiver's children and the emitter:
-//! twelve dipole evaluations (four points × three channels) per question, each with two
-//! exponentials. They are laid out as twelve lanes so the compiler vectorises the square roots,
-//! divisions and a polynomial `exp` ([`exp_neg`](crate::fastexp::exp_neg)) on any x86-64 or AArch64 target; the
-//! library `expf` is a scalar call and was a tenth of the solve.
+//! twelve profile evaluations (four points × three channels) per question. The arithmetic is
+//! [`super::point_kernel`]'s, run on the widest instruction set the CPU has ([`Isa::best`]);
+//! every estimate of one [`DipoleF32`] takes the same path, so that the oracle may hand an
+//! estimate from one form on as another's.
 
+use super::point_kernel::{self as kernel, Profile32};
 use crate::bssrdf::Dipole;
 use crate::bssrdf::profile::TABLE_SIZE;
-use crate::fastexp::exp_neg;
 use crate::formfactor::cubature;
+use crate::simd::{Isa, Separate};
 use glam::Vec3;
-
-/// Lanes of one batch: four points × three colour channels (lane `4 k + c` unused for `c = 3`
-/// would waste a quarter; instead lane `3 j + c` is point `j`, channel `c`).
-const LANES: usize = 12;
 
 /// The profile's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
 /// lengths in mesh units).
@@ -42,49 +39,10 @@ pub struct DipoleF32 {
     /// the oracle's error estimates: `z_r²` for the analytic distance form; a tabulated profile
     /// with single scattering peaks like `1/r` there, so a tenth of `z_r`.
     near_off: [f32; 3],
-    /// Whether the analytic poles are part of the profile (all but PBD).
-    analytic: bool,
-    /// The tabulated part, if any.
-    table: Option<TableF32>,
-    /// The same coefficients repeated over the [`LANES`] of a batch.
-    lanes: Lanes,
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Lanes {
-    sigma_tr: [f32; LANES],
-    z_r: [f32; LANES],
-    z_v: [f32; LANES],
-    k: [f32; LANES],
-    off_r: [f32; LANES],
-    off_v: [f32; LANES],
-}
-
-/// A tabulated profile in `f32`: `r R(r)` per channel on the grid of [`RadialTable`].
-#[derive(Clone, Debug)]
-struct TableF32 {
-    /// Channel `c`'s `TABLE_SIZE + 1` samples start at `c (TABLE_SIZE + 1)`.
-    values: Vec<f32>,
-    inv_r_max: [f32; 3],
-    r_floor: [f32; 3],
-}
-
-impl TableF32 {
-    /// `R(r)` in channel `c` from the squared distance `s2` to the receiver point.
-    #[inline(always)]
-    fn radial(&self, c: usize, s2: f32) -> f32 {
-        const N: usize = TABLE_SIZE;
-        let r = s2.sqrt();
-        let x = (r * self.inv_r_max[c]).sqrt() * N as f32;
-        if x.is_nan() || x >= N as f32 {
-            return 0.0;
-        }
-        let i = x as usize;
-        let f = x - i as f32;
-        let base = c * (N + 1) + i;
-        let w = self.values[base] * (1.0 - f) + self.values[base + 1] * f;
-        w / r.max(self.r_floor[c])
-    }
+    /// The lanes, poles and table of the kernel.
+    kernel: Profile32,
+    /// The instruction set every estimate runs on.
+    isa: Isa,
 }
 
 impl DipoleF32 {
@@ -101,12 +59,14 @@ impl DipoleF32 {
             Some(_) => off(z_r.map(|z| 0.1 * z)),
             None => off_r,
         };
-        let table = d.tables.as_ref().map(|t| TableF32 {
-            values: t.channels.iter().flat_map(|c| c.r_radial.iter().copied()).collect(),
-            inv_r_max: std::array::from_fn(|c| (1.0 / t.channels[c].r_max) as f32),
-            r_floor: std::array::from_fn(|c| t.channels[c].r_floor as f32),
+        let table = d.tables.as_ref().map(|t| {
+            let n = TABLE_SIZE + 1;
+            Box::new(std::array::from_fn(|k| t.channels[k / n].r_radial.get(k % n).copied().unwrap_or(0.0)))
         });
-        let rep = |a: [f32; 3]| std::array::from_fn(|i| a[i % 3]);
+        let per_table = |f: fn(&crate::bssrdf::RadialTable) -> f64| {
+            d.tables.as_ref().map_or([0.0; 3], |t| t.channels.each_ref().map(|c| f(c) as f32))
+        };
+        let (inv_r_max, r_floor) = (per_table(|c| 1.0 / c.r_max), per_table(|c| c.r_floor));
         DipoleF32 {
             sigma_tr,
             z_r,
@@ -116,66 +76,27 @@ impl DipoleF32 {
             off_r,
             off_v,
             near_off,
-            analytic: d.has_analytic(),
-            table,
-            lanes: Lanes {
-                sigma_tr: rep(sigma_tr),
-                z_r: rep(z_r),
-                z_v: rep(z_v),
-                k: rep(k),
-                off_r: rep(off_r),
-                off_v: rep(off_v),
-            },
+            kernel: Profile32::new(
+                [sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor],
+                d.has_analytic(),
+                table,
+            ),
+            isa: Isa::best(),
         }
     }
 
-    /// `area R` per lane from the squared distances to the real (`s2_r`) and virtual
-    /// (`s2_v`) poles' points (Jensen et al. 2001, eq. 5, with `k = α'/4π`), plus the table.
-    #[inline(always)]
-    fn rd_lanes(&self, s2_r: &[f32; LANES], s2_v: &[f32; LANES], area: &[f32; LANES]) -> [f32; LANES] {
-        let l = &self.lanes;
-        let mut out = [0.0f32; LANES];
-        if self.analytic {
-            for i in 0..LANES {
-                let sig = l.sigma_tr[i];
-                out[i] = l.k[i]
-                    * (pole(l.z_r[i], sig, s2_r[i] + l.off_r[i]) + pole(l.z_v[i], sig, s2_v[i] + l.off_v[i]));
-            }
+    /// The same profile on instruction set `isa` (if this CPU has it; for tests and benches).
+    pub fn with_isa(mut self, isa: Isa) -> Self {
+        if isa.is_available() {
+            self.isa = isa;
         }
-        if let Some(t) = &self.table {
-            for i in 0..LANES {
-                out[i] += t.radial(i % 3, s2_r[i]);
-            }
-        }
-        for i in 0..LANES {
-            out[i] *= area[i];
-        }
-        out
+        self
     }
 
-    /// `R` in channel `c` from the squared distances to the poles' points: the same arithmetic
-    /// as one lane of [`DipoleF32::rd_lanes`], so scalar and batched estimates agree exactly.
-    #[inline(always)]
-    fn rd_one(&self, c: usize, s2_r: f32, s2_v: f32) -> f32 {
-        let mut v = 0.0f32;
-        if self.analytic {
-            let sig = self.sigma_tr[c];
-            v = self.k[c]
-                * (pole(self.z_r[c], sig, s2_r + self.off_r[c])
-                    + pole(self.z_v[c], sig, s2_v + self.off_v[c]));
-        }
-        if let Some(t) = &self.table {
-            v += t.radial(c, s2_r);
-        }
-        v
+    /// The instruction set the estimates run on.
+    pub fn isa(&self) -> Isa {
+        self.isa
     }
-}
-
-/// One source's term of `R_d`, `z (1 + σ s) e^{-σ s} / s³`, from the squared distance `s2`.
-#[inline(always)]
-fn pole(z: f32, sigma_tr: f32, s2: f32) -> f32 {
-    let s = s2.sqrt();
-    z * (1.0 + sigma_tr * s) * exp_neg(-sigma_tr * s) / (s2 * s)
 }
 
 /// The poles of one receiver point (the profile sits at the receiver, §4's inverse
@@ -184,8 +105,8 @@ fn pole(z: f32, sigma_tr: f32, s2: f32) -> f32 {
 /// enters as an added squared distance).
 #[derive(Clone, Copy, Debug)]
 pub struct ReceiverSources {
-    x_r: [Vec3; 3],
-    x_v: [Vec3; 3],
+    pub(super) x_r: [Vec3; 3],
+    pub(super) x_v: [Vec3; 3],
 }
 
 impl ReceiverSources {
@@ -228,22 +149,33 @@ impl ReceiverSources {
     /// One-point form factor `A R(p)` for an emitter of area `area` at `p`.
     #[inline]
     pub fn point_sample(&self, d: &DipoleF32, p: Vec3, area: f32) -> [f32; 3] {
-        std::array::from_fn(|c| {
-            area * d.rd_one(c, (self.x_r[c] - p).length_squared(), (self.x_v[c] - p).length_squared())
-        })
+        let k = &d.kernel;
+        match d.isa {
+            // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
+            // `DipoleF32::with_isa` check `is_available`).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { kernel::avx512::to_point(k, self, p, area) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { kernel::avx2::to_point(k, self, p, area) },
+            _ => kernel::to_point::<Separate, 3>(k, self, p, area),
+        }
     }
 
     /// [`ReceiverSources::point_sample`] for four emitters at once (pad with area 0).
     #[inline]
     pub fn point_samples(&self, d: &DipoleF32, p: &[Vec3; 4], area: &[f32; 4]) -> [[f32; 3]; 4] {
-        let mut s2_r = [0.0f32; LANES];
-        let mut s2_v = [0.0f32; LANES];
-        for i in 0..LANES {
-            let (j, c) = (i / 3, i % 3);
-            s2_r[i] = (self.x_r[c] - p[j]).length_squared();
-            s2_v[i] = (self.x_v[c] - p[j]).length_squared();
+        let k = &d.kernel;
+        match d.isa {
+            // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
+            // `DipoleF32::with_isa` check `is_available`).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { kernel::avx512::to_points(k, self, p, area) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { kernel::avx2::to_points(k, self, p, area) },
+            _ => kernel::to_points::<Separate, 12>(k, self, p, area),
         }
-        unpack(d.rd_lanes(&s2_r, &s2_v, &spread_area(area)))
     }
 }
 
@@ -279,24 +211,17 @@ impl ReceiverSources {
 /// `[src[j].point_sample(d, p, area); 4]`, batched.
 #[inline]
 pub fn point_samples_from(src: &[ReceiverSources; 4], d: &DipoleF32, p: Vec3, area: f32) -> [[f32; 3]; 4] {
-    let mut s2_r = [0.0f32; LANES];
-    let mut s2_v = [0.0f32; LANES];
-    for i in 0..LANES {
-        let (j, c) = (i / 3, i % 3);
-        s2_r[i] = (src[j].x_r[c] - p).length_squared();
-        s2_v[i] = (src[j].x_v[c] - p).length_squared();
+    let k = &d.kernel;
+    match d.isa {
+        // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
+        // `DipoleF32::with_isa` check `is_available`).
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => unsafe { kernel::avx512::from_point(k, src, p, area) },
+        // SAFETY: as above.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { kernel::avx2::from_point(k, src, p, area) },
+        _ => kernel::from_point::<Separate, 12>(k, src, p, area),
     }
-    unpack(d.rd_lanes(&s2_r, &s2_v, &[area; LANES]))
-}
-
-#[inline(always)]
-fn spread_area(area: &[f32; 4]) -> [f32; LANES] {
-    std::array::from_fn(|i| area[i / 3])
-}
-
-#[inline(always)]
-fn unpack(v: [f32; LANES]) -> [[f32; 3]; 4] {
-    std::array::from_fn(|j| [v[3 * j], v[3 * j + 1], v[3 * j + 2]])
 }
 
 #[cfg(test)]
@@ -331,6 +256,64 @@ mod tests {
         assert_eq!(from[2], got[0]);
         for j in 0..4 {
             assert_eq!(src.point_sample(&d, p[j], area[j]), got[j]);
+        }
+    }
+
+    /// Every instruction set against the portable path on random points, for every profile
+    /// (Mertens' normal placement, the distance-form dipole with single scattering, PBD), and
+    /// the vector paths against each other bit for bit. Tolerance 2e-5 relative: fusing
+    /// rounds `σ_tr s` differently, and one ulp of it is up to 87 ulp of `e^{-σ_tr s}`; 1e-30
+    /// absolute for results that underflow to subnormals.
+    #[test]
+    fn vector_paths_match_the_portable_one() {
+        use crate::bssrdf::ProfileKind;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        let mut point = |s: f32| Vec3::new(rng.random(), rng.random(), rng.random()) * (2.0 * s) - s;
+        // Points from touching the poles to beyond the profile's range.
+        let trials: Vec<(Vec3, Vec3, [Vec3; 4])> = (0..400)
+            .map(|t| {
+                let s = [0.002, 0.02, 0.2, 1.0][t % 4];
+                let (x_o, n_o) = (point(s), point(1.0).normalize_or(Vec3::Z));
+                (x_o, n_o, [point(s), point(s), point(s), x_o])
+            })
+            .collect();
+        for name in ["marble", "skimmilk", "ketchup"] {
+            let m = Material::by_name(name).unwrap();
+            for kind in ProfileKind::ALL {
+                let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
+                let scalar = DipoleF32::new(&dip).with_isa(Isa::Scalar);
+                let mut first_vector: Option<Vec<[[f32; 3]; 4]>> = None;
+                for isa in Isa::available().into_iter().skip(1) {
+                    let d = DipoleF32::new(&dip).with_isa(isa);
+                    let mut got_all = vec![];
+                    for &(x_o, n_o, p) in &trials {
+                        let src = ReceiverSources::new(&d, x_o, n_o);
+                        let area = [1e-3, 2e-3, 5e-4, 1e-3];
+                        let got = src.point_samples(&d, &p, &area);
+                        let want = src.point_samples(&scalar, &p, &area);
+                        let from = point_samples_from(&[src; 4], &d, p[1], area[1]);
+                        for j in 0..4 {
+                            assert_eq!(src.point_sample(&d, p[j], area[j]), got[j]);
+                            assert_eq!(src.point_sample(&scalar, p[j], area[j]), want[j]);
+                            assert_eq!(from[j], got[1]);
+                            for c in 0..3 {
+                                let (g, w) = (got[j][c], want[j][c]);
+                                assert!(
+                                    (g - w).abs() <= 2e-5 * w.abs() + 1e-30
+                                        || (g.is_infinite() && w.is_infinite()),
+                                    "{name} {kind} {isa:?} {j} {c}: {g} vs {w}"
+                                );
+                            }
+                        }
+                        got_all.push(got);
+                    }
+                    match &first_vector {
+                        None => first_vector = Some(got_all),
+                        Some(v) => assert!(v.iter().zip(&got_all).all(|(a, b)| a == b), "{kind} {isa:?}"),
+                    }
+                }
+            }
         }
     }
 
