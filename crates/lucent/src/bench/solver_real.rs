@@ -85,7 +85,7 @@ fn meshes(json: bool) -> Vec<(String, PathBuf)> {
     out
 }
 
-pub fn run(json: bool) -> anyhow::Result<()> {
+pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
     let max_t: usize =
         std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
     let samples: usize =
@@ -118,7 +118,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
             continue;
         }
         for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
-            let row = measure(&name, &mesh, material, scale_m, samples, &watch)?;
+            let row = measure(&name, &mesh, material, scale_m, samples, &watch, oracle)?;
             if json {
                 println!("{}", serde_json::to_string(&row)?);
             } else {
@@ -139,6 +139,39 @@ pub fn run(json: bool) -> anyhow::Result<()> {
                     100.0 * row.max_rel_err
                 );
             }
+        }
+    }
+    Ok(())
+}
+
+/// `--census`: where the links come from, per mesh, marble at 10 cm.
+pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
+    let max_t: usize =
+        std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
+    for (name, path) in meshes(json) {
+        let mesh = if path.as_os_str().is_empty() { embedded::bunny() } else { load_mesh(&path)? };
+        if mesh.triangles.len() > max_t {
+            continue;
+        }
+        let transport = Transport::new(Material::by_name("marble").context("material preset")?, 0.1);
+        let dipole = transport.dipole(mesh.extent());
+        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
+        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), dipole, oracle);
+        let c = solver.census();
+        let t = mesh.triangles.len() as f64;
+        if json {
+            println!(
+                "{}",
+                serde_json::json!({"bench": "solver_census", "mesh": name, "triangles": t,
+                    "links_per_triangle": c.total as f64 / t, "decisions": c.decisions, "links": c.links,
+                    "near_causes": c.near_causes, "separation_log2": c.separation,
+                    "emitter_size_log2": c.emitter_size, "receiver_level": c.receiver_level,
+                    "per_face_p50_p90_p99_max": c.per_face, "slivers": c.slivers,
+                    "sliver_mean": c.sliver_mean, "other_mean": c.other_mean})
+            );
+        } else {
+            println!("{name}: {} triangles, {} links ({:.1}/triangle)", t, c.total, c.total as f64 / t);
+            println!("{c:#?}");
         }
     }
     Ok(())
@@ -177,7 +210,7 @@ fn bump(mesh: &Mesh, toward: Vec3, radius: f32, h: f32) -> Vec<Vec3> {
 }
 
 /// `n` distinct faces of `count`, drawn with a fixed seed (splitmix64), sorted.
-fn sample_faces(count: usize, n: usize) -> Vec<usize> {
+pub(super) fn sample_faces(count: usize, n: usize) -> Vec<usize> {
     if n >= count {
         return (0..count).collect();
     }
@@ -224,12 +257,13 @@ fn measure(
     scale_m: f64,
     samples: usize,
     watch: &Watch,
+    oracle: Option<Oracle>,
 ) -> anyhow::Result<RealRow> {
     let rss_reset = reset_peak_rss();
     let big = mesh.triangles.len() > 100_000;
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
     let dipole = transport.dipole(mesh.extent());
-    let oracle = Oracle::for_profile(dipole.profile);
+    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
     let (lights, light_at) = lights(mesh);
     let caster = ShadowCaster::new(mesh);
     let e = face_irradiance_shadowed(mesh, &lights, None, &dipole.entry, Some(&caster));
@@ -304,6 +338,6 @@ fn measure(
         max_rel_err,
         exact_ms,
         threads: rayon::current_num_threads(),
-        oracle: format!("{:?}", oracle.mode).to_lowercase(),
+        oracle: format!("{:?}:{},{},{}", oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs).to_lowercase(),
     })
 }
