@@ -17,8 +17,9 @@
 //! (`5` written to `/proc/self/clear_refs`, Linux 4.0+); where that is refused it stays a
 //! process-wide mark, and the row says so (`rss_reset: false`).
 //!
-//! `LUCENT_BENCH_MAX_TRIANGLES` skips larger meshes; `LUCENT_BENCH_EXACT_SAMPLES` changes the
-//! 1,000 sampled faces.
+//! `LUCENT_BENCH_MAX_TRIANGLES` and `LUCENT_BENCH_MIN_TRIANGLES` skip larger and smaller meshes,
+//! `LUCENT_BENCH_MATERIAL` (`marble` or `skimmilk`) the other material;
+//! `LUCENT_BENCH_EXACT_SAMPLES` changes the 1,000 sampled faces.
 
 use crate::progress::Watch;
 use anyhow::Context;
@@ -90,6 +91,9 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
         std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
     let samples: usize =
         std::env::var("LUCENT_BENCH_EXACT_SAMPLES").ok().and_then(|v| v.parse().ok()).unwrap_or(1000);
+    let min_t: usize =
+        std::env::var("LUCENT_BENCH_MIN_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
     if !json {
         println!(
             "{:<12} {:>7} {:<9} {:>10} {:>6} {:>11} {:>10} {:>9} {:>12} {:>9} {:>9} {:>9}",
@@ -114,10 +118,13 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
         } else {
             load_mesh(&path).with_context(|| format!("loading {}", path.display()))?
         };
-        if mesh.triangles.len() > max_t {
+        if mesh.triangles.len() > max_t || mesh.triangles.len() < min_t {
             continue;
         }
         for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
+            if only.as_deref().is_some_and(|m| m != material) {
+                continue;
+            }
             let row = measure(&name, &mesh, material, scale_m, samples, &watch, oracle)?;
             if json {
                 println!("{}", serde_json::to_string(&row)?);
