@@ -37,9 +37,17 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
         intensity: Vec3::splat(ext * ext * 4.0),
     }];
     let m = Material::custom("dense", [100.0; 3], [100.0; 3], 1.3).unwrap();
-    for (kind, single) in [(ProfileKind::Pbd, true), (ProfileKind::Dipole, false), (ProfileKind::Mertens, false)] {
+    for (kind, single) in
+        [(ProfileKind::Pbd, true), (ProfileKind::Dipole, false), (ProfileKind::Mertens, false)]
+    {
         let d = Dipole::profile_for_model_scale(&m, ext as f64, 0.1, kind, single);
-        let reach_mm = Locality::of(&d).reach as f64 * d.mm_per_unit;
+        let loc = Locality::of(&d);
+        let reach_mm = loc.reach as f64 * d.mm_per_unit;
+        // The numerical `∫ R dA` of the local limit is the closed form's.
+        let closed = d.total_diffuse_reflectance();
+        for c in 0..3 {
+            assert!((loc.r_total[c] as f64 / closed[c] - 1.0).abs() < 2e-3, "{kind}: {loc:?} vs {closed:?}");
+        }
         let e = face_irradiance(&mesh, &light, &d.entry);
         let want = exact::solve(&mesh, &d, &e, &FormFactorOptions::default());
         let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::for_profile(kind));

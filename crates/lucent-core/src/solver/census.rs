@@ -1,7 +1,7 @@
 //! Where the links of a solve come from: a serial rerun of the refinement that counts the
 //! oracle's decisions by their cause and the accepted links by kind, level and geometry (the
-//! measurement behind "why do scanned meshes need so many links", `lucent bench solver --real
-//! --census`). Diagnostic only: nothing in a solve reads it.
+//! measurement behind "why do scanned meshes need so many links":
+//! `LUCENT_BENCH_CENSUS=1 lucent bench solver --real`). Diagnostic only: no solve reads it.
 
 use super::hierarchical::HierarchicalSolver;
 use super::oracle::{Decision, LinkKind, ReceiverView, Samples};
@@ -83,7 +83,9 @@ impl HierarchicalSolver {
                 let e = e as usize;
                 s.f_mid = f;
                 let dec = self.oracle.decide(h, &d, &view, r, e, &mut s);
-                *c.decisions.entry(format!("{:?} recv={:?} far={:?}", short(dec), s.why[0], s.why[1])).or_default() += 1;
+                *c.decisions
+                    .entry(format!("{:?} recv={:?} far={:?}", short(dec), s.why[0], s.why[1]))
+                    .or_default() += 1;
                 match dec {
                     Decision::Link(kind) => {
                         let (rg, eg) = (&h.geom[r], &h.geom[e]);
@@ -130,7 +132,10 @@ impl HierarchicalSolver {
             }
             let t = self.mesh.triangles[h.leaf_faces[n.leaf_start as usize] as usize];
             let p = t.map(|v| self.mesh.positions[v as usize]);
-            let longest = (p[0] - p[1]).length_squared().max((p[1] - p[2]).length_squared()).max((p[2] - p[0]).length_squared());
+            let longest = (p[0] - p[1])
+                .length_squared()
+                .max((p[1] - p[2]).length_squared())
+                .max((p[2] - p[0]).length_squared());
             let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
             if longest > 20.0 * area {
                 c.slivers += 1;

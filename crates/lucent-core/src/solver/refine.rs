@@ -10,9 +10,9 @@
 use super::evaluate::Evaluator;
 use super::hierarchical::{HierarchicalSolver, SolveStats};
 use super::link_set::{ChunkPool, LinkChunk, LinkSet};
+use super::local::Locality;
 use super::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
-use super::local::Locality;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES};
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -449,7 +449,9 @@ impl HierarchicalSolver {
                 &mut defer,
                 &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, Vec3A::from_array(f), false)),
             ),
-            Some(reuse) => ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk, old_of_r: None }),
+            Some(reuse) => {
+                ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk, old_of_r: None })
+            }
         }
         chunk.close_receiver();
         if n.is_leaf() {

@@ -113,7 +113,13 @@ pub fn run(json: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn measure(mesh: &Mesh, h: &Hierarchy, material: Material, scale_m: f64, faces: &[usize]) -> anyhow::Result<Case> {
+fn measure(
+    mesh: &Mesh,
+    h: &Hierarchy,
+    material: Material,
+    scale_m: f64,
+    faces: &[usize],
+) -> anyhow::Result<Case> {
     let dipole = Transport::new(material, scale_m).dipole(mesh.extent());
     let (lo, hi) = mesh.bounds();
     let ext = mesh.extent();
@@ -143,6 +149,7 @@ fn measure(mesh: &Mesh, h: &Hierarchy, material: Material, scale_m: f64, faces: 
         .map(|(&f, &w)| (sum(b[f]) - sum(w)).abs() / sum(w))
         .collect();
     errs.sort_by(f64::total_cmp);
-    let errs = if errs.is_empty() { (0.0, 0.0) } else { (errs[errs.len() / 2], *errs.last().context("errors")?) };
+    let errs =
+        if errs.is_empty() { (0.0, 0.0) } else { (errs[errs.len() / 2], *errs.last().context("errors")?) };
     Ok(Case { stats, ms, errs })
 }

@@ -151,7 +151,8 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `--census`: where the links come from, per mesh, marble at 10 cm.
+/// With `LUCENT_BENCH_CENSUS` set: where the links come from (the oracle's decisions by cause,
+/// links by kind, level, separation and emitter size), per mesh, marble at 10 cm.
 pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
     let max_t: usize =
         std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
@@ -345,6 +346,7 @@ fn measure(
         max_rel_err,
         exact_ms,
         threads: rayon::current_num_threads(),
-        oracle: format!("{:?}:{},{},{}", oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs).to_lowercase(),
+        oracle: format!("{:?}:{},{},{}", oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs)
+            .to_lowercase(),
     })
 }
