@@ -31,6 +31,9 @@ pub enum Cause {
     Variation,
 }
 
+/// A candidate emitter with its one-point estimate at the receiver, if known.
+type Candidate = (u32, Option<[f32; 3]>);
+
 /// Counts of a census (see the module documentation).
 #[derive(Clone, Debug, Default)]
 pub struct Census {
@@ -70,12 +73,12 @@ impl HierarchicalSolver {
         let mut c = Census::default();
         let mut at_face = vec![0u64; h.len()];
         // (receiver, its candidates with known estimates)
-        let mut todo: Vec<(usize, Vec<(u32, Option<[f32; 3]>)>)> = vec![(0, vec![(0, None)])];
+        let mut todo: Vec<(usize, Vec<Candidate>)> = vec![(0, vec![(0, None)])];
         let mut stack = Vec::new();
         while let Some((r, cands)) = todo.pop() {
             let view = ReceiverView::new(h, &d, inv_rtot, r);
             let n = h.nodes[r];
-            let mut defer: Vec<Vec<(u32, Option<[f32; 3]>)>> = vec![Vec::new(); n.child_count as usize];
+            let mut defer: Vec<Vec<Candidate>> = vec![Vec::new(); n.child_count as usize];
             stack.clear();
             stack.extend(cands);
             let mut s = Samples::default();

@@ -19,7 +19,8 @@
 //!
 //! `LUCENT_BENCH_MAX_TRIANGLES` and `LUCENT_BENCH_MIN_TRIANGLES` skip larger and smaller meshes,
 //! `LUCENT_BENCH_MATERIAL` (`marble` or `skimmilk`) the other material;
-//! `LUCENT_BENCH_EXACT_SAMPLES` changes the 1,000 sampled faces.
+//! `LUCENT_BENCH_EXACT_SAMPLES` changes the 1,000 sampled faces; `LUCENT_BENCH_NO_ON_THE_FLY`
+//! skips the on-the-fly solve (reported as NaN, `null` in JSON).
 
 use crate::progress::Watch;
 use anyhow::Context;
@@ -282,8 +283,18 @@ fn measure(
     let mut solver = HierarchicalSolver::new(mesh.clone(), h, dipole.clone(), oracle);
     solver.progress = Some(watch.progress());
 
-    let otf_runs = if big { 1 } else { 3 };
-    let on_the_fly_ms = median((0..otf_runs).map(|_| solver.solve_on_the_fly(&e).stats.total_ms).collect());
+    let otf_runs = if std::env::var_os("LUCENT_BENCH_NO_ON_THE_FLY").is_some() {
+        0
+    } else if big {
+        1
+    } else {
+        3
+    };
+    let on_the_fly_ms = if otf_runs == 0 {
+        f64::NAN
+    } else {
+        median((0..otf_runs).map(|_| solver.solve_on_the_fly(&e).stats.total_ms).collect())
+    };
     let link_ms = solver.link().total_ms;
     let render_ms = median((0..3).map(|_| solver.solve_render(&e).stats.total_ms).collect());
     let face_b = solver.solve_render(&e).face_b;
