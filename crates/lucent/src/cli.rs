@@ -475,13 +475,13 @@ pub struct BenchArgs {
     /// `bench solver` only: Mertens table 5 (form factor against point sampling).
     #[arg(long)]
     pub table5: bool,
-    /// `bench solver` only: real scanned meshes (the embedded bunny and the Stanford dragon at
-    /// the resolutions `scripts/fetch_dragon.sh` put in target/meshes/), marble at 10 cm and
-    /// skim milk at 5 cm, with the error at 1,000 sampled faces against their exact `B`.
+    /// `bench solver` only: the bunny and the dragons `scripts/fetch_dragon.sh` fetched.
     #[arg(long)]
     pub real: bool,
-    /// `bench solver` table 3 only: the refinement oracle (as `lucent render --oracle`;
-    /// default `transport`), e.g. `solid-angle:0.2,0.8` for the paper's link count.
+    /// `bench solver` only: cost over sigma (1e-4..1e3 mm^-1) and scale (1 mm..10 m), bunny.
+    #[arg(long)]
+    pub locality: bool,
+    /// `bench solver` table 3 and `--real`: the oracle (as `render --oracle`), e.g. `solid-angle:0.2,0.8`.
     #[arg(long, value_parser = parse_oracle)]
     pub oracle: Option<Oracle>,
     /// `bench energy` only: the mesh (a file, or a built-in name: bunny, candle, cube, sphere).

@@ -19,6 +19,7 @@
 //! mode's over the stored links, on-the-fly mode's during the traversal) in `solver::gather`.
 
 use super::link_set::{ChunkPool, LinkSet};
+use super::local::Locality;
 use super::oracle::Oracle;
 use super::progress::Progress;
 use super::refine::Reuse;
@@ -54,6 +55,9 @@ pub struct SolveStats {
     pub push_ms: f64,
     /// Whole call, ms.
     pub total_ms: f64,
+    /// Faces whose `B` is the local limit `R_d_total E` (transport reaches less far than the
+    /// face's own extent around its midpoint), without links to other faces.
+    pub local_faces: usize,
 }
 
 /// The result of a solve: `B` per face (original face order) and statistics.
@@ -97,6 +101,10 @@ pub struct HierarchicalSolver {
     /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
+    /// The profile's reach (see [`super::local`]).
+    pub(super) locality: Locality,
+    /// Per cluster, whether all its faces take the local limit (made with the geometry).
+    pub(super) local: Vec<bool>,
 }
 
 impl HierarchicalSolver {
@@ -106,6 +114,8 @@ impl HierarchicalSolver {
     pub fn new(mesh: Mesh, mut hierarchy: Hierarchy, dipole: Dipole, oracle: Oracle) -> Self {
         assert_eq!(hierarchy.leaf_count(), mesh.triangles.len());
         hierarchy.refit(&mesh);
+        let locality = Locality::of(&dipole);
+        let local = locality.local_clusters(&hierarchy, &mesh);
         HierarchicalSolver {
             mesh,
             hierarchy,
@@ -119,6 +129,8 @@ impl HierarchicalSolver {
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
             bound: None,
+            locality,
+            local,
         }
     }
 
@@ -155,6 +167,7 @@ impl HierarchicalSolver {
         if self.links.is_none() {
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit(&self.mesh);
+            self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
             return self.link();
         }
         let moved_vertex: Vec<bool> =
@@ -183,6 +196,7 @@ impl HierarchicalSolver {
         if any_moved {
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit_changed(&self.mesh, &changed);
+            self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         }
         if !changed[0] && !stale[0] {
             self.links = Some(old);
@@ -209,6 +223,7 @@ impl HierarchicalSolver {
         assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
         self.mesh.positions.copy_from_slice(positions);
         self.hierarchy.refit(&self.mesh);
+        self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.links = None;
         self.bound = None;
     }
@@ -217,6 +232,8 @@ impl HierarchicalSolver {
     /// the next [`HierarchicalSolver::update_incremental`] (the oracle is geometric, so the
     /// links themselves stay).
     pub fn set_dipole(&mut self, dipole: Dipole) {
+        self.locality = Locality::of(&dipole);
+        self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.dipole = dipole;
         self.spare = None;
         self.bound = None;

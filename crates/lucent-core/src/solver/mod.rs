@@ -1,5 +1,7 @@
 //! Solving `B(x_o) = Σ_k E_k F(A_k, x_o)` (Mertens eq. 6).
 //!
+//! * [`census`]: counts of the oracle's decisions by cause and of the links by kind, level and
+//!   geometry (diagnostic).
 //! * [`energy`]: the energy bound that keeps thin and touching parts from glowing.
 //! * [`exact`]: every face against every other face, O(N^2): the reference.
 //! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
@@ -14,10 +16,12 @@
 //!   kernel over them.
 //! * [`link_set`]: the stored links, a run per receiver in a shared base or a per-update
 //!   delta, so that an incremental update writes only what changed (§5.5).
+//! * [`local`]: the profile's reach and the local limit `B = R_d E` where it is below a face.
 //! * [`oracle`]: the refinement oracle (§5.2).
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 //! * [`progress`]: a counter a front end polls to show a long solve's progress.
 
+pub mod census;
 pub mod energy;
 mod evaluate;
 pub mod exact;
@@ -25,6 +29,7 @@ mod gather;
 pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
+pub mod local;
 pub mod oracle;
 mod point_kernel;
 pub mod point_sample;

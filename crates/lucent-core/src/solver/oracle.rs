@@ -4,6 +4,7 @@
 //! factor (§4) for each accepted link, which `solver::evaluate` then evaluates. Two modes
 //! ([`OracleMode`]): the paper's solid angles, and one-point transport estimates (the default).
 
+use super::census::Cause;
 use super::point_sample::point_samples_from;
 pub use super::point_sample::{DipoleF32, ReceiverSources};
 use crate::bssrdf::ProfileKind;
@@ -158,6 +159,9 @@ pub(crate) struct Samples {
     /// Out, with [`Decision::SplitReceiver`]: the estimates from the emitter to the receiver's
     /// children's midpoints (in order), when the receiver test made them.
     pub at_children: Option<[[f32; 3]; 4]>,
+    /// Out: why the receiver test and the emitter test decided as they did (for
+    /// [`super::census`]; [`Cause::None`] where a test did not run).
+    pub why: [Cause; 2],
 }
 
 /// Solid angle `A_E / d²` of cluster `e` seen from `x`, or infinity inside its bounding sphere.
@@ -248,6 +252,7 @@ impl Samples {
         self.recv_scale = None;
         self.children = None;
         self.at_children = None;
+        self.why = [Cause::None; 2];
         known
     }
 }
@@ -361,6 +366,9 @@ impl Oracle {
         } else {
             [0.0; 3]
         };
+        if p.receiver_degenerate() && !p.rn.is_leaf() {
+            samples.why[0] = Cause::Degenerate;
+        }
         if !p.rn.is_leaf()
             && (p.receiver_degenerate() || self.transport_opens_receiver(h, d, view, p, f_mid, samples))
         {
@@ -393,9 +401,12 @@ impl Oracle {
         samples: &mut Samples,
     ) -> bool {
         let (rn, rg, eg) = (p.rn, p.rg, p.eg);
-        if !p.separated
-            || !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, rg.radius, view.spread)
-        {
+        if !p.separated {
+            samples.why[0] = Cause::NotSeparated;
+            return true;
+        }
+        if !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, rg.radius, view.spread) {
+            samples.why[0] = Cause::Poles;
             return true;
         }
         // The distance-form profiles do not depend on the receiver's normal, so nothing above
@@ -406,6 +417,7 @@ impl Oracle {
             let err: [f32; 3] =
                 std::array::from_fn(|c| (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius * 0.5 * f_mid[c]);
             if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
+                samples.why[0] = Cause::Size;
                 return true;
             }
         }
@@ -417,11 +429,13 @@ impl Oracle {
         for (k, &c) in rn.children().iter().enumerate() {
             let cg = &h.geom[c as usize];
             if solid_angle(cg.midpoint, eg) == INSIDE {
+                samples.why[0] = Cause::Degenerate;
                 return true;
             }
             let fc = f_children[k];
             let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
             if !self.within(diff, f, self.eps1, view.inv_rtot) {
+                samples.why[0] = Cause::Variation;
                 return true;
             }
             for c in 0..3 {
@@ -431,6 +445,7 @@ impl Oracle {
         // R's value goes to all its leaves, so it should be the *average* of F over R, which
         // exceeds F at R's midpoint (R_d is convex): as at the emitter, extrapolate from the
         // children's average.
+        samples.why[0] = Cause::Pass;
         let k = rn.child_count as f32;
         samples.recv_scale = Some(std::array::from_fn(|c| {
             if f[c] > 0.0 { ((avg[c] + (avg[c] - f[c]) / (k - 1.0)) / f[c]).max(0.0) } else { 1.0 }
@@ -452,14 +467,21 @@ impl Oracle {
         f_mid: [f32; 3],
         samples: &mut Samples,
     ) -> bool {
-        p.separated
-            && p.w <= MAX_FAR_SOLID_ANGLE
-            && view.src.clear_of(d, p.eg.midpoint, SOURCE_MARGIN * p.eg.radius, 0.0, 0.0)
-            && if p.en.is_leaf() {
-                self.far_face(d, view, p.eg, f_mid, samples)
-            } else {
-                self.far_cluster(h, d, view, p, f_mid, samples)
-            }
+        let (far, why) = if !p.separated {
+            (false, Cause::NotSeparated)
+        } else if p.w > MAX_FAR_SOLID_ANGLE {
+            (false, Cause::WideAngle)
+        } else if !view.src.clear_of(d, p.eg.midpoint, SOURCE_MARGIN * p.eg.radius, 0.0, 0.0) {
+            (false, Cause::Poles)
+        } else if p.en.is_leaf() {
+            let far = self.far_face(d, view, p.eg, f_mid, samples);
+            (far, if far { Cause::Pass } else { Cause::Variation })
+        } else {
+            let far = self.far_cluster(h, d, view, p, f_mid, samples);
+            (far, if far { Cause::Pass } else { Cause::Variation })
+        };
+        samples.why[1] = why;
+        far
     }
 
     /// [`Oracle::transport_far`] for a face, which cannot be opened: estimates the one-point

@@ -10,9 +10,10 @@
 use super::evaluate::Evaluator;
 use super::hierarchical::{HierarchicalSolver, SolveStats};
 use super::link_set::{ChunkPool, LinkChunk, LinkSet};
+use super::local::Locality;
 use super::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
-use crate::hierarchy::PAR_LEAVES;
+use crate::hierarchy::{Hierarchy, PAR_LEAVES};
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -25,6 +26,11 @@ pub(super) struct Ctx<'a> {
     stack: Vec<(u32, Option<[f32; 3]>)>,
     inv_rtot: [f32; 3],
     point_samples: usize,
+    /// The profile's reach and the clusters whose faces all take the local limit.
+    locality: &'a Locality,
+    local: &'a [bool],
+    /// Faces linked to themselves only, by the local limit.
+    local_faces: usize,
 }
 
 impl<'a> Ctx<'a> {
@@ -41,6 +47,9 @@ impl<'a> Ctx<'a> {
                 [(1.0 / r[0].max(r[1]).max(r[2]).max(1e-12)) as f32; 3]
             },
             point_samples: 0,
+            locality: &s.locality,
+            local: &s.local,
+            local_faces: 0,
         }
     }
 
@@ -74,12 +83,14 @@ impl<'a> Ctx<'a> {
         stats.form_factors = self.ev.form_factors;
         stats.cubatures = self.ev.cubatures;
         stats.point_samples = self.point_samples;
+        stats.local_faces = self.local_faces;
     }
 
     pub(super) fn absorb(&mut self, o: &Ctx) {
         self.ev.form_factors += o.ev.form_factors;
         self.ev.cubatures += o.ev.cubatures;
         self.point_samples += o.point_samples;
+        self.local_faces += o.local_faces;
     }
 
     /// Processes the candidates of receiver `r` (see the module documentation): hands every
@@ -99,11 +110,30 @@ impl<'a> Ctx<'a> {
         let mut samples = Samples::default();
         while let Some((e, f_mid)) = self.stack.pop() {
             let e = e as usize;
-            if sink.kept(r, e) {
+            // Out of reach: what `e` sends to `r` is below the profile's tail.
+            if self.locality.apart(h, r, e) {
                 continue;
             }
-            samples.f_mid = f_mid;
-            match oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples) {
+            let decision = if self.local[r] {
+                samples = Samples::default();
+                match local_decision(h, r, e) {
+                    Some(d) => d,
+                    None => continue,
+                }
+            } else {
+                if sink.kept(r, e) {
+                    continue;
+                }
+                samples.f_mid = f_mid;
+                oracle.decide(h, &self.ev.d32, &view, r, e, &mut samples)
+            };
+            match decision {
+                Decision::Link(LinkKind::PointSample) if self.local[r] => {
+                    // The local limit: the face's own `∫ R dA`, `R_d_total`.
+                    samples.estimate = Some(self.locality.r_total);
+                    self.local_faces += 1;
+                    sink.link(self, &view.src, r, e, LinkKind::PointSample, &samples);
+                }
                 Decision::Link(kind) => sink.link(self, &view.src, r, e, kind, &samples),
                 Decision::SplitReceiver => {
                     defer.emitters.push(e as u32);
@@ -123,6 +153,24 @@ impl<'a> Ctx<'a> {
             None => self.stack.extend(kids.iter().map(|&k| (k, None))),
         }
     }
+}
+
+/// The decision for candidate `e` at a receiver `r` all of whose faces take the local limit
+/// (`None`: drop it). No other face comes within the profile's reach of theirs, so only the
+/// candidates that hold faces of `r` matter: opened down to each face's link to itself.
+#[inline]
+fn local_decision(h: &Hierarchy, r: usize, e: usize) -> Option<Decision> {
+    let (rn, en) = (&h.nodes[r], &h.nodes[e]);
+    if en.leaf_end <= rn.leaf_start || rn.leaf_end <= en.leaf_start {
+        return None;
+    }
+    Some(if r == e && rn.is_leaf() {
+        Decision::Link(LinkKind::PointSample)
+    } else if rn.is_leaf() {
+        Decision::SplitEmitter
+    } else {
+        Decision::SplitReceiver
+    })
 }
 
 /// The candidates a receiver defers to its children, each with the one-point estimates at
@@ -205,13 +253,33 @@ impl<F: FnMut(usize, LinkKind, [f32; 3])> LinkSink for Evaluate<F> {
 struct Reusing<'a, 'b> {
     reuse: &'a Reuse<'a>,
     chunk: &'b mut LinkChunk,
+    /// The receiver's old links as (emitter, index in its run), sorted by emitter, made on
+    /// the first look-up: a scan per candidate cost O(links²) per receiver, and real meshes
+    /// have receivers with thousands of links.
+    old_of_r: Option<Vec<(u32, u32)>>,
+}
+
+impl Reusing<'_, '_> {
+    /// The old link `e -> r` (kind, coefficient, dirty), if any.
+    #[inline]
+    fn old_link(&mut self, r: usize, e: usize) -> Option<(LinkKind, Vec3A, bool)> {
+        let old = self.reuse.old;
+        let index = self.old_of_r.get_or_insert_with(|| {
+            let mut v: Vec<(u32, u32)> = old.emitters_of(r).map(|(j, x)| (x, j as u32)).collect();
+            v.sort_unstable();
+            v
+        });
+        let i = index.binary_search_by_key(&(e as u32), |&(x, _)| x).ok()?;
+        let l = old.link_at(r, index[i].1 as usize);
+        Some((l.kind, l.coef, l.dirty))
+    }
 }
 
 impl LinkSink for Reusing<'_, '_> {
     #[inline]
     fn kept(&mut self, r: usize, e: usize) -> bool {
         let unchanged = !self.reuse.changed[r] && !self.reuse.changed[e];
-        if unchanged && let Some((kind, f, false)) = self.reuse.old_link(r, e) {
+        if unchanged && let Some((kind, f, false)) = self.old_link(r, e) {
             self.chunk.push(r, e, kind, f, false);
             return true;
         }
@@ -231,7 +299,7 @@ impl LinkSink for Reusing<'_, '_> {
             && ctx.ev.is_analytic(src, e)
             && self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
         if over {
-            let f = match self.reuse.old_link(r, e) {
+            let f = match self.old_link(r, e) {
                 Some((LinkKind::FormFactor, f, _)) => f,
                 _ => {
                     ctx.point_samples += 1;
@@ -264,16 +332,6 @@ pub(super) struct Reuse<'a> {
     pub(super) stale: &'a [bool],
     /// Form factor evaluations left in this update's budget.
     pub(super) remaining: &'a AtomicI64,
-}
-
-impl Reuse<'_> {
-    /// The old, clean link `e -> r` of this kind, if any.
-    #[inline]
-    fn old_link(&self, r: usize, e: usize) -> Option<(LinkKind, Vec3A, bool)> {
-        let (j, _) = self.old.emitters_of(r).find(|&(_, x)| x as usize == e)?;
-        let l = self.old.link_at(r, j);
-        Some((l.kind, l.coef, l.dirty))
-    }
 }
 
 impl HierarchicalSolver {
@@ -391,7 +449,9 @@ impl HierarchicalSolver {
                 &mut defer,
                 &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, Vec3A::from_array(f), false)),
             ),
-            Some(reuse) => ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk }),
+            Some(reuse) => {
+                ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk, old_of_r: None })
+            }
         }
         chunk.close_receiver();
         if n.is_leaf() {

@@ -7,6 +7,7 @@ mod energy;
 mod formfactor;
 mod htsm;
 mod solver;
+mod solver_locality;
 mod solver_real;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
@@ -16,13 +17,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
         BenchTarget::Solver if args.real => {
-            if args.sweep || args.table5 || args.oracle.is_some() {
-                anyhow::bail!(
-                    "--real takes neither --sweep, --table5 nor --oracle (it uses the profile's default oracle)"
-                );
+            if args.sweep || args.table5 {
+                anyhow::bail!("--real takes neither --sweep nor --table5");
             }
-            solver_real::run(args.json)
+            if std::env::var_os("LUCENT_BENCH_CENSUS").is_some() {
+                return solver_real::census(args.json, args.oracle);
+            }
+            solver_real::run(args.json, args.oracle)
         }
+        BenchTarget::Solver if args.locality => solver_locality::run(args.json),
         BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle),
     }
 }

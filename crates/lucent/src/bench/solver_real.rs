@@ -17,8 +17,10 @@
 //! (`5` written to `/proc/self/clear_refs`, Linux 4.0+); where that is refused it stays a
 //! process-wide mark, and the row says so (`rss_reset: false`).
 //!
-//! `LUCENT_BENCH_MAX_TRIANGLES` skips larger meshes; `LUCENT_BENCH_EXACT_SAMPLES` changes the
-//! 1,000 sampled faces.
+//! `LUCENT_BENCH_MAX_TRIANGLES` and `LUCENT_BENCH_MIN_TRIANGLES` skip larger and smaller meshes,
+//! `LUCENT_BENCH_MATERIAL` (`marble` or `skimmilk`) the other material;
+//! `LUCENT_BENCH_EXACT_SAMPLES` changes the 1,000 sampled faces; `LUCENT_BENCH_NO_ON_THE_FLY`
+//! skips the on-the-fly solve (reported as NaN, `null` in JSON).
 
 use crate::progress::Watch;
 use anyhow::Context;
@@ -85,11 +87,14 @@ fn meshes(json: bool) -> Vec<(String, PathBuf)> {
     out
 }
 
-pub fn run(json: bool) -> anyhow::Result<()> {
+pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
     let max_t: usize =
         std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
     let samples: usize =
         std::env::var("LUCENT_BENCH_EXACT_SAMPLES").ok().and_then(|v| v.parse().ok()).unwrap_or(1000);
+    let min_t: usize =
+        std::env::var("LUCENT_BENCH_MIN_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
     if !json {
         println!(
             "{:<12} {:>7} {:<9} {:>10} {:>6} {:>11} {:>10} {:>9} {:>12} {:>9} {:>9} {:>9}",
@@ -114,11 +119,14 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         } else {
             load_mesh(&path).with_context(|| format!("loading {}", path.display()))?
         };
-        if mesh.triangles.len() > max_t {
+        if mesh.triangles.len() > max_t || mesh.triangles.len() < min_t {
             continue;
         }
         for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
-            let row = measure(&name, &mesh, material, scale_m, samples, &watch)?;
+            if only.as_deref().is_some_and(|m| m != material) {
+                continue;
+            }
+            let row = measure(&name, &mesh, material, scale_m, samples, &watch, oracle)?;
             if json {
                 println!("{}", serde_json::to_string(&row)?);
             } else {
@@ -139,6 +147,40 @@ pub fn run(json: bool) -> anyhow::Result<()> {
                     100.0 * row.max_rel_err
                 );
             }
+        }
+    }
+    Ok(())
+}
+
+/// With `LUCENT_BENCH_CENSUS` set: where the links come from (the oracle's decisions by cause,
+/// links by kind, level, separation and emitter size), per mesh, marble at 10 cm.
+pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
+    let max_t: usize =
+        std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
+    for (name, path) in meshes(json) {
+        let mesh = if path.as_os_str().is_empty() { embedded::bunny() } else { load_mesh(&path)? };
+        if mesh.triangles.len() > max_t {
+            continue;
+        }
+        let transport = Transport::new(Material::by_name("marble").context("material preset")?, 0.1);
+        let dipole = transport.dipole(mesh.extent());
+        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
+        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), dipole, oracle);
+        let c = solver.census();
+        let t = mesh.triangles.len() as f64;
+        if json {
+            println!(
+                "{}",
+                serde_json::json!({"bench": "solver_census", "mesh": name, "triangles": t,
+                    "links_per_triangle": c.total as f64 / t, "decisions": c.decisions, "links": c.links,
+                    "near_causes": c.near_causes, "separation_log2": c.separation,
+                    "emitter_size_log2": c.emitter_size, "receiver_level": c.receiver_level,
+                    "per_face_p50_p90_p99_max": c.per_face, "slivers": c.slivers,
+                    "sliver_mean": c.sliver_mean, "other_mean": c.other_mean})
+            );
+        } else {
+            println!("{name}: {} triangles, {} links ({:.1}/triangle)", t, c.total, c.total as f64 / t);
+            println!("{c:#?}");
         }
     }
     Ok(())
@@ -177,7 +219,7 @@ fn bump(mesh: &Mesh, toward: Vec3, radius: f32, h: f32) -> Vec<Vec3> {
 }
 
 /// `n` distinct faces of `count`, drawn with a fixed seed (splitmix64), sorted.
-fn sample_faces(count: usize, n: usize) -> Vec<usize> {
+pub(super) fn sample_faces(count: usize, n: usize) -> Vec<usize> {
     if n >= count {
         return (0..count).collect();
     }
@@ -224,12 +266,13 @@ fn measure(
     scale_m: f64,
     samples: usize,
     watch: &Watch,
+    oracle: Option<Oracle>,
 ) -> anyhow::Result<RealRow> {
     let rss_reset = reset_peak_rss();
     let big = mesh.triangles.len() > 100_000;
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
     let dipole = transport.dipole(mesh.extent());
-    let oracle = Oracle::for_profile(dipole.profile);
+    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
     let (lights, light_at) = lights(mesh);
     let caster = ShadowCaster::new(mesh);
     let e = face_irradiance_shadowed(mesh, &lights, None, &dipole.entry, Some(&caster));
@@ -240,8 +283,18 @@ fn measure(
     let mut solver = HierarchicalSolver::new(mesh.clone(), h, dipole.clone(), oracle);
     solver.progress = Some(watch.progress());
 
-    let otf_runs = if big { 1 } else { 3 };
-    let on_the_fly_ms = median((0..otf_runs).map(|_| solver.solve_on_the_fly(&e).stats.total_ms).collect());
+    let otf_runs = if std::env::var_os("LUCENT_BENCH_NO_ON_THE_FLY").is_some() {
+        0
+    } else if big {
+        1
+    } else {
+        3
+    };
+    let on_the_fly_ms = if otf_runs == 0 {
+        f64::NAN
+    } else {
+        median((0..otf_runs).map(|_| solver.solve_on_the_fly(&e).stats.total_ms).collect())
+    };
     let link_ms = solver.link().total_ms;
     let render_ms = median((0..3).map(|_| solver.solve_render(&e).stats.total_ms).collect());
     let face_b = solver.solve_render(&e).face_b;
@@ -304,6 +357,7 @@ fn measure(
         max_rel_err,
         exact_ms,
         threads: rayon::current_num_threads(),
-        oracle: format!("{:?}", oracle.mode).to_lowercase(),
+        oracle: format!("{:?}:{},{},{}", oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs)
+            .to_lowercase(),
     })
 }

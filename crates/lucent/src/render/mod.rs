@@ -101,6 +101,28 @@ pub struct Timings {
     pub links: Option<usize>,
 }
 
+/// Says so when transport reaches less far than faces are wide: those faces took the local
+/// limit `B = R_d E` (one link each) instead of a refinement.
+fn local_limit_note(mesh: &lucent_core::mesh::Mesh, dipole: &lucent_core::bssrdf::Dipole) {
+    use lucent_core::hierarchy::face_cluster;
+    use lucent_core::solver::local::Locality;
+    let loc = Locality::of(dipole);
+    // Only a face wider than twice the reach can be local: skip the hierarchy otherwise.
+    let widest = mesh.triangles.iter().enumerate().map(|(f, _)| mesh.face_area(f)).fold(0.0f32, f32::max);
+    if widest < 4.0 * loc.reach * loc.reach {
+        return;
+    }
+    let h = face_cluster::build(mesh);
+    let local = loc.local_clusters(&h, mesh).iter().zip(&h.nodes).filter(|(l, n)| **l && n.is_leaf()).count();
+    if local > 0 {
+        println!(
+            "lucent: transport reaches {:.3e} mm, below the faces: {local} of {} faces took the local limit B = R_d E",
+            loc.reach as f64 * dipole.mm_per_unit,
+            mesh.triangles.len()
+        );
+    }
+}
+
 /// The output format: `--format`, else by `--out`'s extension.
 pub(crate) fn image_format(args: &RenderArgs) -> ImageFormat {
     ImageFormat::resolve(args.format, args.out.as_deref(), args.frames.is_some())
@@ -146,9 +168,13 @@ fn render_mertens(
     session.set_positions(&mesh.positions);
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
+    let dipole = session.dipole().clone();
     let solved = session.solve();
     drop(watch);
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
+    if method == Method::Hierarchical {
+        local_limit_note(&mesh, &dipole);
+    }
     let st = &solved.timings;
     log::info!(
         "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms",
