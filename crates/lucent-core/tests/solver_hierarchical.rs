@@ -8,6 +8,7 @@ use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, face_irradiance};
 use lucent_core::mesh::Mesh;
+use lucent_core::solver::exact::rel_rmse;
 use lucent_core::solver::{HierarchicalSolver, Oracle, exact};
 
 /// A smooth, non-convex closed blob: an octahedron split `levels` times onto the unit sphere,
@@ -57,18 +58,6 @@ fn plane(n: u32, size: f32) -> Mesh {
         }
     }
     Mesh::new(pos, tris)
-}
-
-/// `sqrt(mean squared difference over vertices and channels) / rms(reference)`.
-fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
-    let (mut num, mut den) = (0.0f64, 0.0f64);
-    for (a, b) in reference.iter().zip(test) {
-        for c in 0..3 {
-            num += ((a[c] - b[c]) as f64).powi(2);
-            den += (a[c] as f64).powi(2);
-        }
-    }
-    (num / den).sqrt()
 }
 
 fn point_light() -> [Light; 1] {

@@ -2,24 +2,13 @@
 //! below a face, `B = R_d_total E` with one link per face, and it agrees with the exact solve.
 
 use glam::Vec3;
-use lucent_core::Rgb;
 use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, face_irradiance};
+use lucent_core::solver::exact::rel_rmse;
 use lucent_core::solver::local::Locality;
 use lucent_core::solver::{HierarchicalSolver, Oracle, exact};
-
-fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
-    let (mut num, mut den) = (0.0f64, 0.0f64);
-    for (a, b) in reference.iter().zip(test) {
-        for c in 0..3 {
-            num += ((a[c] - b[c]) as f64).powi(2);
-            den += (a[c] as f64).powi(2);
-        }
-    }
-    (num / den).sqrt()
-}
 
 /// The case: sigma_s' = sigma_a = 100 mm^-1 on the bunny at 10 cm (transport reaches
 /// hundredths of a millimetre, faces are millimetres): almost every face takes the local

@@ -17,6 +17,19 @@ use crate::mesh::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// Relative RMS error of `test` against `reference` (the exact solve's `B`, per face or
+/// vertex): `sqrt(Σ (a - b)² / Σ a²)` over every element and channel. Unitless.
+pub fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (a, b) in reference.iter().zip(test) {
+        for c in 0..3 {
+            num += ((a[c] - b[c]) as f64).powi(2);
+            den += (a[c] as f64).powi(2);
+        }
+    }
+    (num / den.max(1e-300)).sqrt()
+}
+
 /// Per-face `B` (same units as the irradiance) for per-face irradiance `face_irradiance`.
 pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Vec<Rgb> {
     let all: Vec<usize> = (0..mesh.triangles.len()).collect();

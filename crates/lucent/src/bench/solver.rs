@@ -15,12 +15,12 @@
 
 use anyhow::Context;
 use glam::Vec3;
-use lucent_core::Rgb;
 use lucent_core::bssrdf::{Dipole, Material};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::subdivision::{butterfly, octahedron};
 use lucent_core::irradiance::{Light, face_irradiance};
 use lucent_core::mesh::Mesh;
+use lucent_core::solver::exact::rel_rmse;
 use lucent_core::solver::oracle::OracleMode;
 use lucent_core::solver::{HierarchicalSolver, Oracle, exact};
 use serde::Serialize;
@@ -90,17 +90,6 @@ fn median_ms(runs: usize, mut f: impl FnMut() -> f64) -> f64 {
     let mut t: Vec<f64> = (0..runs).map(|_| f()).collect();
     t.sort_by(f64::total_cmp);
     t[t.len() / 2]
-}
-
-fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
-    let (mut num, mut den) = (0.0f64, 0.0f64);
-    for (a, b) in reference.iter().zip(test) {
-        for c in 0..3 {
-            num += ((a[c] - b[c]) as f64).powi(2);
-            den += (a[c] as f64).powi(2);
-        }
-    }
-    (num / den.max(1e-300)).sqrt()
 }
 
 /// A point light above, in front and to the side of a mesh with extent `ext`.
