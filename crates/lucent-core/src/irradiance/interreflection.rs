@@ -47,8 +47,7 @@ pub fn bounced_irradiance(
                     e.add(radiance, &dipole.entry, cos);
                 }
             }
-            let k = std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32;
-            Entering { carried: e.carried * k, local: e.local * k }
+            e * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
         })
         .collect()
 }

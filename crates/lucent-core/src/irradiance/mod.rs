@@ -111,6 +111,13 @@ impl std::ops::Sub for Entering {
     }
 }
 
+impl std::ops::Mul<f32> for Entering {
+    type Output = Entering;
+    fn mul(self, k: f32) -> Entering {
+        Entering { carried: self.carried * k, local: self.local * k }
+    }
+}
+
 impl std::ops::AddAssign for Entering {
     fn add_assign(&mut self, o: Entering) {
         self.carried += o.carried;

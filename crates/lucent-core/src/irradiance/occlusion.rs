@@ -40,8 +40,7 @@ pub fn blocked_environment(
             blocked.add(radiance, entry, cos);
         }
     }
-    let k = std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32;
-    Entering { carried: blocked.carried * k, local: blocked.local * k }
+    blocked * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
 }
 
 /// [`ENVIRONMENT_SHADOW_RAYS`] cosine-weighted directions about the unit normal `n`, stratified
