@@ -440,6 +440,29 @@ fn report_counts_components_and_inconsistent_orientation() {
     assert_eq!(r.euler_characteristic, 4);
 }
 
+#[test]
+fn repeated_faces_are_removed_keeping_the_winding_that_agrees_with_the_neighbours() {
+    // A closed cube, then: its first face again (same winding), its second face reversed and
+    // stored *before* the original (a back-to-back pair, as the vrip dragon has hundreds),
+    // and a face over three vertices no other face shares (a repeat-free fin is not touched).
+    let cube = generate::cube_base();
+    let mut triangles = vec![{
+        let mut t = cube.triangles[1];
+        t.swap(1, 2);
+        t
+    }];
+    triangles.extend(cube.triangles.iter().copied());
+    triangles.push(cube.triangles[0]);
+    let (mesh, r) =
+        lucent_core::mesh::validate::validate(Mesh::new(cube.positions.clone(), triangles), "cube").unwrap();
+    assert_eq!(r.repeated_faces, 2, "{r}");
+    assert_eq!(mesh.triangles, cube.triangles, "the outward copies stay, in order");
+    assert!(r.is_closed_manifold() && !r.is_clean(), "{r}");
+    assert!(r.to_string().contains("removed 2 repeated faces"), "{r}");
+    assert!(r.warnings().iter().any(|w| w.contains("2 repeated faces")), "{:?}", r.warnings());
+    assert!(mesh.signed_volume() > 0.0);
+}
+
 // ---- robustness: no input may panic a parser ----
 
 /// Deterministic xorshift so the corrupted inputs are reproducible.

@@ -25,7 +25,7 @@
 
 use super::Mesh;
 use super::texture::{MeshTexture, TextureSource};
-use super::validate::{MeshReport, is_degenerate, validate, weld_exact_duplicates};
+use super::validate::{MeshReport, validate_keeping, weld_exact_duplicates};
 use glam::{Vec2, Vec3};
 use std::io::{BufReader, Cursor};
 use std::path::Path;
@@ -110,7 +110,7 @@ impl MeshFormat {
 }
 
 /// Loads a mesh from an OBJ, PLY, OFF, glTF or GLB file (format from the extension),
-/// validates it and removes degenerate faces. See [`load_mesh_with_report`] for what was found.
+/// validates it and removes degenerate and repeated faces. See [`load_mesh_with_report`] for what was found.
 pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
     load_mesh_with_report(path).map(|(mesh, _)| mesh)
 }
@@ -161,15 +161,10 @@ fn parse_mesh_inner(
         MeshFormat::Obj | MeshFormat::Gltf => weld_exact_duplicates(&mut mesh),
         MeshFormat::Ply | MeshFormat::Off => 0,
     };
-    // Validation drops degenerate faces; their UVs go with them.
-    let n = mesh.positions.len();
-    if let Some(t) = &mut texture
-        && mesh.triangles.iter().flatten().all(|&v| (v as usize) < n)
-    {
-        let mut keep = mesh.triangles.iter().map(|t| !is_degenerate(&mesh.positions, t));
-        t.corner_uvs.retain(|_| keep.next().unwrap_or(false));
-    }
-    let (mesh, mut report) = validate(mesh, name)?;
+    // Validation drops degenerate and repeated faces; their UVs go with them.
+    let mut no_uvs = Vec::new();
+    let uvs = texture.as_mut().map_or(&mut no_uvs, |t| &mut t.corner_uvs);
+    let (mesh, mut report) = validate_keeping(mesh, name, uvs)?;
     report.welded_vertices = welded;
     let text = match format {
         MeshFormat::Obj | MeshFormat::Off => true,

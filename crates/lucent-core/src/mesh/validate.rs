@@ -7,7 +7,9 @@
 //!
 //! - fatal ([`MeshError`]): no vertices, no triangles, non-finite coordinates, indices out of
 //!   range, or nothing left after removing degenerate faces;
-//! - removed and reported: degenerate faces (a repeated index or zero area);
+//! - removed and reported: degenerate faces (a repeated index or zero area), and repeated
+//!   faces (the same three vertices as another face: scanned reconstructions such as the vrip
+//!   Stanford dragon hold hundreds, mostly back to back, which drew as black specks);
 //! - reported only: boundary edges (one face), non-manifold edges (more than two faces),
 //!   inconsistently oriented edges, unreferenced vertices, connected components.
 
@@ -30,6 +32,10 @@ pub struct MeshReport {
     pub welded_vertices: usize,
     /// Degenerate faces (a repeated vertex index, or zero area) found and *removed*.
     pub degenerate_faces: usize,
+    /// Faces over the same three vertices as another face, *removed*: of each such group one
+    /// face stays, the one whose winding agrees best with its neighbours' (so a face stored
+    /// back to back with its reverse keeps the outward side).
+    pub repeated_faces: usize,
     /// Undirected edges used by exactly one face (holes, open borders).
     pub boundary_edges: usize,
     /// Undirected edges used by more than two faces.
@@ -59,7 +65,10 @@ impl MeshReport {
     /// True when nothing was removed and the mesh is one closed, consistently oriented
     /// component.
     pub fn is_clean(&self) -> bool {
-        self.degenerate_faces == 0 && self.is_closed_manifold() && self.components == 1
+        self.degenerate_faces == 0
+            && self.repeated_faces == 0
+            && self.is_closed_manifold()
+            && self.components == 1
     }
 
     /// One line per thing lucent repaired or the user should know, with counts (empty for a
@@ -71,6 +80,7 @@ impl MeshReport {
         }
         for (n, what) in [
             (self.degenerate_faces, "removed {} degenerate faces (a repeated vertex or zero area)"),
+            (self.repeated_faces, "removed {} repeated faces (the same three vertices as another face)"),
             (self.welded_vertices, "welded {} duplicate vertices"),
             (self.boundary_edges, "open mesh: {} boundary edges (subsurface light leaks at holes)"),
             (self.nonmanifold_edges, "non-manifold mesh: {} edges shared by more than two faces"),
@@ -102,6 +112,9 @@ impl fmt::Display for MeshReport {
         if self.degenerate_faces > 0 {
             write!(f, ", removed {} degenerate faces", self.degenerate_faces)?;
         }
+        if self.repeated_faces > 0 {
+            write!(f, ", removed {} repeated faces", self.repeated_faces)?;
+        }
         if self.is_closed_manifold() {
             write!(f, ", closed manifold")?;
         }
@@ -119,9 +132,19 @@ impl fmt::Display for MeshReport {
     }
 }
 
-/// Checks `mesh` (see the module doc), removes degenerate faces, and returns the cleaned mesh
-/// with its report. `source` names the mesh (its file) in errors.
-pub fn validate(mut mesh: Mesh, source: &str) -> Result<(Mesh, MeshReport), MeshError> {
+/// Checks `mesh` (see the module doc), removes degenerate and repeated faces, and returns the
+/// cleaned mesh with its report. `source` names the mesh (its file) in errors.
+pub fn validate(mesh: Mesh, source: &str) -> Result<(Mesh, MeshReport), MeshError> {
+    validate_keeping(mesh, source, &mut Vec::<()>::new())
+}
+
+/// [`validate`], also dropping from `per_face` (one entry per face of `mesh`, e.g. texture
+/// coordinates; left alone unless its length is the face count) the entries of removed faces.
+pub fn validate_keeping<T>(
+    mut mesh: Mesh,
+    source: &str,
+    per_face: &mut Vec<T>,
+) -> Result<(Mesh, MeshReport), MeshError> {
     let fail = |reason: String| MeshError::invalid(source, reason);
     if mesh.positions.is_empty() {
         return Err(fail("empty mesh: no vertices".into()));
@@ -142,16 +165,60 @@ pub fn validate(mut mesh: Mesh, source: &str) -> Result<(Mesh, MeshReport), Mesh
     }
 
     let before = mesh.triangles.len();
-    let positions = &mesh.positions;
-    mesh.triangles.retain(|t| !is_degenerate(positions, t));
-    let degenerate_faces = before - mesh.triangles.len();
-    if mesh.triangles.is_empty() {
+    let mut keep: Vec<bool> = mesh.triangles.iter().map(|t| !is_degenerate(&mesh.positions, t)).collect();
+    let degenerate_faces = keep.iter().filter(|&&k| !k).count();
+    if degenerate_faces == before {
         return Err(fail(format!("all {before} triangles are degenerate (zero area or repeated vertex)")));
     }
+    let repeated_faces = drop_repeated_faces(&mesh.triangles, &mut keep);
+    if per_face.len() == before {
+        let mut k = keep.iter();
+        per_face.retain(|_| *k.next().unwrap_or(&false));
+    }
+    let mut k = keep.iter();
+    mesh.triangles.retain(|_| *k.next().unwrap_or(&false));
 
     let mut report = analyze(&mesh);
     report.degenerate_faces = degenerate_faces;
+    report.repeated_faces = repeated_faces;
     Ok((mesh, report))
+}
+
+/// Clears `keep` for every kept face over the same three vertices as another kept face, but
+/// one per group: the face whose directed edges its neighbours (faces outside any group)
+/// traverse most often the other way, i.e. the winding that agrees with the surface around it
+/// (the first on a tie). Returns how many faces it cleared.
+fn drop_repeated_faces(triangles: &[[u32; 3]], keep: &mut [bool]) -> usize {
+    let sorted = |t: &[u32; 3]| {
+        let mut k = *t;
+        k.sort_unstable();
+        k
+    };
+    let mut order: Vec<u32> = (0..triangles.len() as u32).filter(|&f| keep[f as usize]).collect();
+    order.par_sort_by_key(|&f| (sorted(&triangles[f as usize]), f));
+    let groups: Vec<&[u32]> =
+        order.chunk_by(|&a, &b| sorted(&triangles[a as usize]) == sorted(&triangles[b as usize])).collect();
+    if groups.iter().all(|g| g.len() == 1) {
+        return 0;
+    }
+    let edges_of = |t: &[u32; 3]| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])];
+    let mut directed: Vec<(u32, u32)> =
+        groups.iter().filter(|g| g.len() == 1).flat_map(|g| edges_of(&triangles[g[0] as usize])).collect();
+    directed.par_sort_unstable();
+    let uses = |e: (u32, u32)| directed.partition_point(|&x| x <= e) - directed.partition_point(|&x| x < e);
+    let agreement = |t: &[u32; 3]| {
+        edges_of(t).iter().map(|&(a, b)| uses((b, a)) as i64 - uses((a, b)) as i64).sum::<i64>()
+    };
+    let mut dropped = 0;
+    for g in groups.iter().filter(|g| g.len() > 1) {
+        // `max_by_key` keeps the last of equal maxima; reversing makes it the first.
+        let best = *g.iter().rev().max_by_key(|&&f| agreement(&triangles[f as usize])).unwrap_or(&g[0]);
+        for &f in g.iter().filter(|&&f| f != best) {
+            keep[f as usize] = false;
+            dropped += 1;
+        }
+    }
+    dropped
 }
 
 /// Whether a face repeats a vertex index or has zero area. The area test is relative to the
@@ -220,6 +287,7 @@ pub fn analyze(mesh: &Mesh) -> MeshReport {
         triangles: mesh.triangles.len(),
         welded_vertices: 0,
         degenerate_faces: 0,
+        repeated_faces: 0,
         boundary_edges: boundary,
         nonmanifold_edges: nonmanifold,
         inconsistent_edges: inconsistent,
