@@ -200,9 +200,15 @@ fn splat(p: Vec3) -> Xyz {
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 fn unpack(v: __m512) -> [[f32; 3]; 4] {
     let idx = _mm512_setr_epi32(0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, 0, 0, 0, 0);
+    let v = _mm512_permutexvar_ps(idx, v);
     let mut out = [[0.0f32; 3]; 4];
-    // SAFETY: `out` holds twelve contiguous floats; the mask writes twelve.
-    unsafe { _mm512_mask_storeu_ps(out.as_mut_ptr().cast(), 0x0fff, _mm512_permutexvar_ps(idx, v)) };
+    // Eight and four floats rather than a masked store, which loads cannot forward from.
+    let o: *mut f32 = out.as_mut_ptr().cast();
+    // SAFETY: `out` holds twelve contiguous floats: eight from `o`, four from `o + 8`.
+    unsafe {
+        _mm256_storeu_ps(o, _mm512_castps512_ps256(v));
+        _mm_storeu_ps(o.add(8), _mm512_extractf32x4_ps::<2>(v));
+    }
     out
 }
 
