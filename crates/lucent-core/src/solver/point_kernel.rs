@@ -14,8 +14,9 @@
 //! instruction per operation and a hardware gather for the table.
 //!
 //! Lanes do not interact, so a single estimate, a batch of four points and a batch of four
-//! receivers give one channel the same bits on one path; the paths differ only by fused
-//! multiply-adds (see [`crate::simd`]).
+//! receivers give one channel the same bits on one path; the portable and AVX2 paths differ
+//! only by fused multiply-adds (see [`crate::simd`]). AVX-512 has its own hand-written copy
+//! without square roots and divisions ([`super::point_kernel_avx512`]).
 
 use super::point_sample::ReceiverSources;
 use crate::bssrdf::profile::TABLE_SIZE;

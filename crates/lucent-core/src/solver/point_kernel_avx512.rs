@@ -1,12 +1,12 @@
 //! The one-point estimate kernel of [`super::point_kernel`] written out for AVX-512: the same
 //! sixteen lanes (four points × three channels, lane `4 c + j`, four padding lanes), one
 //! `zmm` register per quantity, but without the divider. The portable path's two square roots
-//! and division per pole become one `vrsqrt14ps` and a Newton step (`s = s² / s`, `1 / s³`
-//! from `1 / s`), its exponential scales by `vscalefps` instead of exponent bits, and PBD's
-//! table is read as 64-bit pairs `(t[i], t[i + 1])`: two gathers of eight (the second masked
-//! to the four used lanes) instead of two of sixteen. Results differ from the portable path by
-//! a few ulp (the Newton step's rounding, amplified by `σ_tr s` in the exponential; tested to
-//! 2e-5 relative); lanes do not interact, so a single estimate, a batch of four points and a
+//! and division per pole become one `vrsqrt14ps` and a Newton step (`s` and `1 / s³` from it),
+//! its exponential a fitted `2^t` scaled by `vscalefps`, and PBD's table is read as 64-bit
+//! pairs `(t[i], t[i + 1])`: two gathers of eight (the second masked to the four used lanes)
+//! instead of two of sixteen. Results differ from the portable path by a few ulp (the Newton
+//! step's rounding, amplified by `σ_tr s` in the exponential; tested to 2e-5 relative, about
+//! 8e-6 measured); lanes do not interact, so a single estimate, a batch of four points and a
 //! batch of four receivers agree bit for bit, as the oracle needs.
 
 use super::point_kernel::{Lanes, Profile32, TABLE_LEN, WIDTH};
@@ -51,7 +51,8 @@ fn rsqrt_sqrt(x: __m512, c: __m512) -> (__m512, __m512) {
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 fn exp2_neg(t: __m512) -> __m512 {
-    const C: [f32; 6] = [1.000_000_1, 0.693_146_94, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_1];
+    const C: [f32; 6] =
+        [1.000_000_1, 0.693_146_94, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_1];
     let k = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(t);
     let f = _mm512_sub_ps(t, k);
     // Estrin's scheme: three multiply-adds deep instead of five (the estimate is latency bound).
@@ -214,7 +215,12 @@ fn unpack(v: __m512) -> [[f32; 3]; 4] {
 
 /// `A R` from one receiver's poles to four points (areas 0 pad).
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-pub(super) fn to_points(k: &Profile32, src: &ReceiverSources, p: &[Vec3; 4], area: &[f32; 4]) -> [[f32; 3]; 4] {
+pub(super) fn to_points(
+    k: &Profile32,
+    src: &ReceiverSources,
+    p: &[Vec3; 4],
+    area: &[f32; 4],
+) -> [[f32; 3]; 4] {
     let pv = load_packed(p, 12);
     let pt = [
         _mm512_permutexvar_ps(point_index(0), pv),
