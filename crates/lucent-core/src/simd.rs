@@ -9,8 +9,9 @@
 //! best it has), to compare them on one binary.
 //!
 //! Arithmetic: the vector paths fuse multiply-adds ([`Fused`]), the portable one does not
-//! ([`Separate`]), so they differ by a few ulp (about 1e-7 relative, tested); the AVX2 and
-//! AVX-512 paths do the same operations lane by lane and agree bit for bit.
+//! ([`Separate`]), so they differ by a few ulp (about 1e-7 relative, tested). The AVX-512
+//! one-point kernel is written out by hand (reciprocal square root and a Newton step instead
+//! of square roots and divisions), so it differs from the AVX2 one by a few ulp as well.
 
 use std::sync::OnceLock;
 

@@ -32,6 +32,8 @@ pub mod link_set;
 pub mod local;
 pub mod oracle;
 mod point_kernel;
+#[cfg(target_arch = "x86_64")]
+mod point_kernel_avx512;
 pub mod point_sample;
 pub mod progress;
 mod refine;

@@ -14,8 +14,9 @@
 //! instruction per operation and a hardware gather for the table.
 //!
 //! Lanes do not interact, so a single estimate, a batch of four points and a batch of four
-//! receivers give one channel the same bits on one path; the paths differ only by fused
-//! multiply-adds (see [`crate::simd`]).
+//! receivers give one channel the same bits on one path; the portable and AVX2 paths differ
+//! only by fused multiply-adds (see [`crate::simd`]). AVX-512 has its own hand-written copy
+//! without square roots and divisions ([`super::point_kernel_avx512`]).
 
 use super::point_sample::ReceiverSources;
 use crate::bssrdf::profile::TABLE_SIZE;
@@ -53,6 +54,15 @@ pub(super) struct Lanes<const W: usize> {
     /// The table's `1 / r_max` and `r_floor` (0 without a table).
     pub inv_r_max: [f32; W],
     pub r_floor: [f32; W],
+    /// For the AVX-512 kernel: `1 / r_floor` (0 without a table), `N² / r_max` (`N` the
+    /// table size), `k z` and `k z σ_tr` per pole, `-σ_tr log2 e`.
+    pub inv_r_floor: [f32; W],
+    pub x_scale: [f32; W],
+    pub kz_r: [f32; W],
+    pub kz_v: [f32; W],
+    pub kzs_r: [f32; W],
+    pub kzs_v: [f32; W],
+    pub exp2_scale: [f32; W],
     /// Where the lane's channel starts in the table.
     pub table_start: [u32; W],
 }
@@ -64,7 +74,31 @@ impl<const W: usize> Lanes<W> {
         let rep = |a: [f32; 3]| std::array::from_fn(|i| a[channel(i)]);
         let [sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor] = per_channel.map(rep);
         let table_start = std::array::from_fn(|i| (channel(i) * (TABLE_SIZE + 1)) as u32);
-        Lanes { sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor, table_start }
+        let inv_r_floor = r_floor.map(|f| if f > 0.0 { 1.0 / f } else { 0.0 });
+        let x_scale = inv_r_max.map(|v| v * (TABLE_SIZE * TABLE_SIZE) as f32);
+        let kz = |z: [f32; W]| std::array::from_fn(|i| k[i] * z[i]);
+        let (kz_r, kz_v) = (kz(z_r), kz(z_v));
+        let kzs = |kz: [f32; W]| std::array::from_fn(|i| kz[i] * sigma_tr[i]);
+        let (kzs_r, kzs_v) = (kzs(kz_r), kzs(kz_v));
+        let exp2_scale = sigma_tr.map(|s| -s * std::f32::consts::LOG2_E);
+        Lanes {
+            sigma_tr,
+            z_r,
+            z_v,
+            k,
+            off_r,
+            off_v,
+            inv_r_max,
+            r_floor,
+            inv_r_floor,
+            x_scale,
+            kz_r,
+            kz_v,
+            kzs_r,
+            kzs_v,
+            exp2_scale,
+            table_start,
+        }
     }
 }
 
@@ -276,4 +310,5 @@ macro_rules! isa_kernels {
 }
 
 isa_kernels!(avx2, "avx2,fma,f16c");
-isa_kernels!(avx512, "avx512f,avx512vl,avx2,fma,f16c");
+#[cfg(target_arch = "x86_64")]
+pub(super) use super::point_kernel_avx512 as avx512;

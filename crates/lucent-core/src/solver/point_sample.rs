@@ -260,10 +260,10 @@ mod tests {
     }
 
     /// Every instruction set against the portable path on random points, for every profile
-    /// (Mertens' normal placement, the distance-form dipole with single scattering, PBD), and
-    /// the vector paths against each other bit for bit. Tolerance 2e-5 relative: fusing
-    /// rounds `σ_tr s` differently, and one ulp of it is up to 87 ulp of `e^{-σ_tr s}`; 1e-30
-    /// absolute for results that underflow to subnormals.
+    /// (Mertens' normal placement, the distance-form dipole with single scattering, PBD).
+    /// Tolerance 2e-5 relative: fusing (and AVX-512's Newton-step `1 / s`) rounds `σ_tr s`
+    /// differently, and one ulp of it is up to 87 ulp of `e^{-σ_tr s}`; 1e-30 absolute for
+    /// results that underflow to subnormals. Prints the worst relative difference.
     #[test]
     fn vector_paths_match_the_portable_one() {
         use crate::bssrdf::ProfileKind;
@@ -283,10 +283,9 @@ mod tests {
             for kind in ProfileKind::ALL {
                 let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
                 let scalar = DipoleF32::new(&dip).with_isa(Isa::Scalar);
-                let mut first_vector: Option<Vec<[[f32; 3]; 4]>> = None;
                 for isa in Isa::available().into_iter().skip(1) {
                     let d = DipoleF32::new(&dip).with_isa(isa);
-                    let mut got_all = vec![];
+                    let mut worst = 0.0f32;
                     for &(x_o, n_o, p) in &trials {
                         let src = ReceiverSources::new(&d, x_o, n_o);
                         let area = [1e-3, 2e-3, 5e-4, 1e-3];
@@ -299,6 +298,9 @@ mod tests {
                             assert_eq!(from[j], got[1]);
                             for c in 0..3 {
                                 let (g, w) = (got[j][c], want[j][c]);
+                                if w.abs() > 1e-30 && g.is_finite() {
+                                    worst = worst.max((g - w).abs() / w.abs());
+                                }
                                 assert!(
                                     (g - w).abs() <= 2e-5 * w.abs() + 1e-30
                                         || (g.is_infinite() && w.is_infinite()),
@@ -306,12 +308,8 @@ mod tests {
                                 );
                             }
                         }
-                        got_all.push(got);
                     }
-                    match &first_vector {
-                        None => first_vector = Some(got_all),
-                        Some(v) => assert!(v.iter().zip(&got_all).all(|(a, b)| a == b), "{kind} {isa:?}"),
-                    }
+                    eprintln!("{name} {kind} {isa:?}: worst relative difference {worst:e}");
                 }
             }
         }
