@@ -133,14 +133,14 @@ pub fn parse_on_off(s: &str) -> Result<bool, String> {
 }
 
 /// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
-/// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
+/// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
 /// steradians). Every threshold must be a positive, finite number; the rest stay at their
 /// defaults ([`Oracle::default`]).
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
-    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2`";
+    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
     let (mode, counts) = match mode {
-        "transport" => (OracleMode::Transport, [0, 2, 3].as_slice()),
+        "transport" => (OracleMode::Transport, [0, 2, 3, 4, 5].as_slice()),
         "solid-angle" => (OracleMode::SolidAngle, [2].as_slice()),
         _ => return Err(format!("{usage}, got `{s}`")),
     };
@@ -165,8 +165,12 @@ pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     if let [e1, e2, ref rest @ ..] = eps[..] {
         oracle.eps1 = e1;
         oracle.eps2 = e2;
-        if let [abs] = *rest {
-            oracle.eps_abs = abs;
+        for (k, &v) in rest.iter().enumerate() {
+            match k {
+                0 => oracle.eps_abs = v,
+                1 => oracle.eps_share = v,
+                _ => oracle.irradiance_contrast = v.min(1.0),
+            }
         }
     }
     Ok(oracle)
@@ -577,6 +581,8 @@ mod tests {
             (OracleMode::Transport, 0.5, 0.2, Oracle::default().eps_abs)
         );
         assert_eq!(parse_oracle("transport:0.5,0.2,1e-3").unwrap().eps_abs, 1e-3);
+        let o = parse_oracle("transport:0.5,0.2,1e-3,0.01,0.5").unwrap();
+        assert_eq!((o.eps_abs, o.eps_share, o.irradiance_contrast), (1e-3, 0.01, 0.5));
         let o = parse_oracle("solid-angle:0.02,0.05").unwrap();
         assert_eq!((o.mode, o.eps1, o.eps2), (OracleMode::SolidAngle, 0.02, 0.05));
         assert_eq!(o.eps_near_cluster, Oracle::default().eps_near_cluster);
