@@ -358,8 +358,13 @@ fn measure(
         exact_ms,
         threads: rayon::current_num_threads(),
         oracle: format!(
-            "{:?}:{},{},{},{}",
-            oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs, oracle.eps_share
+            "{:?}:{},{},{},{},{}",
+            oracle.mode,
+            oracle.eps1,
+            oracle.eps2,
+            oracle.eps_abs,
+            oracle.eps_share,
+            oracle.irradiance_contrast
         )
         .to_lowercase(),
     })
