@@ -133,14 +133,15 @@ pub fn parse_on_off(s: &str) -> Result<bool, String> {
 }
 
 /// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
-/// `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε` in
-/// steradians). Every threshold must be a positive, finite number; the rest stay at their
+/// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` (`CONTRAST`, the oracle's
+/// `irradiance_contrast`, is capped at 1) or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε`
+/// in steradians). Every threshold must be a positive, finite number; the rest stay at their
 /// defaults ([`Oracle::default`]).
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
-    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS]` or `solid-angle:EPS1,EPS2`";
+    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
     let (mode, counts) = match mode {
-        "transport" => (OracleMode::Transport, [0, 2, 3].as_slice()),
+        "transport" => (OracleMode::Transport, [0, 2, 3, 4, 5].as_slice()),
         "solid-angle" => (OracleMode::SolidAngle, [2].as_slice()),
         _ => return Err(format!("{usage}, got `{s}`")),
     };
@@ -163,11 +164,11 @@ pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     }
     let mut oracle = Oracle { mode, ..Oracle::default() };
     if let [e1, e2, ref rest @ ..] = eps[..] {
-        oracle.eps1 = e1;
-        oracle.eps2 = e2;
-        if let [abs] = *rest {
-            oracle.eps_abs = abs;
-        }
+        (oracle.eps1, oracle.eps2) = (e1, e2);
+        let mut rest = rest.iter().copied();
+        oracle.eps_abs = rest.next().unwrap_or(oracle.eps_abs);
+        oracle.eps_share = rest.next().unwrap_or(oracle.eps_share);
+        oracle.irradiance_contrast = rest.next().map_or(oracle.irradiance_contrast, |v| v.min(1.0));
     }
     Ok(oracle)
 }
@@ -280,10 +281,10 @@ pub struct RenderArgs {
     /// 0..=9; that wrapped mesh is what is solved and rendered).
     #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
     pub hierarchy: HierarchyChoice,
-    /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default:
-    /// one-point transport estimates at the profile's default thresholds, ε1 = 0.1, ε2 = 0.03,
-    /// ε_abs = 3e-4 for pbd and dipole, 0.3, 0.1, 1e-3 for mertens, within 1% of the exact
-    /// solve on the bunny), `transport:EPS1,EPS2[,EPS_ABS]`, or the paper's solid angles
+    /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default: the
+    /// profile's thresholds, ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 for pbd and dipole, 0.3, 0.1,
+    /// 1e-3 for mertens, ε_share = 0, contrast 1, within 1% of exact on the bunny),
+    /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`, or the paper's solid angles
     /// `solid-angle:EPS1,EPS2` (steradians). Larger thresholds: fewer links, faster, less
     /// accurate (`lucent bench solver --sweep` measures the trade).
     #[arg(long, default_value = "transport", value_parser = parse_oracle)]
@@ -576,7 +577,8 @@ mod tests {
             (o.mode, o.eps1, o.eps2, o.eps_abs),
             (OracleMode::Transport, 0.5, 0.2, Oracle::default().eps_abs)
         );
-        assert_eq!(parse_oracle("transport:0.5,0.2,1e-3").unwrap().eps_abs, 1e-3);
+        let o = parse_oracle("transport:0.5,0.2,1e-3,0.01,0.5").unwrap();
+        assert_eq!((o.eps_abs, o.eps_share, o.irradiance_contrast), (1e-3, 0.01, 0.5));
         let o = parse_oracle("solid-angle:0.02,0.05").unwrap();
         assert_eq!((o.mode, o.eps1, o.eps2), (OracleMode::SolidAngle, 0.02, 0.05));
         assert_eq!(o.eps_near_cluster, Oracle::default().eps_near_cluster);

@@ -143,6 +143,8 @@ impl HierarchicalSolver {
     pub fn link(&mut self) -> SolveStats {
         let t0 = Instant::now();
         self.start_progress("link");
+        // A link from scratch reads nothing of the old set: free it before the new one grows.
+        self.links = None;
         let mut stats = self.relink(None);
         stats.link_ms = ms(t0.elapsed());
         stats.total_ms = stats.link_ms;

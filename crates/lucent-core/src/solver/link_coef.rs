@@ -68,7 +68,7 @@ pub fn receiver_scale(max: f32) -> f32 {
 /// A link's transport coefficient per channel (unitless, `F(E, x_R)` of Mertens eq. 6) as
 /// IEEE half floats relative to its receiver's scale (see the module documentation); the
 /// fourth lane is 0, so that eight aligned bytes load into one register.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
 #[repr(C, align(8))]
 pub struct LinkCoef([u16; 4]);
 

@@ -265,8 +265,12 @@ impl LinkSet {
     /// relink), the chunks' kept subtrees take `old`'s runs: those in its base by reference,
     /// those in its delta by copy. `spare`'s buffers are reused. `clusters` is the hierarchy's
     /// size.
+    ///
+    /// Without `old` (a link from scratch, where the chunks hold every link), each chunk's
+    /// buffers are freed once copied, and fresh delta buffers are zeroed lazily (mapped on
+    /// first write), so the links are held about once, not twice, at the peak.
     pub(crate) fn build(
-        chunks: &[LinkChunk],
+        chunks: &mut [LinkChunk],
         old: Option<&LinkSet>,
         spare: Option<LinkSet>,
         clusters: usize,
@@ -284,21 +288,21 @@ impl LinkSet {
         let own_links: usize = chunks.iter().map(|c| c.emitter.len()).sum();
         let own_cands: usize = chunks.iter().map(|c| c.cands.len()).sum();
         let d = &mut set.delta;
-        d.emitter.resize(own_links, 0);
-        d.coef.resize(own_links, LinkCoef::default());
-        d.dirty.resize(own_links, false);
-        d.cands.resize(own_cands, 0);
+        grow_zeroed(&mut d.emitter, own_links);
+        grow_zeroed(&mut d.coef, own_links);
+        grow_zeroed(&mut d.dirty, own_links);
+        grow_zeroed(&mut d.cands, own_cands);
+        let release = old.is_none();
         let (mut e, mut f, mut k, mut q) =
             (&mut d.emitter[..], &mut d.coef[..], &mut d.dirty[..], &mut d.cands[..]);
         let mut parts = Vec::with_capacity(chunks.len());
         let (mut at_link, mut at_cand) = (0, 0);
-        for c in chunks {
+        for c in chunks.iter_mut() {
             let (n, m) = (c.emitter.len(), c.cands.len());
             let (e0, e1) = std::mem::take(&mut e).split_at_mut(n);
             let (f0, f1) = std::mem::take(&mut f).split_at_mut(n);
             let (k0, k1) = std::mem::take(&mut k).split_at_mut(n);
             let (q0, q1) = std::mem::take(&mut q).split_at_mut(m);
-            parts.push((c, e0, f0, k0, q0));
             (e, f, k, q) = (e1, f1, k1, q1);
             let mut j = at_link;
             for r in &c.receivers {
@@ -314,16 +318,20 @@ impl LinkSet {
                 j += n as usize;
             }
             (at_link, at_cand) = (at_link + n, at_cand + m);
+            parts.push((c, e0, f0, k0, q0));
         }
         parts.into_par_iter().for_each(|(c, e, f, k, q)| {
             e.copy_from_slice(&c.emitter);
             f.copy_from_slice(&c.coef);
             k.copy_from_slice(&c.dirty);
             q.copy_from_slice(&c.cands);
+            if release {
+                *c = LinkChunk { key: c.key, ..LinkChunk::default() };
+            }
         });
         // Kept subtrees: runs in the old base are shared, runs in the old delta copied.
         if let Some(old) = old {
-            for c in chunks {
+            for c in chunks.iter() {
                 for &(a, z) in &c.kept {
                     for r in a as usize..z as usize {
                         let (l, m) = (old.links[r], old.cands[r]);
@@ -373,6 +381,31 @@ impl LinkSet {
             self.base = Arc::new(flat);
             self.delta.clear();
         }
+    }
+}
+
+/// Resizes `v` to `n` default (all-zero) elements; where it must grow, into a fresh zeroed
+/// allocation, which the allocator maps lazily, instead of writing every element.
+fn grow_zeroed<T: Copy + Default + bytemuck::Zeroable>(v: &mut Vec<T>, n: usize) {
+    if v.capacity() >= n {
+        v.clear();
+        v.resize(n, T::default());
+        return;
+    }
+    *v = Vec::new();
+    if n == 0 || size_of::<T>() == 0 {
+        return;
+    }
+    let layout = std::alloc::Layout::array::<T>(n).expect("link buffers fit in memory");
+    // SAFETY: the layout has non-zero size; `T: Zeroable`, so zeroed memory holds `n` valid
+    // `T`s, and the pointer comes from the global allocator with `Vec`'s layout for capacity
+    // `n`.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout) as *mut T;
+        if p.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        *v = Vec::from_raw_parts(p, n, n);
     }
 }
 

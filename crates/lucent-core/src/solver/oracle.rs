@@ -86,13 +86,30 @@ pub struct Oracle {
     /// this are accepted whatever their relative error, so negligible far transport stays
     /// coarse. Default 1e-3.
     pub eps_abs: f32,
+    /// [`OracleMode::Transport`] only: share-weighted error allowance per link (unitless, 0
+    /// and up). A link carrying the share `s = F / R_d_total` of its receiver's total may also
+    /// err by `eps_share sqrt(s) R_d_total`: errors of many links of unrelated sign add in
+    /// quadrature, and `Σ (eps_share sqrt(s_l))² = eps_share² Σ s_l ≈ eps_share²`, so the
+    /// receiver's total still errs by about `eps_share` relative, while links with a small
+    /// share of it stay coarser (hierarchical radiosity's "BF" refinement, with the
+    /// receiver's total standing in for `B`). Default 0 (off).
+    pub eps_share: f32,
+    /// [`OracleMode::Transport`] only: the relative variation of irradiance over an emitter
+    /// cluster that the emitter test guards against (0..1). A point-sample link spreads the
+    /// emitter's average irradiance, which errs by the transport's deviation from area
+    /// weighting over `E`'s children times the irradiance's deviation from its average; 1
+    /// bounds the latter by the irradiance itself (a shadow edge across every emitter).
+    /// Default 1.
+    pub irradiance_contrast: f32,
 }
 
 impl Oracle {
     /// The default oracle for profile `kind`: [`Oracle::default`] for Mertens' dipole; for the
     /// distance-form profiles (`dipole`, `pbd`) tighter emitter and absolute thresholds, which
     /// they need to stay near 1% of the exact solve on the bunny at 1 cm (measured with
-    /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`).
+    /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`; that
+    /// test has no room for `eps_share` or `irradiance_contrast`: either pushes the 1 cm cases
+    /// past 1%).
     pub fn for_profile(kind: ProfileKind) -> Oracle {
         match kind {
             ProfileKind::Mertens => Oracle::default(),
@@ -113,6 +130,8 @@ impl Default for Oracle {
             min_flatness: 0.98,
             eps_normal: 0.05,
             eps_abs: 1e-3,
+            eps_share: 0.0,
+            irradiance_contrast: 1.0,
         }
     }
 }
@@ -180,8 +199,8 @@ pub(crate) struct ReceiverView {
     /// `1 / R_d_total` per channel.
     pub inv_rtot: [f32; 3],
     /// Bound on how far the receiver's leaves' normals stray from its average normal (0 for a
-    /// face, up to 2): the leaves' dipole sources lie within `radius + spread z` of the
-    /// receiver's own sources.
+    /// face, up to 2; 0 for the distance form, whose poles do not move with the normal): the
+    /// leaves' dipole sources lie within `radius + spread z` of the receiver's own sources.
     pub spread: f32,
 }
 
@@ -195,8 +214,15 @@ impl ReceiverView {
             child_src[k] = ReceiverSources::new(d, cg.midpoint, cg.normal);
         }
         // `sqrt(2 (1 - A'/A))` is an RMS normal deviation; twice it stands in for the maximum.
-        let spread =
-            if h.nodes[r].is_leaf() { 0.0 } else { (2.0 * (2.0 * (1.0 - g.flatness())).sqrt()).min(2.0) };
+        // The distance form's poles sit at the receiver point whatever its normal, so its
+        // leaves' poles lie within the radius of the receiver's (`clear_of`'s `base`): a margin
+        // of `spread z` (`z_v` a few faces across on a scanned mesh) kept every noisy cluster
+        // from linking its neighbourhood, at every resolution.
+        let spread = if h.nodes[r].is_leaf() || d.normal_weight == 0.0 {
+            0.0
+        } else {
+            (2.0 * (2.0 * (1.0 - g.flatness())).sqrt()).min(2.0)
+        };
         ReceiverView { src, child_src, inv_rtot, spread }
     }
 }
@@ -258,11 +284,14 @@ impl Samples {
 }
 
 impl Oracle {
-    /// Whether the error estimate `err` of transport `f` is within `eps_rel f + eps_abs R_tot`
-    /// in every channel.
+    /// Whether the error estimate `err` of transport `f` is within
+    /// `eps_rel f + eps_share sqrt(f R_tot) + eps_abs R_tot` in every channel.
     #[inline]
     fn within(&self, err: [f32; 3], f: [f32; 3], eps_rel: f32, inv_rtot: [f32; 3]) -> bool {
-        (0..3).all(|c| err[c] * inv_rtot[c] <= eps_rel * f[c] * inv_rtot[c] + self.eps_abs)
+        (0..3).all(|c| {
+            let s = f[c] * inv_rtot[c];
+            err[c] * inv_rtot[c] <= eps_rel * s + self.eps_share * s.max(0.0).sqrt() + self.eps_abs
+        })
     }
 
     /// The decision for receiver `r` and emitter `e` (cluster indices of `h`); `view` is
@@ -538,10 +567,11 @@ impl Oracle {
         let mut err = [0.0f32; 3];
         let inv_a = if eg.area > 0.0 { 1.0 / eg.area } else { 0.0 };
         for c in 0..3 {
-            err[c] = (f[c] - sum[c]).abs();
+            let mut spread = 0.0;
             for j in 0..en.child_count as usize {
-                err[c] += (fk[j][c] - areas[j] * inv_a * sum[c]).abs();
+                spread += (fk[j][c] - areas[j] * inv_a * sum[c]).abs();
             }
+            err[c] = (f[c] - sum[c]).abs() + self.irradiance_contrast * spread;
         }
         // Keep a better estimate for the link: R_d is convex, so one-point estimates fall short
         // systematically, by ~ area x extent² (midpoint rule); k children of 1/k the area each

@@ -123,8 +123,7 @@ impl ReceiverSources {
     /// Whether every pole is farther from `p` than `margin + base + spread z` (its own `z`;
     /// distances include the distance form's added `z²`): the poles of all points within
     /// `base` of the receiver point whose normals stray by at most `spread` stay `margin` away
-    /// from `p`. The distance form keeps the `spread z` margin although its poles do not move
-    /// with the normal: a curved receiver's leaves lie off its midpoint by about that much.
+    /// from `p` (the distance form's poles do not move with the normal: callers pass 0).
     #[inline]
     pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
         (0..3).all(|c| {

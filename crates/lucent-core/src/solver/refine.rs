@@ -352,8 +352,13 @@ impl HierarchicalSolver {
         }
         // The set the last update replaced lends its buffers, already paged in: large fresh
         // allocations are mapped anew by the allocator and fault on first touch.
-        let set = LinkSet::build(&chunks, reuse.map(|u| u.old), self.spare.take(), h.len());
-        self.chunk_pool.put(chunks);
+        let set = LinkSet::build(&mut chunks, reuse.map(|u| u.old), self.spare.take(), h.len());
+        // After a link from scratch the chunks are emptied shells: an incremental relink's
+        // chunks hold only what changed, so sizing them for every link would hold the links
+        // twice.
+        if reuse.is_some() {
+            self.chunk_pool.put(chunks);
+        }
         stats.links = set.len();
         self.links = Some(set);
         self.bound = None;

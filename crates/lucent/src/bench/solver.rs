@@ -81,7 +81,12 @@ pub fn run(json: bool, sweep: bool, table5: bool, oracle: Option<Oracle>) -> any
 fn oracle_name(o: &Oracle) -> String {
     match o.mode {
         OracleMode::SolidAngle => format!("solid-angle eps1={} eps2={}", o.eps1, o.eps2),
-        OracleMode::Transport => format!("transport eps1={} eps2={} eps_abs={}", o.eps1, o.eps2, o.eps_abs),
+        OracleMode::Transport => {
+            format!(
+                "transport eps1={} eps2={} eps_abs={} eps_share={}",
+                o.eps1, o.eps2, o.eps_abs, o.eps_share
+            )
+        }
     }
 }
 

@@ -357,7 +357,15 @@ fn measure(
         max_rel_err,
         exact_ms,
         threads: rayon::current_num_threads(),
-        oracle: format!("{:?}:{},{},{}", oracle.mode, oracle.eps1, oracle.eps2, oracle.eps_abs)
-            .to_lowercase(),
+        oracle: format!(
+            "{:?}:{},{},{},{},{}",
+            oracle.mode,
+            oracle.eps1,
+            oracle.eps2,
+            oracle.eps_abs,
+            oracle.eps_share,
+            oracle.irradiance_contrast
+        )
+        .to_lowercase(),
     })
 }
