@@ -530,6 +530,8 @@ impl FrameSession {
         let oracle_changed = changes.oracle || s.oracle != oracle;
         let relink = moved || profile_changed || oracle_changed;
         s.oracle = oracle;
+        // Render mode never updates its links incrementally: it stores no candidates.
+        s.keep_candidates = mode != SolveMode::Render;
         let solution = match mode {
             SolveMode::OnTheFly => {
                 if moved {

@@ -160,6 +160,28 @@ fn accuracy_against_exact() {
 /// Incremental mode after a deformation matches a from-scratch on-the-fly solve of the
 /// deformed mesh; with a budget on form factor evaluations it converges to it over frames.
 #[test]
+fn links_without_candidates_render_the_same_and_relink_before_an_update() {
+    let mesh = blob(3);
+    let h = face_cluster::build(&mesh);
+    let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
+    let e = face_irradiance(&mesh, &point_light(), &d.entry);
+    let mut with = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
+    let mut without = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
+    without.keep_candidates = false;
+    assert_eq!(with.link().links, without.link().links);
+    assert_eq!(with.solve_render(&e).face_b, without.solve_render(&e).face_b);
+    // An update over links made without candidates links from scratch on the new shape, which
+    // is what an update from unmoved links gives too.
+    let bumped: Vec<Vec3> =
+        mesh.positions.iter().map(|p| *p + Vec3::X * 0.1 * (-p.length_squared()).exp()).collect();
+    with.update_incremental(&bumped, None);
+    without.update_incremental(&bumped, None);
+    assert!(without.keep_candidates, "the update turns candidates back on");
+    let (a, b) = (with.solve_render(&e).face_b, without.solve_render(&e).face_b);
+    assert!(rel_rmse(&a, &b) < 1e-3, "{}", rel_rmse(&a, &b));
+}
+
+#[test]
 fn incremental_matches_on_the_fly_after_deformation() {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);

@@ -361,6 +361,7 @@ impl HierarchicalSolver {
         }
         stats.links = set.len();
         self.links = Some(set);
+        self.links_have_candidates = self.keep_candidates;
         self.bound = None;
         stats
     }
@@ -439,10 +440,12 @@ impl HierarchicalSolver {
                 // ancestor cannot have kept a range, as it would be unmoved and clean too).
                 debug_assert!(kept.is_empty());
                 fresh.extend(cands.iter());
-                let start = chunk.cands.len();
-                chunk.cands.extend_from_slice(cands.emitters);
-                chunk.cands[start..].sort_unstable();
-                chunk.cand_count.push((r as u32, cands.emitters.len() as u32));
+                if self.keep_candidates {
+                    let start = chunk.cands.len();
+                    chunk.cands.extend_from_slice(cands.emitters);
+                    chunk.cands[start..].sort_unstable();
+                    chunk.cand_count.push((r as u32, cands.emitters.len() as u32));
+                }
             }
         }
         let mut defer = Deferred::default();
