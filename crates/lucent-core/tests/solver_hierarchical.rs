@@ -64,12 +64,19 @@ fn point_light() -> [Light; 1] {
     [Light::Point { position: Vec3::new(2.0, 3.0, 1.5), intensity: Vec3::splat(10.0) }]
 }
 
-#[test]
-fn render_mode_equals_on_the_fly() {
+/// The level-3 blob in marble at 5 cm under [`point_light`]: mesh, hierarchy, profile and
+/// face irradiance.
+fn marble_blob() -> (Mesh, lucent_core::hierarchy::Hierarchy, Dipole, Vec<Rgb>) {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
     let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
     let e = face_irradiance(&mesh, &point_light(), &d.entry);
+    (mesh, h, d, e)
+}
+
+#[test]
+fn render_mode_equals_on_the_fly() {
+    let (mesh, h, d, e) = marble_blob();
     let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::default());
     let otf = s.solve_on_the_fly(&e);
     let link_stats = s.link();
@@ -157,14 +164,11 @@ fn accuracy_against_exact() {
     }
 }
 
-/// Incremental mode after a deformation matches a from-scratch on-the-fly solve of the
-/// deformed mesh; with a budget on form factor evaluations it converges to it over frames.
+/// Render mode's links without candidate emitters are the same links; an incremental update
+/// over them relinks with candidates.
 #[test]
 fn links_without_candidates_render_the_same_and_relink_before_an_update() {
-    let mesh = blob(3);
-    let h = face_cluster::build(&mesh);
-    let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
-    let e = face_irradiance(&mesh, &point_light(), &d.entry);
+    let (mesh, h, d, e) = marble_blob();
     let mut with = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     let mut without = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     without.keep_candidates = false;
@@ -181,6 +185,8 @@ fn links_without_candidates_render_the_same_and_relink_before_an_update() {
     assert!(rel_rmse(&a, &b) < 1e-3, "{}", rel_rmse(&a, &b));
 }
 
+/// Incremental mode after a deformation matches a from-scratch on-the-fly solve of the
+/// deformed mesh; with a budget on form factor evaluations it converges to it over frames.
 #[test]
 fn incremental_matches_on_the_fly_after_deformation() {
     let mesh = blob(3);

@@ -90,7 +90,7 @@ pub struct HierarchicalSolver {
     /// Record each receiver's candidate emitters while linking: what an incremental update
     /// reuses, about 5.5 bytes per link (a quarter of a link set). Off for render-only use
     /// (the frame session turns it off in render mode); an incremental update over links made
-    /// without them links from scratch first. Default true.
+    /// without them turns it back on and links from scratch first. Default true.
     pub keep_candidates: bool,
     /// Whether the stored links were made with their candidates.
     pub(super) links_have_candidates: bool,
