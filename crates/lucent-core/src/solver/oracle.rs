@@ -290,7 +290,9 @@ impl Oracle {
     fn within(&self, err: [f32; 3], f: [f32; 3], eps_rel: f32, inv_rtot: [f32; 3]) -> bool {
         (0..3).all(|c| {
             let s = f[c] * inv_rtot[c];
-            err[c] * inv_rtot[c] <= eps_rel * s + self.eps_share * s.max(0.0).sqrt() + self.eps_abs
+            // Off by default: no square root per decision then.
+            let share = if self.eps_share > 0.0 { self.eps_share * s.max(0.0).sqrt() } else { 0.0 };
+            err[c] * inv_rtot[c] <= eps_rel * s + share + self.eps_abs
         })
     }
 
