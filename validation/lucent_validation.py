@@ -148,7 +148,7 @@ def mitsuba_scene(cfg, case, max_depth, interior):
         emitter = {"type": "constant", "radiance": {"type": "rgb", "value": [cfg["sky_radiance"]] * 3}}
     return {
         "type": "scene",
-        "integrator": {"type": "volpath", "max_depth": max_depth, "rr_depth": 100000},
+        "integrator": {"type": cfg.get("integrator", "volpath"), "max_depth": max_depth, "rr_depth": 100000},
         "sensor": {"type": "perspective", "fov": fov, "fov_axis": "y",
                    "to_world": mi.ScalarTransform4f().look_at(origin=(eye * s).tolist(), target=(centre * s).tolist(), up=[0, 1, 0]),
                    "film": {"type": "hdrfilm", "width": w, "height": h, "pixel_format": "rgba",
@@ -184,7 +184,7 @@ def cmd_reference(cfg, only):
         for k, v in parts.items():
             write_exr(os.path.join(REFS, f"{case['name']}.{k}.exr"), v)
         manifest[case["name"]] = {"spp_per_half": spp, "seeds": {"half_a": 1, "half_b": 2, "single": 3, "surface": 4},
-                                  "mitsuba": mi.__version__, "variant": "scalar_rgb", "seconds": round(time.time() - t0, 1)}
+                                  "mitsuba": mi.__version__, "variant": "scalar_rgb", "integrator": cfg.get("integrator", "volpath"), "seconds": round(time.time() - t0, 1)}
         json.dump(manifest, open(manifest_path, "w"), indent=1, sort_keys=True)
         print(f"{case['name']}: {time.time() - t0:.0f} s", flush=True)
 
@@ -301,7 +301,7 @@ def heat_map(path, ours, ref, mask):
     mi.util.write_bitmap(path, (np.clip(img, 0, 1) * 255).astype(np.uint8))
 
 
-def cmd_compare(cfg, profiles, out_dir, as_json, write_bounds, reuse=False):
+def cmd_compare(cfg, profiles, out_dir, as_json, write_bounds, reuse=False, extra=()):
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     os.makedirs(out_dir, exist_ok=True)
@@ -314,7 +314,7 @@ def cmd_compare(cfg, profiles, out_dir, as_json, write_bounds, reuse=False):
             out = os.path.join(out_dir, f"{case['name']}.{profile}.exr")
             if not (reuse and os.path.exists(out)):
                 subprocess.run([lucent, "render", "--scene", os.path.join(SCENES, case["name"] + ".toml"), "--profile", profile,
-                                "--width", str(w), "--height", str(h), "--no-surface", "--out", out],
+                                "--width", str(w), "--height", str(h), "--no-surface", "--out", out, *extra],
                                check=True, capture_output=True)
             ours = read_exr(out)
             # lucent's coverage decides: Mitsuba's alpha is 1 everywhere under a constant sky and
@@ -370,6 +370,7 @@ def main():
     c.add_argument("--json", action="store_true")
     c.add_argument("--write-bounds", action="store_true", help="record the first profile's figures (+ margins) in bounds.json")
     c.add_argument("--reuse", action="store_true", help="compare the images an earlier run left in --out instead of rendering")
+    c.add_argument("--lucent-args", default="", help="more `lucent render` arguments, e.g. '--single-scattering profile'")
     args = p.parse_args()
     cfg = load_cases()
     if args.cmd == "scenes":
@@ -380,7 +381,7 @@ def main():
     elif args.cmd == "reference":
         cmd_reference(cfg, set(args.cases))
     else:
-        cmd_compare(cfg, args.profiles.split(","), args.out, args.json, args.write_bounds, args.reuse)
+        cmd_compare(cfg, args.profiles.split(","), args.out, args.json, args.write_bounds, args.reuse, args.lucent_args.split())
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@
 //! [`FrameSession::environment`] from it.
 
 use crate::Rgb;
-use crate::bssrdf::{Dipole, Material, ProfileKind};
+use crate::bssrdf::Dipole;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering, interreflection};
@@ -27,6 +27,9 @@ use crate::solver::{self, HierarchicalSolver, Oracle, Progress};
 use glam::Vec3;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod transport;
+pub use transport::Transport;
 
 /// How the subsurface transport is computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -107,40 +110,6 @@ fn parse_name<T: Copy>(s: &str, all: &[T], name: fn(T) -> &'static str, what: &s
     })
 }
 
-/// The material at its size, which together decide the diffusion profile.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Transport {
-    /// Scattering coefficients (mm⁻¹) and relative index of refraction.
-    pub material: Material,
-    /// Model scale: the rest mesh's largest bounding-box side, metres (> 0).
-    pub scale_m: f64,
-    /// Diffusion profile (default [`ProfileKind::default`], photon beam diffusion).
-    pub profile: ProfileKind,
-    /// Whether the single-scattering term is included (`pbd`, `dipole`; `mertens` has none).
-    pub single_scattering: bool,
-}
-
-impl Transport {
-    /// `material` at `scale_m` metres with the default profile and its single-scattering
-    /// default.
-    pub fn new(material: Material, scale_m: f64) -> Self {
-        let profile = ProfileKind::default();
-        Transport { material, scale_m, profile, single_scattering: profile.single_scattering_by_default() }
-    }
-
-    /// The profile in the units of a mesh whose largest bounding-box side is `extent` mesh
-    /// units (tabulated profiles cost tens of milliseconds: made only when this changes).
-    pub fn dipole(&self, extent: f32) -> Dipole {
-        Dipole::profile_for_model_scale(
-            &self.material,
-            extent as f64,
-            self.scale_m,
-            self.profile,
-            self.single_scattering,
-        )
-    }
-}
-
 /// How the session solves, besides the material and the light.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameSettings {
@@ -169,6 +138,8 @@ pub struct Timings {
     pub pull_ms: f64,
     /// Gathering along the links (the whole O(N²) sum for the exact solver).
     pub gather_ms: f64,
+    /// Single scattering along the view ray (`shading::single_scattering`).
+    pub single_scattering_ms: f64,
     /// Pushing `B` down to the leaves, bounces and the per-vertex average.
     pub push_ms: f64,
 }
@@ -176,7 +147,12 @@ pub struct Timings {
 impl Timings {
     /// Sum of the stages, milliseconds.
     pub fn total_ms(&self) -> f64 {
-        self.irradiance_ms + self.link_ms + self.pull_ms + self.gather_ms + self.push_ms
+        self.irradiance_ms
+            + self.link_ms
+            + self.pull_ms
+            + self.gather_ms
+            + self.push_ms
+            + self.single_scattering_ms
     }
 }
 
@@ -204,13 +180,19 @@ struct Changes {
     light: bool,
     oracle: bool,
     method: bool,
+    /// The eye moved (only view-ray single scattering depends on it).
+    view: bool,
 }
 
 impl Changes {
     fn all() -> Self {
-        Changes { geometry: true, transport: true, light: true, oracle: true, method: true }
+        Changes { geometry: true, transport: true, light: true, oracle: true, method: true, view: true }
     }
     fn any(&self) -> bool {
+        self.solve() || self.view
+    }
+    /// Whether the per-face solve must run.
+    fn solve(&self) -> bool {
         self.geometry || self.transport || self.light || self.oracle || self.method
     }
 
@@ -222,6 +204,7 @@ impl Changes {
             light: self.light || o.light,
             oracle: self.oracle || o.oracle,
             method: self.method || o.method,
+            view: self.view || o.view,
         }
     }
 }
@@ -249,6 +232,10 @@ pub struct FrameSession {
     irradiance: Vec<Entering>,
     /// Per-face entry factors of a texture (`sqrt` of its colour over the face), if any.
     entry: Option<Vec<Rgb>>,
+    /// The eye, mesh units, for view-ray single scattering (`None`: not added).
+    eye: Option<Vec3>,
+    /// `B / (c π)` per vertex of the last solve, before single scattering is added.
+    diffuse_vertex: Vec<Rgb>,
     changes: Changes,
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
@@ -283,6 +270,8 @@ impl FrameSession {
             caster: None,
             irradiance: Vec::new(),
             entry: None,
+            eye: None,
+            diffuse_vertex: Vec::new(),
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
@@ -378,6 +367,15 @@ impl FrameSession {
         }
     }
 
+    /// Sets the eye (mesh units) that view-ray single scattering is seen from; `None` leaves
+    /// it out. Only that term is recomputed when the eye moves.
+    pub fn set_eye(&mut self, eye: Option<Vec3>) {
+        if self.eye != eye {
+            self.eye = eye;
+            self.changes.view = true;
+        }
+    }
+
     /// Counts the progress of long solves (hierarchical refinement: leaves of finished receiver
     /// subtrees; exact solve: receivers) on `progress`, for a front end to poll; `None` stops.
     pub fn set_progress(&mut self, progress: Option<Arc<Progress>>) {
@@ -446,6 +444,14 @@ impl FrameSession {
             return &self.last;
         }
         let mut timings = Timings::default();
+        if !changes.solve() && self.diffuse_vertex.len() == self.mesh.positions.len() {
+            let t = Instant::now();
+            self.last.vertex_radiance = self.with_single_scattering(&self.diffuse_vertex);
+            timings.single_scattering_ms = ms_since(t);
+            self.last.timings = timings;
+            self.last.fresh = true;
+            return &self.last;
+        }
         let t = Instant::now();
         if changes.geometry || changes.light || changes.transport || self.irradiance.is_empty() {
             self.irradiance = self.face_irradiance(changes.geometry);
@@ -468,10 +474,34 @@ impl FrameSession {
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
         }
         self.irradiance = e;
-        let vertex_radiance = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
+        self.diffuse_vertex = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t);
+        let t = Instant::now();
+        let vertex_radiance = self.with_single_scattering(&self.diffuse_vertex);
+        timings.single_scattering_ms = ms_since(t);
         self.last = Solved { face_b, vertex_radiance, timings, links, fresh: true };
         &self.last
+    }
+
+    /// `diffuse` plus view-ray single scattering where the transport asks for it and an eye is
+    /// set (the shadow BVH is current: the solve refits it first).
+    fn with_single_scattering(&self, diffuse: &[Rgb]) -> Vec<Rgb> {
+        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return diffuse.to_vec() };
+        if !self.transport.single_scattering_along_view() {
+            return diffuse.to_vec();
+        }
+        let normals = self.mesh.vertex_normals();
+        let scene = shading::single_scattering::ViewRayScene {
+            mesh: &self.mesh,
+            normals: &normals,
+            bvh: caster.bvh(),
+            offset: caster.offset(),
+            dipole: &self.dipole,
+            lights: &self.lights,
+            environment: self.environment.as_ref(),
+        };
+        let ss = shading::single_scattering::view_ray_radiance(&scene, eye);
+        diffuse.iter().zip(ss).map(|(d, s)| *d + s).collect()
     }
 
     /// Fresnel-transmitted irradiance at the faces (§5.3), refitting the shadow BVH first when
@@ -479,7 +509,8 @@ impl FrameSession {
     fn face_irradiance(&mut self, moved: bool) -> Vec<Entering> {
         let shadows = self.lights.iter().any(|l| l.shadows)
             || (self.environment.is_some() && self.settings.environment_shadows);
-        let need_caster = shadows || self.settings.bounces > 0;
+        let need_caster =
+            shadows || self.settings.bounces > 0 || self.transport.single_scattering_along_view();
         match &mut self.caster {
             Some(c) if moved => {
                 c.update(&self.mesh);

@@ -3,6 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lucent_core::bssrdf::ProfileKind;
 pub use lucent_core::session::{Method, SolveMode};
+use lucent_core::shading::SingleScattering;
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
 use std::path::{Path, PathBuf};
@@ -123,13 +124,9 @@ fn rgb_within(flag: &str, s: &str, range: &std::ops::RangeInclusive<f64>) -> Res
     Ok(rgb)
 }
 
-/// `on`/`off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
-pub fn parse_on_off(s: &str) -> Result<bool, String> {
-    match s.trim().to_ascii_lowercase().as_str() {
-        "on" | "true" | "yes" | "1" => Ok(true),
-        "off" | "false" | "no" | "0" => Ok(false),
-        _ => Err(format!("expected on or off, got '{s}'")),
-    }
+/// `view`/`on`, `profile` or `off` (`--single-scattering`).
+pub fn parse_single_scattering(s: &str) -> Result<SingleScattering, String> {
+    s.parse().map_err(|e: lucent_core::shading::UnknownSingleScattering| e.to_string())
 }
 
 /// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
@@ -266,10 +263,12 @@ pub struct RenderArgs {
     /// tables). Scene key `profile`.
     #[arg(long, value_parser = parse_profile)]
     pub profile: Option<ProfileKind>,
-    /// Include the single-scattering term (`on`/`off`; default on for pbd and dipole, mertens
-    /// has none). Scene key `single_scattering`.
-    #[arg(long, value_parser = parse_on_off)]
-    pub single_scattering: Option<bool>,
+    /// Single scattering: `view` (default; also `on`: integrated along the refracted view ray
+    /// through the object, shadowed, per vertex), `profile` (PBD's tabulated term in the
+    /// diffusion profile, a function of distance only) or `off`. The mertens profile has none.
+    /// Scene key `single_scattering`.
+    #[arg(long, value_parser = parse_single_scattering)]
+    pub single_scattering: Option<SingleScattering>,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
     /// (every face against every face, O(N^2): the reference) or `htsm` (Heterogeneous
     /// Translucent Shadow Maps on the GPU, Shopf 2007).

@@ -12,7 +12,7 @@
 //! exposure = 1.0
 //! surface = true             # false: subsurface term only (no reflection, no highlight)
 //! profile = "pbd"             # diffusion profile: pbd, dipole or mertens
-//! single_scattering = true    # single scattering (pbd, dipole)
+//! single_scattering = "view"  # along the view ray (default), "profile" or "off"
 //! deform = ["twist:30"]       # twist:DEGREES, bump:x,y,z,radius,height, noise:amplitude,frequency
 //!
 //! [[light]]
@@ -57,7 +57,8 @@ pub mod gltf_material;
 mod material;
 mod resolve;
 pub mod save;
-pub use material::{CustomMaterial, MaterialSpec};
+pub use material::{CustomMaterial, MaterialSpec, SingleScatteringKey};
+
 pub use resolve::{Overrides, Scene, default_lights, orbit_lights, parse_light, parse_three};
 
 /// A scene as read from a TOML file (what [`Scene::resolve`] reads beside the flags). Every field has a default, so an empty file is the default
@@ -98,10 +99,10 @@ pub struct SceneFile {
     /// `lucent render --profile`.
     #[serde(default)]
     pub profile: Option<String>,
-    /// Whether the single-scattering term is included (default: true for `pbd` and `dipole`;
-    /// `mertens` has none), as `lucent render --single-scattering`.
+    /// Single scattering, as `lucent render --single-scattering`: `"view"` (default), `"profile"`,
+    /// `"off"`, or `true` (view) / `false` (off). `mertens` has none.
     #[serde(default)]
-    pub single_scattering: Option<bool>,
+    pub single_scattering: Option<SingleScatteringKey>,
     /// Lights (`[[light]]` tables). Default: none, and the renderer adds its default light when
     /// there is neither a light nor an environment.
     #[serde(default, rename = "light")]

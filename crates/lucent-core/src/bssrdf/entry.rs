@@ -62,11 +62,14 @@ impl Entry {
 
     /// Fresnel's transmittance times the half-space albedo ratio for reduced albedos `rho` per
     /// channel (0..=1) at relative index `eta`, split into the carried part `F_t g(μ_t)` and
-    /// the local rest (module docs). About a millisecond per channel.
-    pub fn half_space(rho: &[f64; 3], eta: f64) -> Self {
+    /// the local rest (module docs). About a millisecond per channel. `with_single`: whether
+    /// the albedo counts single scattering; without it (the profile has none, or it is computed
+    /// along the view ray, which has its own dependence on the angle) the ratio is of the
+    /// albedos less their direct single scattering, most of what rises at grazing incidence.
+    pub fn half_space(rho: &[f64; 3], eta: f64, with_single: bool) -> Self {
         let spaces: [(HalfSpace, f64, f64); 3] = std::array::from_fn(|c| {
             let hs = HalfSpace::new(rho[c], eta);
-            let normal = hs.albedo(1.0);
+            let normal = albedo_of(&hs, 1.0, with_single);
             (hs, normal, optical_extrapolation_distance(rho[c], eta))
         });
         Self::from_fn(eta, |mu_i| {
@@ -76,7 +79,7 @@ impl Entry {
             let mut carried = [0.0; 3];
             let mut local = [0.0; 3];
             for (c, (hs, normal, z_b)) in spaces.iter().enumerate() {
-                let ratio = if *normal > 1e-12 { hs.albedo(mu_t) / normal } else { 1.0 };
+                let ratio = if *normal > 1e-12 { albedo_of(hs, mu_t, with_single) / normal } else { 1.0 };
                 let g = ((mu_t + z_b) / (1.0 + z_b)).min(ratio);
                 carried[c] = f_t * g;
                 local[c] = f_t * (ratio - g);
@@ -123,6 +126,12 @@ impl Entry {
     pub fn local_band_weights(&self, c: usize) -> [f32; 3] {
         self.local_bands[c]
     }
+}
+
+/// The half-space albedo at refracted cosine `mu_t`, with or without its direct single
+/// scattering.
+fn albedo_of(hs: &HalfSpace, mu_t: f64, with_single: bool) -> f64 {
+    if with_single { hs.albedo(mu_t) } else { hs.albedo(mu_t) - hs.single_albedo(mu_t) }
 }
 
 /// A table over `μ = k / SAMPLES` at `mu` (clamped to 0..1), linearly.
@@ -182,7 +191,7 @@ mod tests {
 
     #[test]
     fn oblique_light_returns_more_and_normal_light_is_unchanged() {
-        let e = Entry::half_space(&[0.3, 0.9, 0.99], 1.0);
+        let e = Entry::half_space(&[0.3, 0.9, 0.99], 1.0, true);
         let normal = e.at(1.0) + e.local_at(1.0);
         assert!((normal - Rgb::ONE).abs().max_element() < 1e-5);
         assert!(e.local_at(1.0).max_element() < 1e-6, "a normal beam is all carried");
@@ -197,7 +206,7 @@ mod tests {
     #[test]
     fn oblique_light_is_carried_by_its_depth_and_the_rest_returns_locally() {
         assert!((optical_extrapolation_distance(1.0, 1.0) - 2.0 / 3.0).abs() < 1e-12);
-        let e = Entry::half_space(&[0.999; 3], 1.0);
+        let e = Entry::half_space(&[0.999; 3], 1.0, true);
         let z_b = optical_extrapolation_distance(0.999, 1.0);
         for mu in [0.0625f32, 0.25, 0.5, 0.75] {
             let want = (mu as f64 + z_b) / (1.0 + z_b);

@@ -113,6 +113,19 @@ impl HalfSpace {
         HalfSpace { omega, nodes, h, fresnel, inverse }
     }
 
+    /// The single-scattering part of [`HalfSpace::albedo`] that leaves directly (no internal
+    /// reflection before or after the one scattering): Hanrahan & Krueger's
+    /// `ω/(4π) μ_t/(μ_t + μ)` radiance, through the boundary, per unit entering flux. This is
+    /// what `shading::single_scattering` computes along the view ray.
+    pub fn single_albedo(&self, mu_t: f64) -> f64 {
+        let mu_t = mu_t.clamp(1e-6, 1.0);
+        self.nodes
+            .iter()
+            .zip(&self.fresnel)
+            .map(|(&(mu, w), f)| 2.0 * PI * w * mu * (1.0 - f) * self.omega / (4.0 * PI) / (mu + mu_t))
+            .sum()
+    }
+
     /// Total albedo (single plus multiple scattering, all orders of internal reflection) for
     /// light entering with refracted direction cosine `mu_t` (0..=1).
     pub fn albedo(&self, mu_t: f64) -> f64 {

@@ -112,7 +112,7 @@ impl Dipole {
             ));
         }
         if kind != ProfileKind::Mertens {
-            d.entry = std::sync::Arc::new(Entry::half_space(&d.alpha_prime, d.eta));
+            d.entry = std::sync::Arc::new(Entry::half_space(&d.alpha_prime, d.eta, d.single_scattering));
         }
         d
     }

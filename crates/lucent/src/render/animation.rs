@@ -53,6 +53,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     // Incremental by default: the links made on the first frame are updated, not rebuilt.
     let mut session = scene.session(SolveMode::Incremental);
     let mode = session.settings().mode;
+    session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
     let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };

@@ -59,8 +59,7 @@ impl GpuFrame {
             }
             None => (GpuMesh::new(&ctx, &mesh.positions, &normals, radiance, &mesh.triangles)?, None, None),
         };
-        let (center, radius) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
-        let camera = scene.camera.frame(center, radius, width as f32 / height as f32);
+        let camera = scene.camera_view((width, height));
         let mut shading = Shading {
             eta: scene.material().eta as f32,
             lights: scene.plain_lights(),

@@ -166,6 +166,7 @@ fn render_mertens(
     debug_assert_eq!(scene.settings.method, method);
     let mut session = scene.session(SolveMode::OnTheFly);
     session.set_positions(&mesh.positions);
+    session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
     let dipole = session.dipole().clone();

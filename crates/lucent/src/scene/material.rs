@@ -4,6 +4,7 @@
 
 use anyhow::{Result, bail};
 use lucent_core::bssrdf::Material;
+use lucent_core::shading::{SingleScattering, UnknownSingleScattering};
 use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use std::fmt;
@@ -100,6 +101,28 @@ impl<'de> Deserialize<'de> for MaterialSpec {
             }
         }
         d.deserialize_any(V)
+    }
+}
+
+/// The scene file's `single_scattering`: a mode name, or `true` (view) / `false` (off) as
+/// files written before the modes existed have it.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum SingleScatteringKey {
+    /// `true` or `false`.
+    On(bool),
+    /// `"view"`, `"profile"` or `"off"`.
+    Mode(String),
+}
+
+impl SingleScatteringKey {
+    /// The mode it names.
+    pub fn mode(&self) -> Result<SingleScattering, UnknownSingleScattering> {
+        match self {
+            SingleScatteringKey::On(true) => Ok(SingleScattering::ViewRay),
+            SingleScatteringKey::On(false) => Ok(SingleScattering::Off),
+            SingleScatteringKey::Mode(s) => s.parse(),
+        }
     }
 }
 

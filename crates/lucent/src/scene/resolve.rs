@@ -46,8 +46,8 @@ pub struct Overrides {
     pub exposure: Option<f32>,
     /// Diffusion profile.
     pub profile: Option<ProfileKind>,
-    /// Single scattering on or off.
-    pub single_scattering: Option<bool>,
+    /// Where single scattering is computed.
+    pub single_scattering: Option<lucent_core::shading::SingleScattering>,
     /// Lights as `point:x,y,z` or `dir:x,y,z`; any replaces all of the file's lights.
     pub lights: Vec<String>,
     /// Turns off every shadow (lights and environment).
@@ -184,6 +184,13 @@ impl Scene {
         FrameSettings { mode: self.mode.unwrap_or(default_mode), ..self.settings }
     }
 
+    /// The camera framed on the rest mesh for a `width` x `height` image (fixed over an
+    /// animation), as the GPU side draws it and view-ray single scattering sees it.
+    pub fn camera_view(&self, (width, height): (u32, u32)) -> lucent_gpu::camera::CameraView {
+        let (center, radius) = lucent_gpu::camera::bounding_sphere(&self.mesh.positions);
+        self.camera.frame(center, radius, width as f32 / height.max(1) as f32)
+    }
+
     /// A frame session on the rest mesh with the scene's transport, lights and environment.
     pub fn session(&self, default_mode: SolveMode) -> FrameSession {
         let mut s = FrameSession::new(
@@ -270,10 +277,11 @@ fn transport(
         (None, Some(name)) => name.parse::<ProfileKind>().map_err(|e| anyhow::anyhow!("scene file: {e}"))?,
         (None, None) => ProfileKind::default(),
     };
-    let single_scattering = o
-        .single_scattering
-        .or(file.and_then(|f| f.single_scattering))
-        .unwrap_or(profile.single_scattering_by_default());
+    let from_file = match file.and_then(|f| f.single_scattering.as_ref()) {
+        Some(v) => Some(v.mode().map_err(|e| anyhow::anyhow!("scene file: {e}"))?),
+        None => None,
+    };
+    let single_scattering = o.single_scattering.or(from_file).unwrap_or_default();
     Ok(Transport { material, scale_m, profile, single_scattering })
 }
 

@@ -7,6 +7,7 @@
 
 use anyhow::{Context, Result};
 use lucent_core::bssrdf::{Material, ProfileKind};
+use lucent_core::shading::SingleScattering;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -20,8 +21,8 @@ pub struct SavedScene<'a> {
     pub scale_m: f64,
     /// Diffusion profile.
     pub profile: ProfileKind,
-    /// Whether single scattering is on.
-    pub single_scattering: bool,
+    /// Where single scattering is computed.
+    pub single_scattering: SingleScattering,
     /// Exposure multiplier before tone mapping (unitless, > 0, within
     /// [`crate::ranges::EXPOSURE`]).
     pub exposure: f32,
@@ -43,7 +44,7 @@ pub fn scene_toml(s: &SavedScene<'_>) -> String {
     out += &format!(
         "# As colour and distance: albedo [{}], mfp [{}] mm.\n\
          material = {{ name = {}, sigma_s_prime = {}, sigma_a = {}, eta = {:?} }}\n\
-         scale = {:?}\nprofile = \"{}\"\nsingle_scattering = {}\nexposure = {:?}\n",
+         scale = {:?}\nprofile = \"{}\"\nsingle_scattering = \"{}\"\nexposure = {:?}\n",
         short(albedo),
         short(mfp),
         toml::Value::String(m.name.clone()),
@@ -52,7 +53,7 @@ pub fn scene_toml(s: &SavedScene<'_>) -> String {
         m.eta,
         s.scale_m,
         s.profile.name(),
-        s.single_scattering,
+        s.single_scattering.name(),
         s.exposure
     );
     out
@@ -101,7 +102,7 @@ mod tests {
             material: &m,
             scale_m: 0.073,
             profile: ProfileKind::Dipole,
-            single_scattering: false,
+            single_scattering: SingleScattering::Profile,
             exposure: 1.5,
             mesh: Some("bunny".into()),
         };
@@ -114,7 +115,7 @@ mod tests {
         assert_eq!((scene.scale(), scene.exposure), (0.073, 1.5));
         assert_eq!(
             (scene.transport.profile, scene.transport.single_scattering),
-            (ProfileKind::Dipole, false)
+            (ProfileKind::Dipole, SingleScattering::Profile)
         );
         // Never overwritten: the second write fails naming the file; free_path finds m_2.toml.
         let e = write_new(&path, "x").unwrap_err().to_string();

@@ -230,6 +230,8 @@ impl App {
             let saved = super::scene_file::save_material(state, None);
             state.save.message = Some(saved.map(|p| p.display().to_string()).map_err(|e| format!("{e:#}")));
         }
+        let aspect = viewport.1.x / viewport.1.y.max(1.0);
+        self.scene.state.params.eye = Some(self.framing.view(aspect).eye);
         self.scene.sync(worker);
         self.framing.update(self.scene.base.as_ref(), self.scene.mesh.as_ref());
         upload_scene(surface, &mut self.scene)?;

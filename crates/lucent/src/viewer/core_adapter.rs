@@ -145,6 +145,7 @@ impl SolverSession {
             params.lights.iter().map(|&light| SceneLight { light, shadows: params.shadows }).collect(),
         );
         session.set_environment(environment);
+        session.set_eye(params.eye);
         let solved = session.solve().clone();
         let clusters = params
             .cluster_face

@@ -107,8 +107,11 @@ pub struct SolveParams {
     pub mode: SolveMode,
     /// Diffusion profile (default [`ProfileKind::default`]: photon beam diffusion).
     pub profile: ProfileKind,
-    /// Whether the single-scattering term is included (pbd, dipole).
-    pub single_scattering: bool,
+    /// Where single scattering is computed (pbd, dipole).
+    pub single_scattering: lucent_core::shading::SingleScattering,
+    /// The eye (normalised mesh units) that view-ray single scattering is seen from; set from
+    /// the camera before each sync (`None` until the first frame).
+    pub eye: Option<glam::Vec3>,
     /// The refinement oracle (Mertens §5.2): mode and thresholds `eps1` (receiver), `eps2`
     /// (emitter) and, in transport mode, `eps_abs` (relative to `R_d_total`). Default: the
     /// profile's own ([`lucent_core::solver::Oracle::for_profile`]).
@@ -217,7 +220,8 @@ impl ViewState {
                 env_strength: 1.0,
                 mode: SolveMode::Render,
                 profile,
-                single_scattering: profile.single_scattering_by_default(),
+                single_scattering: Default::default(),
+                eye: None,
                 // The profile's default thresholds (transport oracle), which meet 1% of the
                 // exact solve on the bunny.
                 oracle: lucent_core::solver::Oracle::for_profile(profile),

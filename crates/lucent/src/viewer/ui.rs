@@ -338,7 +338,13 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
         }
     });
     if p.profile != lucent_core::bssrdf::ProfileKind::Mertens {
-        ui.checkbox(&mut p.single_scattering, "single scattering");
+        ui.horizontal(|ui| {
+            use lucent_core::shading::SingleScattering as S;
+            ui.label("single scattering");
+            for s in [S::ViewRay, S::Profile, S::Off] {
+                ui.radio_value(&mut p.single_scattering, s, s.name());
+            }
+        });
     }
     // Transport-oracle thresholds (relative errors): smaller refines more.
     oracle(ui, &mut p.oracle, p.profile);

@@ -18,3 +18,6 @@ pub fn diffuse_radiance(b: &[Rgb], dipole: &Dipole) -> Vec<Rgb> {
     let k = (dipole.exit_normalization() / std::f64::consts::PI) as f32;
     b.iter().map(|v| *v * k).collect()
 }
+
+pub mod single_scattering;
+pub use single_scattering::{SingleScattering, UnknownSingleScattering};

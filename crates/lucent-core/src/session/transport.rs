@@ -1,0 +1,47 @@
+//! The material at its size: what decides the diffusion profile of a [`super::FrameSession`].
+
+use crate::bssrdf::{Dipole, Material, ProfileKind};
+use crate::shading::SingleScattering;
+
+/// The material at its size, which together decide the diffusion profile.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transport {
+    /// Scattering coefficients (mm⁻¹) and relative index of refraction.
+    pub material: Material,
+    /// Model scale: the rest mesh's largest bounding-box side, metres (> 0).
+    pub scale_m: f64,
+    /// Diffusion profile (default [`ProfileKind::default`], photon beam diffusion).
+    pub profile: ProfileKind,
+    /// Where single scattering is computed (default [`SingleScattering::ViewRay`]; the `mertens`
+    /// profile has none whatever this says).
+    pub single_scattering: SingleScattering,
+}
+
+impl Transport {
+    /// `material` at `scale_m` metres with the default profile and single scattering.
+    pub fn new(material: Material, scale_m: f64) -> Self {
+        Transport {
+            material,
+            scale_m,
+            profile: ProfileKind::default(),
+            single_scattering: SingleScattering::default(),
+        }
+    }
+
+    /// The profile in the units of a mesh whose largest bounding-box side is `extent` mesh
+    /// units (tabulated profiles cost tens of milliseconds: made only when this changes).
+    pub fn dipole(&self, extent: f32) -> Dipole {
+        Dipole::profile_for_model_scale(
+            &self.material,
+            extent as f64,
+            self.scale_m,
+            self.profile,
+            self.single_scattering.in_profile(),
+        )
+    }
+
+    /// Whether single scattering is integrated along the view ray (needs the eye).
+    pub fn single_scattering_along_view(&self) -> bool {
+        self.single_scattering == SingleScattering::ViewRay && self.profile != ProfileKind::Mertens
+    }
+}
