@@ -23,11 +23,13 @@ use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering, interreflection};
 use crate::mesh::Mesh;
 use crate::shading;
+use crate::solver::finite_body::FiniteBody;
 use crate::solver::{self, HierarchicalSolver, Oracle, Progress};
 use glam::Vec3;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod extras;
 mod transport;
 pub use transport::Transport;
 
@@ -234,6 +236,10 @@ pub struct FrameSession {
     entry: Option<Vec<Rgb>>,
     /// The eye, mesh units, for view-ray single scattering (`None`: not added).
     eye: Option<Vec3>,
+    /// The finite-body gain per face and its table (`solver::finite_body`), for the profiles
+    /// that bound energy; remade when the mesh moves or the transport changes.
+    face_gain: Option<Arc<Vec<Rgb>>>,
+    finite_body: Option<FiniteBody>,
     /// `B / (c π)` per vertex of the last solve, before single scattering is added.
     diffuse_vertex: Vec<Rgb>,
     changes: Changes,
@@ -271,6 +277,8 @@ impl FrameSession {
             irradiance: Vec::new(),
             entry: None,
             eye: None,
+            face_gain: None,
+            finite_body: None,
             diffuse_vertex: Vec::new(),
             changes: Changes::all(),
             unsolved: Changes::default(),
@@ -337,6 +345,7 @@ impl FrameSession {
         if self.transport != transport {
             self.dipole = transport.dipole(self.rest_extent);
             self.transport = transport;
+            self.finite_body = None;
             self.changes.transport = true;
         }
     }
@@ -400,28 +409,6 @@ impl FrameSession {
         }
     }
 
-    /// The carried part of `e` past the texture's entry factors (unchanged without a texture).
-    fn entered_carried(&self, e: &[Entering]) -> Vec<Rgb> {
-        match &self.entry {
-            Some(f) => e.iter().zip(f).map(|(e, f)| e.carried * *f).collect(),
-            None => e.iter().map(|e| e.carried).collect(),
-        }
-    }
-
-    /// Adds to `b` the light an oblique beam returns at its entry face (`bssrdf::entry`): the
-    /// local part of `e`, past the texture's entry factors, times the profile's total diffuse
-    /// reflectance.
-    fn add_local(&self, b: &mut [Rgb], e: &[Entering]) {
-        if !self.dipole.entry.has_local() {
-            return;
-        }
-        let r = Rgb::from_array(self.dipole.total_diffuse_reflectance().map(|v| v as f32));
-        for (f, (b, e)) in b.iter_mut().zip(e).enumerate() {
-            let texture = self.entry.as_ref().map_or(Rgb::ONE, |t| t[f]);
-            *b += e.local * texture * r;
-        }
-    }
-
     /// True when nothing the solve depends on changed since the last solve.
     pub fn is_current(&self) -> bool {
         !self.changes.any()
@@ -456,6 +443,9 @@ impl FrameSession {
         if changes.geometry || changes.light || changes.transport || self.irradiance.is_empty() {
             self.irradiance = self.face_irradiance(changes.geometry);
         }
+        if changes.geometry || changes.transport || self.face_gain.is_none() {
+            self.face_gain = self.face_gains();
+        }
         timings.irradiance_ms = ms_since(t);
 
         let e = std::mem::take(&mut self.irradiance);
@@ -483,34 +473,15 @@ impl FrameSession {
         &self.last
     }
 
-    /// `diffuse` plus view-ray single scattering where the transport asks for it and an eye is
-    /// set (the shadow BVH is current: the solve refits it first).
-    fn with_single_scattering(&self, diffuse: &[Rgb]) -> Vec<Rgb> {
-        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return diffuse.to_vec() };
-        if !self.transport.single_scattering_along_view() {
-            return diffuse.to_vec();
-        }
-        let normals = self.mesh.vertex_normals();
-        let scene = shading::single_scattering::ViewRayScene {
-            mesh: &self.mesh,
-            normals: &normals,
-            bvh: caster.bvh(),
-            offset: caster.offset(),
-            dipole: &self.dipole,
-            lights: &self.lights,
-            environment: self.environment.as_ref(),
-        };
-        let ss = shading::single_scattering::view_ray_radiance(&scene, eye);
-        diffuse.iter().zip(ss).map(|(d, s)| *d + s).collect()
-    }
-
     /// Fresnel-transmitted irradiance at the faces (§5.3), refitting the shadow BVH first when
     /// the mesh `moved`.
     fn face_irradiance(&mut self, moved: bool) -> Vec<Entering> {
         let shadows = self.lights.iter().any(|l| l.shadows)
             || (self.environment.is_some() && self.settings.environment_shadows);
-        let need_caster =
-            shadows || self.settings.bounces > 0 || self.transport.single_scattering_along_view();
+        let need_caster = shadows
+            || self.settings.bounces > 0
+            || self.transport.single_scattering_along_view()
+            || self.dipole.bounds_energy();
         match &mut self.caster {
             Some(c) if moved => {
                 c.update(&self.mesh);
@@ -546,15 +517,17 @@ impl FrameSession {
             let all: Vec<usize> = (0..self.mesh.triangles.len()).collect();
             let opts = FormFactorOptions::default();
             let p = self.progress.as_deref();
-            let b = solver::exact::solve_receivers(&self.mesh, &self.dipole, e, &opts, &all, p);
+            let gain = self.face_gain.as_deref().map(|g| g.as_slice());
+            let b = solver::exact::solve_receivers_with_gain(&self.mesh, &self.dipole, e, &opts, &all, p, gain);
             timings.gather_ms += ms_since(t);
             return (b, None);
         }
         let oracle = self.oracle();
         let mode = self.settings.mode;
         self.make_solver();
-        let Self { solver, mesh, dipole, .. } = self;
+        let Self { solver, mesh, dipole, face_gain, .. } = self;
         let s = solver.as_mut().expect("made above");
+        s.set_face_gain(face_gain.clone());
         let moved = s.mesh.positions != mesh.positions;
         let t = Instant::now();
         let profile_changed = s.dipole != *dipole;

@@ -1,4 +1,5 @@
 use super::*;
+use crate::bssrdf::Material;
 use crate::irradiance::Light;
 use crate::mesh::deform::{self, Deformer as _};
 use crate::mesh::generate;

@@ -29,6 +29,14 @@ pub fn bound(uniform: Rgb) -> Rgb {
     Rgb::splat(if worst > 1.0 { 1.0 / worst } else { 1.0 })
 }
 
+/// [`bound`] for a face whose `B` is multiplied by the finite-body gain `gain`
+/// ([`super::finite_body`]): `gain min(1, 1/max_c(gain_c U_c))`, so that `B` under uniform
+/// irradiance still does not exceed 1.
+#[inline]
+pub fn bound_with_gain(uniform: Rgb, gain: Rgb) -> Rgb {
+    gain * bound(uniform * gain)
+}
+
 /// What [`uniform_report`] measures on one mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniformReport {

@@ -48,6 +48,20 @@ pub fn solve_receivers(
     receivers: &[usize],
     progress: Option<&Progress>,
 ) -> Vec<Rgb> {
+    solve_receivers_with_gain(mesh, dipole, face_irradiance, opts, receivers, progress, None)
+}
+
+/// [`solve_receivers`] with the finite-body gain per face (`gain`, one per face of `mesh`;
+/// [`super::finite_body`]) applied with the energy bound, as the hierarchical solver does.
+pub fn solve_receivers_with_gain(
+    mesh: &Mesh,
+    dipole: &Dipole,
+    face_irradiance: &[Rgb],
+    opts: &FormFactorOptions,
+    receivers: &[usize],
+    progress: Option<&Progress>,
+    gain: Option<&[Rgb]>,
+) -> Vec<Rgb> {
     assert_eq!(face_irradiance.len(), mesh.triangles.len());
     if let Some(p) = progress {
         p.start("exact", receivers.len());
@@ -89,7 +103,12 @@ pub fn solve_receivers(
                 p.add(1);
             }
             let b = Rgb::new(b[0] as f32, b[1] as f32, b[2] as f32);
-            if bound { b * energy::bound(Rgb::new(u[0] as f32, u[1] as f32, u[2] as f32)) } else { b }
+            let u = Rgb::new(u[0] as f32, u[1] as f32, u[2] as f32);
+            match (bound, gain) {
+                (false, _) => b,
+                (true, Some(g)) => b * energy::bound_with_gain(u, g[o]),
+                (true, None) => b * energy::bound(u),
+            }
         })
         .collect()
 }

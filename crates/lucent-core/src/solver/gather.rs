@@ -6,7 +6,6 @@
 //! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
 //! the energy bound of [`super::energy`].
 
-use super::energy;
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef;
 use super::link_set::LinkSet;
@@ -46,7 +45,7 @@ impl HierarchicalSolver {
             if self.bound.is_none() {
                 let ones = vec![Rgb::ONE; self.hierarchy.leaf_count()];
                 let uniform = self.render_stored(&ones).face_b;
-                self.bound = Some(uniform.into_iter().map(energy::bound).collect());
+                self.bound = Some(uniform.into_iter().enumerate().map(|(f, u)| self.bound_factor(f, u)).collect());
             }
             let bound = self.bound.as_ref().expect("bound made above");
             solution.face_b.iter_mut().zip(bound).for_each(|(b, s)| *b *= *s);
@@ -115,7 +114,7 @@ impl HierarchicalSolver {
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
         for (pos, &f) in h.leaf_faces.iter().enumerate() {
             let [b, u] = leaf_b[pos];
-            face_b[f as usize] = if bound { b * energy::bound(u) } else { b };
+            face_b[f as usize] = if bound { b * self.bound_factor(f as usize, u) } else { b };
         }
         let t3 = Instant::now();
         ctx.fill(&mut stats);

@@ -18,6 +18,7 @@
 //! that every mode runs is in `solver::refine`, and a frame's pull, gather and push (render
 //! mode's over the stored links, on-the-fly mode's during the traversal) in `solver::gather`.
 
+use super::energy;
 use super::link_set::{ChunkPool, LinkSet};
 use super::local::Locality;
 use super::oracle::Oracle;
@@ -97,6 +98,10 @@ pub struct HierarchicalSolver {
     /// Where a front end watches long refinements (leaves of finished receiver subtrees out of
     /// all leaves); `None` (default): not counted.
     pub progress: Option<Arc<Progress>>,
+    /// The finite-body gain per face ([`super::finite_body`]), applied with the energy bound
+    /// where the profile bounds energy; `None` (default): none. Set through
+    /// [`HierarchicalSolver::set_face_gain`].
+    pub(super) face_gain: Option<Arc<Vec<Rgb>>>,
     pub(super) links: Option<LinkSet>,
     /// The link set an incremental update replaced, kept for its buffers.
     pub(super) spare: Option<LinkSet>,
@@ -138,6 +143,7 @@ impl HierarchicalSolver {
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
             bound: None,
+            face_gain: None,
             locality,
             local,
         }
@@ -238,6 +244,24 @@ impl HierarchicalSolver {
         self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.links = None;
         self.bound = None;
+    }
+
+    /// Sets the finite-body gain per face (`None`: none); the stored bound is remade.
+    pub fn set_face_gain(&mut self, gain: Option<Arc<Vec<Rgb>>>) {
+        if self.face_gain != gain {
+            self.face_gain = gain;
+            self.bound = None;
+        }
+    }
+
+    /// The energy-bound factor (times the finite-body gain, if any) of face `f` whose `B` under
+    /// uniform irradiance 1 is `uniform`.
+    #[inline]
+    pub(super) fn bound_factor(&self, f: usize, uniform: Rgb) -> Rgb {
+        match &self.face_gain {
+            Some(g) => energy::bound_with_gain(uniform, g[f]),
+            None => energy::bound(uniform),
+        }
     }
 
     /// Changes the material: every stored link's coefficient becomes stale and is recomputed by

@@ -25,6 +25,7 @@ pub mod census;
 pub mod energy;
 mod evaluate;
 pub mod exact;
+pub mod finite_body;
 mod gather;
 pub mod hierarchical;
 pub mod link_coef;

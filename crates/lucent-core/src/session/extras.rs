@@ -1,0 +1,62 @@
+//! What a [`FrameSession`] adds around the solve: the texture's entry factors, the light an
+//! oblique beam returns locally, the finite-body gain and view-ray single scattering.
+
+use super::FrameSession;
+use crate::Rgb;
+use crate::irradiance::Entering;
+use crate::shading;
+use crate::solver::finite_body::FiniteBody;
+use std::sync::Arc;
+
+impl FrameSession {
+    /// The carried part of `e` past the texture's entry factors (unchanged without a texture).
+    pub(super) fn entered_carried(&self, e: &[Entering]) -> Vec<Rgb> {
+        match &self.entry {
+            Some(f) => e.iter().zip(f).map(|(e, f)| e.carried * *f).collect(),
+            None => e.iter().map(|e| e.carried).collect(),
+        }
+    }
+
+    /// Adds to `b` the light an oblique beam returns at its entry face (`bssrdf::entry`): the
+    /// local part of `e`, past the texture's entry factors, times the profile's total diffuse
+    /// reflectance.
+    pub(super) fn add_local(&self, b: &mut [Rgb], e: &[Entering]) {
+        if !self.dipole.entry.has_local() {
+            return;
+        }
+        let r = Rgb::from_array(self.dipole.total_diffuse_reflectance().map(|v| v as f32));
+        for (f, (b, e)) in b.iter_mut().zip(e).enumerate() {
+            let texture = self.entry.as_ref().map_or(Rgb::ONE, |t| t[f]);
+            *b += e.local * texture * r;
+        }
+    }
+
+    /// The finite-body gain of every face for the current pose and profile (the shadow BVH is
+    /// current), or `None` where the profile does not bound energy (Mertens').
+    pub(super) fn face_gains(&mut self) -> Option<Arc<Vec<Rgb>>> {
+        let caster = self.caster.as_ref().filter(|_| self.dipole.bounds_energy())?;
+        let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
+        Some(Arc::new(fb.face_gains(&self.mesh, caster.bvh(), caster.offset())))
+    }
+
+    /// `diffuse` plus view-ray single scattering where the transport asks for it and an eye is
+    /// set (the shadow BVH is current: the solve refits it first).
+    pub(super) fn with_single_scattering(&self, diffuse: &[Rgb]) -> Vec<Rgb> {
+        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return diffuse.to_vec() };
+        if !self.transport.single_scattering_along_view() {
+            return diffuse.to_vec();
+        }
+        let normals = self.mesh.vertex_normals();
+        let scene = shading::single_scattering::ViewRayScene {
+            mesh: &self.mesh,
+            normals: &normals,
+            bvh: caster.bvh(),
+            offset: caster.offset(),
+            dipole: &self.dipole,
+            lights: &self.lights,
+            environment: self.environment.as_ref(),
+        };
+        let ss = shading::single_scattering::view_ray_radiance(&scene, eye);
+        diffuse.iter().zip(ss).map(|(d, s)| *d + s).collect()
+    }
+}
