@@ -5,7 +5,7 @@
 //!
 //! | change                         | work on the next [`FrameSession::solve`]                     |
 //! |--------------------------------|--------------------------------------------------------------|
-//! | camera only                    | none (nothing the solve depends on changed)                  |
+//! | camera only                    | view-ray single scattering only (`shading::single_scattering`) |
 //! | lights or environment          | irradiance, then pull/gather/push on the stored links        |
 //! | material, scale or profile     | profile tables; render mode relinks, incremental re-evaluates |
 //! | deformation (positions)        | BVH refit, irradiance; render relinks, incremental updates   |
@@ -518,7 +518,8 @@ impl FrameSession {
             let opts = FormFactorOptions::default();
             let p = self.progress.as_deref();
             let gain = self.face_gain.as_deref().map(|g| g.as_slice());
-            let b = solver::exact::solve_receivers_with_gain(&self.mesh, &self.dipole, e, &opts, &all, p, gain);
+            let b =
+                solver::exact::solve_receivers_with_gain(&self.mesh, &self.dipole, e, &opts, &all, p, gain);
             timings.gather_ms += ms_since(t);
             return (b, None);
         }

@@ -3,6 +3,7 @@ use crate::bssrdf::Material;
 use crate::irradiance::Light;
 use crate::mesh::deform::{self, Deformer as _};
 use crate::mesh::generate;
+use crate::solver::finite_body::FiniteBody;
 
 fn marble() -> Transport {
     Transport::new(Material::by_name("marble").unwrap(), 0.05)
@@ -24,8 +25,8 @@ fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f32 {
     a.iter().zip(b).map(|(x, y)| (*x - *y).abs().max_element() / scale).fold(0.0, f32::max)
 }
 
-/// The session's on-the-fly solve is the solver's on the carried irradiance plus the local
-/// return at each face, bit for bit.
+/// The session's on-the-fly solve is the solver's on the carried irradiance (with the
+/// finite-body gain of its faces) plus the local return at each face, bit for bit.
 #[test]
 fn on_the_fly_matches_the_solver_called_directly() {
     let mut s = session(SolveMode::OnTheFly);
@@ -34,14 +35,18 @@ fn on_the_fly_matches_the_solver_called_directly() {
     let dipole = marble().dipole(mesh.extent());
     let entering = crate::irradiance::face_entering(&mesh, &key_light(), None, &dipole.entry, None);
     let e: Vec<Rgb> = entering.iter().map(|e| e.carried).collect();
-    let mut direct = HierarchicalSolver::new(
+    let mut solver = HierarchicalSolver::new(
         mesh.clone(),
         face_cluster::build(&mesh),
         dipole.clone(),
         Oracle::for_profile(dipole.profile),
-    )
-    .solve_on_the_fly(&e)
-    .face_b;
+    );
+    // The session applies the finite-body gain of its pose with the energy bound.
+    let caster = ShadowCaster::new(&mesh);
+    let gain = FiniteBody::new(&dipole).face_gains(&mesh, caster.bvh(), caster.offset());
+    assert!(gain.iter().all(|g| g.min_element() > 1.0), "a small marble sphere gains");
+    solver.set_face_gain(Some(Arc::new(gain)));
+    let mut direct = solver.solve_on_the_fly(&e).face_b;
     let r = Rgb::from_array(dipole.total_diffuse_reflectance().map(|v| v as f32));
     assert!(entering.iter().any(|e| e.local.max_element() > 0.0), "oblique faces return some light locally");
     direct.iter_mut().zip(&entering).for_each(|(b, e)| *b += e.local * Rgb::ONE * r);
@@ -157,4 +162,24 @@ fn names_parse_and_bad_ones_list_the_choices() {
     }
     let e = "fast".parse::<SolveMode>().unwrap_err();
     assert_eq!(e, "unknown mode \"fast\"; expected one of render, incremental, on-the-fly");
+}
+
+/// Moving the eye redoes view-ray single scattering and nothing else.
+#[test]
+fn moving_the_eye_redoes_only_single_scattering() {
+    let mut s = session(SolveMode::Render);
+    s.set_eye(Some(Vec3::new(0.0, 0.0, 5.0)));
+    let a = s.solve().clone();
+    s.set_eye(Some(Vec3::new(5.0, 0.0, 0.0)));
+    let b = s.solve().clone();
+    assert!(b.fresh);
+    assert_eq!((b.timings.link_ms, b.timings.gather_ms, b.timings.irradiance_ms), (0.0, 0.0, 0.0));
+    assert!(b.timings.single_scattering_ms > 0.0);
+    assert_eq!(a.face_b, b.face_b);
+    assert_ne!(a.vertex_radiance, b.vertex_radiance);
+    // Without an eye: `B / (c π)` alone, never more than with single scattering.
+    s.set_eye(None);
+    let c = s.solve().clone();
+    assert!(c.vertex_radiance.iter().zip(&a.vertex_radiance).all(|(c, a)| (*a - *c).min_element() >= 0.0));
+    assert!(c.vertex_radiance.iter().zip(&a.vertex_radiance).any(|(c, a)| (*a - *c).max_element() > 0.0));
 }

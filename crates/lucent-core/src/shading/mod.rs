@@ -7,7 +7,8 @@
 //! the `mertens` profile keeps that form to reproduce the paper ([`Dipole::exit_normalization`]).
 //!
 //! The view-dependent `F_t(eta, w_o)` is applied per pixel on the GPU; this module gives the
-//! per-vertex diffuse part `B / (c pi)`.
+//! per-vertex diffuse part `B / (c pi)`, and [`single_scattering`] the per-vertex radiance
+//! scattered once along the refracted view ray, to which the GPU applies the same factor.
 
 use crate::Rgb;
 use crate::bssrdf::Dipole;

@@ -177,7 +177,12 @@ mod tests {
             let fb = FiniteBody::new(&marble(1.0, eta));
             let g = fb.gain(10.0);
             for c in 0..3 {
-                assert!((g[c] as f64 - want[c]).abs() < 0.006, "eta {eta} channel {c}: {} vs {}", g[c], want[c]);
+                assert!(
+                    (g[c] as f64 - want[c]).abs() < 0.006,
+                    "eta {eta} channel {c}: {} vs {}",
+                    g[c],
+                    want[c]
+                );
             }
         }
     }
@@ -191,5 +196,30 @@ mod tests {
         // Radii are in mesh units: 10 mm is 1 unit at 10 mm per unit.
         let scaled = FiniteBody::new(&marble(10.0, 1.0));
         assert!((scaled.gain(1.0).x - fb.gain(10.0).x).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_sphere_s_faces_take_the_gain_of_its_radius() {
+        let mesh = crate::mesh::generate::icosphere(3);
+        let bvh = Bvh::build(&mesh);
+        // Unit sphere at 10 mm per unit: the 2 cm marble sphere.
+        let fb = FiniteBody::new(&marble(10.0, 1.0));
+        let want = fb.gain(1.0);
+        for g in fb.face_gains(&mesh, &bvh, 1e-4) {
+            // Face centroids lie a little inside the sphere, so chords are a little short.
+            assert!((g - want).abs().max_element() < 0.003, "{g} vs {want}");
+        }
+    }
+
+    #[test]
+    fn the_bound_takes_the_gain_back_where_uniform_light_would_exceed_one() {
+        use crate::solver::energy::bound_with_gain;
+        let gain = Rgb::new(1.2, 1.1, 1.05);
+        // Thick: U g below 1 keeps the gain.
+        assert_eq!(bound_with_gain(Rgb::splat(0.8), gain), gain);
+        // Thin: U g above 1 is scaled so the worst channel reaches 1, one factor for all.
+        let u = Rgb::new(1.0, 0.9, 0.8);
+        let b = u * bound_with_gain(u, gain);
+        assert!((b.max_element() - 1.0).abs() < 1e-6 && (b.x / b.y - 1.2 / 0.99).abs() < 1e-5, "{b}");
     }
 }

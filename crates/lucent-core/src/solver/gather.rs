@@ -45,7 +45,8 @@ impl HierarchicalSolver {
             if self.bound.is_none() {
                 let ones = vec![Rgb::ONE; self.hierarchy.leaf_count()];
                 let uniform = self.render_stored(&ones).face_b;
-                self.bound = Some(uniform.into_iter().enumerate().map(|(f, u)| self.bound_factor(f, u)).collect());
+                self.bound =
+                    Some(uniform.into_iter().enumerate().map(|(f, u)| self.bound_factor(f, u)).collect());
             }
             let bound = self.bound.as_ref().expect("bound made above");
             solution.face_b.iter_mut().zip(bound).for_each(|(b, s)| *b *= *s);
