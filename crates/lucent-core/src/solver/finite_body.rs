@@ -11,7 +11,8 @@
 //! irradiance in diffusion theory (the radially symmetric diffusion equation, first-collision
 //! source converging as `(a/r)²`, extrapolated boundary `φ = 2 A D ∂φ/∂n`), for the sphere whose
 //! diameter is the body's thickness under the face (a ray along the inward normal). It
-//! multiplies `B`, and the energy bound then keeps `B` under uniform light at most 1
+//! multiplies `B` as one factor for all channels (weighted by the light each returns, so the
+//! profile keeps its hue), and the energy bound then keeps `B` under uniform light at most 1
 //! ([`super::energy::bound_with_gain`]): on a thin part, where the half-space profile already
 //! gathers from both sides, the bound takes the gain back. View-ray single scattering
 //! (`shading::single_scattering`) sees the real geometry and takes no gain.
@@ -215,11 +216,24 @@ mod tests {
     fn the_bound_takes_the_gain_back_where_uniform_light_would_exceed_one() {
         use crate::solver::energy::bound_with_gain;
         let gain = Rgb::new(1.2, 1.1, 1.05);
-        // Thick: U g below 1 keeps the gain.
-        assert_eq!(bound_with_gain(Rgb::splat(0.8), gain), gain);
+        // Thick: U g below 1 keeps the gain (its mean, the channels returning alike).
+        let mean = Rgb::splat((1.2 + 1.1 + 1.05) / 3.0);
+        assert!((bound_with_gain(Rgb::splat(0.8), gain) - mean).abs().max_element() < 1e-6);
         // Thin: U g above 1 is scaled so the worst channel reaches 1, one factor for all.
         let u = Rgb::new(1.0, 0.9, 0.8);
         let b = u * bound_with_gain(u, gain);
-        assert!((b.max_element() - 1.0).abs() < 1e-6 && (b.x / b.y - 1.2 / 0.99).abs() < 1e-5, "{b}");
+        assert!((b.max_element() - 1.0).abs() < 1e-6 && (b.x / b.y - 1.0 / 0.9).abs() < 1e-5, "{b}");
+    }
+
+    #[test]
+    fn the_gain_is_one_factor_weighted_by_the_light_each_channel_returns() {
+        use crate::solver::energy::bound_with_gain;
+        let gain = Rgb::new(1.2, 1.1, 1.05);
+        // Equal returns: the mean gain, the hue of B unchanged.
+        let even = bound_with_gain(Rgb::splat(0.5), gain);
+        assert!((even - Rgb::splat((1.2 + 1.1 + 1.05) / 3.0)).abs().max_element() < 1e-6, "{even}");
+        // Ketchup-like: red returns nearly all the light and sets the factor.
+        let red = bound_with_gain(Rgb::new(0.4, 0.01, 0.0), gain);
+        assert!((red.x - (1.2 * 0.4 + 1.1 * 0.01) / 0.41).abs() < 1e-6 && red.x == red.z, "{red}");
     }
 }
