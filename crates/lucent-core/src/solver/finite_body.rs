@@ -84,7 +84,7 @@ impl FiniteBody {
         let r_mm = radius as f64 * self.mm_per_unit;
         Rgb::from_array(std::array::from_fn(|c| {
             let (radii, gain) = (&self.radius_mm[c], &self.gain[c]);
-            if !(r_mm < radii[RADII - 1]) {
+            if r_mm.is_nan() || r_mm >= radii[RADII - 1] {
                 return 1.0;
             }
             if r_mm <= radii[0] {
