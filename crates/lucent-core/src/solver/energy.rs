@@ -54,8 +54,8 @@ pub fn bound_with_gain(uniform: Rgb, gain: Rgb) -> Rgb {
 /// What [`uniform_report`] measures on one mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniformReport {
-    /// Largest `B` over faces and channels under uniform irradiance 1 after the bound
-    /// (unitless; at most 1 for the bounded profiles).
+    /// Largest `B` over faces and channels under uniform irradiance 1 after the finite-body gain
+    /// and the bound, as a render applies them (unitless; at most 1 for the bounded profiles).
     pub max_b_uniform: f32,
     /// The same before the bound: how far the profile alone breaks energy conservation.
     pub max_b_unbounded: f32,
@@ -82,8 +82,20 @@ pub fn uniform_report(
     let solver = super::HierarchicalSolver::new(mesh.clone(), h, unbounded, oracle);
     let raw = solver.solve_on_the_fly(&ones);
     let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
-    let bounded: Vec<Rgb> =
-        raw.face_b.iter().map(|&u| if dipole.bounds_energy() { u * bound(u) } else { u }).collect();
+    // As a render does: the finite-body gain of each face, applied with the bound.
+    let gain = dipole.bounds_energy().then(|| {
+        let caster = crate::irradiance::ShadowCaster::new(mesh);
+        super::finite_body::FiniteBody::new(dipole).face_gains(mesh, caster.bvh(), caster.offset())
+    });
+    let bounded: Vec<Rgb> = raw
+        .face_b
+        .iter()
+        .enumerate()
+        .map(|(f, &u)| match &gain {
+            Some(g) => u * bound_with_gain(u, g[f]),
+            None => u,
+        })
+        .collect();
     UniformReport {
         max_b_uniform: max(&bounded),
         max_b_unbounded: max(&raw.face_b),
