@@ -142,3 +142,37 @@ fn modes_parse_by_name_and_only_the_profile_mode_is_in_the_profile() {
     let e = "sideways".parse::<SingleScattering>().unwrap_err().to_string();
     assert!(e.contains("sideways") && e.contains("view") && e.contains("profile"), "{e}");
 }
+
+/// Only vertices of triangles facing the eye cast rays: the cube's top centre seen from above
+/// has single scattering, seen from below (where only back faces hold it) none.
+#[test]
+fn vertices_of_back_faces_only_cast_no_rays() {
+    let (mesh, d) = half_space(1.0);
+    let light = Light::Directional { direction: -Vec3::Y, irradiance: Rgb::ONE };
+    let lights = [SceneLight { light, shadows: true }];
+    let above = radiance_at(&mesh, &d, &lights, None, Vec3::new(0.0, 1e4, 0.0));
+    let below = radiance_at(&mesh, &d, &lights, None, Vec3::new(0.0, -1e4, 0.0));
+    assert!(above.min_element() > 0.0, "{above}");
+    assert_eq!(below, Rgb::ZERO);
+    // Seen from the side (+X, below the top face's plane) and lit from there: the +X face's
+    // centre has single scattering, the top centre, on back faces only, none.
+    let side = [SceneLight {
+        light: Light::Directional { direction: -Vec3::X, irradiance: Rgb::ONE },
+        shadows: true,
+    }];
+    let normals = mesh.vertex_normals();
+    let bvh = Bvh::build(&mesh);
+    let scene = ViewRayScene {
+        mesh: &mesh,
+        normals: &normals,
+        bvh: &bvh,
+        offset: 1e-5,
+        dipole: &d,
+        lights: &side,
+        environment: None,
+    };
+    let ss = view_ray_radiance(&scene, Vec3::new(1e4, 0.5, 0.0));
+    let side_centre = mesh.positions.iter().position(|p| p.distance(Vec3::X) < 1e-6).unwrap();
+    assert_eq!(ss[top_centre(&mesh)], Rgb::ZERO);
+    assert!(ss[side_centre].min_element() > 0.0, "{}", ss[side_centre]);
+}

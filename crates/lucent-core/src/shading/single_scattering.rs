@@ -125,12 +125,13 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
+    let seen = front_facing_vertices(scene.mesh, eye);
     (0..scene.mesh.positions.len())
         .into_par_iter()
         .map(|v| {
             let x = scene.mesh.positions[v];
             let n = scene.normals[v];
-            if n == Vec3::ZERO {
+            if n == Vec3::ZERO || !seen[v] {
                 return Rgb::ZERO;
             }
             // A vertex turned slightly away still colours the pixels of its front-facing
@@ -171,6 +172,22 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
             l / (eta * eta)
         })
         .collect()
+}
+
+/// Whether each vertex belongs to a triangle that faces `eye` (its plane has the eye on the
+/// side of its normal). Only those colour a pixel of a closed mesh, which hides its back faces
+/// behind its front ones, so the rest (about half) cast no rays.
+fn front_facing_vertices(mesh: &Mesh, eye: Vec3) -> Vec<bool> {
+    let mut seen = vec![false; mesh.positions.len()];
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        let p = mesh.positions[tri[0] as usize];
+        if mesh.face_normal(f).dot(eye - p) > 0.0 {
+            for &v in tri {
+                seen[v as usize] = true;
+            }
+        }
+    }
+    seen
 }
 
 /// The refracted direction into the material for a view direction `w_o` (unit, towards the eye)
