@@ -90,7 +90,7 @@ pub struct SceneFile {
     #[serde(default = "yes")]
     pub surface: bool,
     /// Bounces of subsurface light between facing parts through the air (0..=4; 0 switches
-    /// them off), as `lucent render --bounces`. Default 0 (see the README's path-tracer
+    /// them off), as `lucent render --bounces`. Default 1 (see the README's path-tracer
     /// comparison for why).
     #[serde(default = "default_bounces")]
     pub bounces: u32,
@@ -130,7 +130,7 @@ fn default_scale() -> f64 {
     resolve::DEFAULT_SCALE_M
 }
 fn default_bounces() -> u32 {
-    0
+    crate::ranges::DEFAULT_BOUNCES
 }
 fn one() -> f32 {
     1.0

@@ -100,6 +100,15 @@ fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
     let mut failures = Vec::new();
     for case in cases["cases"].as_array().unwrap() {
         let name = case["name"].as_str().unwrap();
+        // A scanned mesh that is fetched, not committed (the Stanford dragon's terms): measured
+        // where it has been fetched, as `compare` does; the committed cases run everywhere.
+        if let Some(how) = case["fetched"].as_str() {
+            let mesh = root.join(format!("validation/scenes/{}.obj", case["mesh"].as_str().unwrap()));
+            if !mesh.exists() {
+                println!("{name}: its mesh is not here ({how}); the committed cases still run");
+                continue;
+            }
+        }
         let exr = out.join(format!("{name}.exr"));
         let status = Command::new(env!("CARGO_BIN_EXE_lucent"))
             .arg("render")

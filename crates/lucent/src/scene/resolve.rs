@@ -147,7 +147,7 @@ impl Scene {
             mode: o.mode.unwrap_or_default(),
             oracle: o.oracle,
             environment_shadows: !o.no_shadows,
-            bounces: o.bounces.or(file.as_ref().map(|f| f.bounces)).unwrap_or(0),
+            bounces: o.bounces.or(file.as_ref().map(|f| f.bounces)).unwrap_or(crate::ranges::DEFAULT_BOUNCES),
         };
         Ok(Scene {
             source,

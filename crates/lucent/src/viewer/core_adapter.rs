@@ -126,7 +126,7 @@ impl SolverSession {
             mode: params.mode,
             oracle: Some(params.oracle),
             environment_shadows: params.shadows,
-            bounces: 0,
+            bounces: params.bounces,
         };
         let same_topology = self.session.as_ref().is_some_and(|s| {
             s.mesh().triangles == mesh.triangles && s.mesh().positions.len() == mesh.positions.len()

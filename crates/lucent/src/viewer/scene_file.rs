@@ -37,6 +37,7 @@ pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
     state.params.profile = scene.transport.profile;
     state.params.single_scattering = scene.transport.single_scattering;
     state.params.shadows = scene.lights.first().is_none_or(|l| l.shadows);
+    state.params.bounces = scene.settings.bounces;
     if let Some(mode) = scene.mode {
         state.params.mode = mode;
     }

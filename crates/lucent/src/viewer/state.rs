@@ -118,6 +118,9 @@ pub struct SolveParams {
     pub oracle: lucent_core::solver::Oracle,
     /// Whether the mesh shadows the lights and the environment.
     pub shadows: bool,
+    /// Bounces of subsurface light between parts through the air (0..=4), as `lucent render
+    /// --bounces`. Default [`crate::ranges::DEFAULT_BOUNCES`].
+    pub bounces: u32,
     /// Figure 6.9: the face whose gathered-from clusters are shown, if that view is on (set
     /// from [`ViewState::show_clusters`] and [`ViewState::picked_face`]).
     pub cluster_face: Option<u32>,
@@ -226,6 +229,7 @@ impl ViewState {
                 // exact solve on the bunny.
                 oracle: lucent_core::solver::Oracle::for_profile(profile),
                 shadows: true,
+                bounces: crate::ranges::DEFAULT_BOUNCES,
                 cluster_face: None,
             },
             deform: Deformations::default(),

@@ -322,6 +322,8 @@ fn environment(ui: &mut Ui, state: &mut ViewState) {
         ui.weak(format!("{path} not found (run from the repository root)"));
     }
     ui.checkbox(&mut p.shadows, "shadows");
+    ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces between parts"))
+        .on_hover_text("light one part sends through the air to another: 64 rays a face and a solve each");
 }
 
 fn solver(ui: &mut Ui, state: &mut ViewState) {
