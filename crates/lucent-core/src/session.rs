@@ -142,8 +142,10 @@ pub struct Timings {
     pub gather_ms: f64,
     /// Single scattering along the view ray (`shading::single_scattering`).
     pub single_scattering_ms: f64,
-    /// Pushing `B` down to the leaves, bounces and the per-vertex average.
+    /// Pushing `B` down to the leaves and the per-vertex average.
     pub push_ms: f64,
+    /// Bounces between parts: their rays and solves ([`interreflection`]).
+    pub bounces_ms: f64,
 }
 
 impl Timings {
@@ -154,6 +156,7 @@ impl Timings {
             + self.pull_ms
             + self.gather_ms
             + self.push_ms
+            + self.bounces_ms
             + self.single_scattering_ms
     }
 }
@@ -455,6 +458,7 @@ impl FrameSession {
         // Each bounce: the light the last solve sent out, caught by facing parts, solved again
         // (the solve is linear in the irradiance; stored links are reused).
         let mut last = face_b.clone();
+        let t_bounces = Instant::now();
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
             let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
@@ -463,9 +467,10 @@ impl FrameSession {
             self.add_local(&mut last, &e2);
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
         }
+        timings.bounces_ms = ms_since(t_bounces);
         self.irradiance = e;
         self.diffuse_vertex = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
-        timings.push_ms += ms_since(t);
+        timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
         let vertex_radiance = self.with_single_scattering(&self.diffuse_vertex);
         timings.single_scattering_ms = ms_since(t);

@@ -206,7 +206,7 @@ impl Times {
         let t = &s.timings;
         self.irradiance.push(t.irradiance_ms);
         self.link.push(t.link_ms);
-        self.solve.push(t.pull_ms + t.gather_ms + t.push_ms);
+        self.solve.push(t.pull_ms + t.gather_ms + t.push_ms + t.bounces_ms);
         self.render.push(render_ms);
         self.write.push(write_ms);
     }

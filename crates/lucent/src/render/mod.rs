@@ -178,12 +178,13 @@ fn render_mertens(
     }
     let st = &solved.timings;
     log::info!(
-        "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms, single scattering {:.1} ms",
+        "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms, bounces {:.1} ms, single scattering {:.1} ms",
         st.irradiance_ms,
         st.link_ms,
         st.pull_ms,
         st.gather_ms,
         st.push_ms,
+        st.bounces_ms,
         st.single_scattering_ms
     );
 

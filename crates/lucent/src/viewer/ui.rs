@@ -402,6 +402,8 @@ fn timings(ui: &mut Ui, status: &Status) {
             ("pull", t.pull_ms),
             ("gather", t.gather_ms),
             ("push", t.push_ms),
+            ("bounces", t.bounces_ms),
+            ("single scattering", t.single_scattering_ms),
             ("solve total", t.total_ms()),
             ("draw (CPU)", status.draw_ms),
         ] {
