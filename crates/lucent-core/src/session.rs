@@ -125,7 +125,8 @@ pub struct FrameSettings {
     /// [`crate::irradiance::occlusion`]). Lights say for themselves ([`SceneLight::shadows`]).
     pub environment_shadows: bool,
     /// Bounces of subsurface light between facing parts through the air
-    /// ([`interreflection`]), 0..=4; 0 (default) switches them off.
+    /// ([`interreflection`]), 0..=4; 0 (this struct's default) switches them off. The `lucent`
+    /// command line, scenes and viewer default to 1 (`ranges::DEFAULT_BOUNCES` there).
     pub bounces: u32,
 }
 
