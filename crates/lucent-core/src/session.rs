@@ -112,6 +112,12 @@ fn parse_name<T: Copy>(s: &str, all: &[T], name: fn(T) -> &'static str, what: &s
     })
 }
 
+/// How much looser the oracle's thresholds are for a bounce solved on the fly than for the
+/// direct light's solve. The bounce is a few percent of `B` (up to a third in a crevice), so its
+/// share of the error stays below the direct solve's: on the 48K Stanford dragon (marble,
+/// 10 cm) the image moved by 0.03% at the median pixel, 0.18% at the 99th percentile.
+const BOUNCE_ORACLE_SLACK: f32 = 4.0;
+
 /// How the session solves, besides the material and the light.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameSettings {
@@ -464,7 +470,18 @@ impl FrameSession {
             let Some(caster) = &self.caster else { break };
             let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
             let unchanged = Changes::default();
+            // On the fly, a bounce links anew; its light is a small part of `B`, so its links
+            // may err more (stored links are reused as they are).
+            let saved = self.settings.oracle;
+            if self.settings.mode == SolveMode::OnTheFly {
+                let mut o = self.oracle();
+                o.eps1 *= BOUNCE_ORACLE_SLACK;
+                o.eps2 *= BOUNCE_ORACLE_SLACK;
+                o.eps_abs *= BOUNCE_ORACLE_SLACK;
+                self.settings.oracle = Some(o);
+            }
             last = self.transport_once(&self.entered_carried(&e2), &unchanged, &mut Timings::default()).0;
+            self.settings.oracle = saved;
             self.add_local(&mut last, &e2);
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
         }

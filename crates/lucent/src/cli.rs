@@ -220,7 +220,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_shadows: bool,
     /// Bounces of subsurface light between facing parts of the object through the air (a
-    /// crevice, feet under a body): 0 switches them off; each bounce casts 64 rays per face and
+    /// crevice, feet under a body): 0 switches them off; each bounce casts up to 64 rays per face and
     /// solves again. Default: the scene's `bounces`, else 1.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::BOUNCES), allow_negative_numbers = true)]
     pub bounces: Option<u32>,

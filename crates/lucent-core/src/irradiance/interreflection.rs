@@ -8,9 +8,10 @@
 //! comparison. lucent adds it as extra irradiance and solves again (the solve is linear in the
 //! irradiance): for each face, the rays of [`super::occlusion::cosine_rays`] that hit the front
 //! of another face `k` bring its exitant radiance `B_k F_t(η, μ_k) / (c π)` (the exit lobe of
-//! [`crate::shading`]), through the receiver's entry term.
+//! [`crate::shading`]), through the receiver's entry term. On meshes with many faces within a
+//! diffusion length each face casts fewer of those rays (`strata_for`).
 
-use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, cosine_rays};
+use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, stratified_cosine_rays};
 use super::{Entering, ShadowCaster};
 use crate::Rgb;
 use crate::bssrdf::{Dipole, fresnel_transmittance};
@@ -30,13 +31,15 @@ pub fn bounced_irradiance(
     let exit = (dipole.exit_normalization() / std::f64::consts::PI) as f32;
     let eta = dipole.eta;
     let eps = caster.offset();
+    let strata = strata_for(mesh, dipole);
+    let weight = std::f32::consts::PI / (strata * strata) as f32;
     (0..mesh.triangles.len())
         .into_par_iter()
         .map(|f| {
             let (p, n) = (mesh.face_centroid(f), mesh.face_normal(f));
             let origin = p + n * eps;
             let mut e = Entering::default();
-            for (dir, cos) in cosine_rays(n, f) {
+            for (dir, cos) in stratified_cosine_rays(n, f, strata) {
                 let Some((_, k)) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY) else {
                     continue;
                 };
@@ -47,17 +50,70 @@ pub fn bounced_irradiance(
                     e.add(radiance, &dipole.entry, cos);
                 }
             }
-            e * (std::f32::consts::PI / ENVIRONMENT_SHADOW_RAYS as f32)
+            e * weight
         })
         .collect()
+}
+
+/// Faces within a diffusion length below which every face casts all 64 rays.
+const FACES_PER_DISC: f64 = 64.0;
+
+/// Rays per face for the bounce, as strata per side (8: 64 rays, down to 2: 4 rays). The
+/// bounced light reaches a receiver through the profile, which averages it over the faces
+/// within a diffusion length `1/σ_tr` (the shortest channel's); where that disc holds more
+/// than [`FACES_PER_DISC`] faces, their rays together sample it, so each face casts 64 times
+/// that over their number (at least 4). The bunny in marble at 10 cm holds about 60 faces a
+/// disc (all 64 rays), the 203K Stanford dragon hundreds: its bounce took a third of the time,
+/// and the image moved by 0.24% at the median pixel, 2.1% at the 99th percentile (low-frequency
+/// blotches, not speckle: the profile smooths them).
+fn strata_for(mesh: &Mesh, dipole: &Dipole) -> usize {
+    let sigma_tr = (0..3)
+        .map(|c| {
+            let (t, a) = (dipole.sigma_t[c], dipole.alpha_prime[c]);
+            (3.0 * t * (1.0 - a) * t).sqrt()
+        })
+        .fold(0.0f64, f64::max);
+    let faces = mesh.triangles.len().max(1);
+    let area: f64 = (0..faces).map(|f| mesh.face_area(f) as f64).sum::<f64>() / faces as f64;
+    let usable = sigma_tr.is_finite() && sigma_tr > 0.0 && area.is_finite() && area > 0.0;
+    if !usable {
+        return 8;
+    }
+    let per_disc = std::f64::consts::PI / (sigma_tr * sigma_tr) / area;
+    let rays = (ENVIRONMENT_SHADOW_RAYS as f64 * FACES_PER_DISC / per_disc)
+        .clamp(4.0, ENVIRONMENT_SHADOW_RAYS as f64);
+    (rays.sqrt().round() as usize).clamp(2, 8)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bssrdf::Material;
+    use crate::bssrdf::{Material, ProfileKind};
     use crate::mesh::generate;
     use glam::Vec3;
+
+    /// Coarse meshes cast every ray; a mesh with thousands of faces within a diffusion length
+    /// casts the fewest.
+    #[test]
+    fn dense_meshes_cast_fewer_bounce_rays() {
+        let marble = Material::by_name("marble").unwrap();
+        let at = |mesh: &Mesh, metres: f64| {
+            let d = Dipole::profile_for_model_scale(
+                &marble,
+                mesh.extent() as f64,
+                metres,
+                ProfileKind::Pbd,
+                true,
+            );
+            strata_for(mesh, &d)
+        };
+        let bunny = crate::mesh::embedded::bunny();
+        assert_eq!(at(&bunny, 0.1), 8, "the bunny at 10 cm");
+        let fine = generate::icosphere(7);
+        let dense = at(&fine, 0.1);
+        assert!((2..=3).contains(&dense), "327,680 faces on a 10 cm sphere: {dense} strata");
+        assert_eq!(at(&fine, 100.0), 8, "the same at 100 m: faces wider than a diffusion length");
+    }
 
     /// Two `size`-wide square plates of `n × n` quads, one at y = 0 facing up and one at
     /// y = `gap` facing down.

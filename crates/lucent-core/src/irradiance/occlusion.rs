@@ -47,12 +47,17 @@ pub fn blocked_environment(
 /// 8 × 8 and jittered by a hash of `face` (the same every run): `(direction, cosine to n)`.
 /// With `N` of them, `(π/N) Σ f(ω_k)` estimates `∫ f(ω) cos dω` over the hemisphere.
 pub fn cosine_rays(n: Vec3, face: usize) -> impl Iterator<Item = (Vec3, f32)> {
+    stratified_cosine_rays(n, face, STRATA)
+}
+
+/// [`cosine_rays`] on a `strata` × `strata` grid (`strata²` rays).
+pub fn stratified_cosine_rays(n: Vec3, face: usize, strata: usize) -> impl Iterator<Item = (Vec3, f32)> {
     let (t, b) = n.any_orthonormal_pair();
-    (0..ENVIRONMENT_SHADOW_RAYS).map(move |k| {
-        let (i, j) = (k % STRATA, k / STRATA);
+    (0..strata * strata).map(move |k| {
+        let (i, j) = (k % strata, k / strata);
         let (ju, jv) = jitter(face as u32, k as u32);
-        let u = (i as f32 + ju) / STRATA as f32;
-        let v = (j as f32 + jv) / STRATA as f32;
+        let u = (i as f32 + ju) / strata as f32;
+        let v = (j as f32 + jv) / strata as f32;
         // Malley's method: a uniform disk sample lifted to the hemisphere is cosine-weighted.
         let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
         let cos = (1.0 - u).max(0.0).sqrt();

@@ -346,8 +346,9 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
             }
         });
     }
-    ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces"))
-        .on_hover_text("light one part sends through the air to another: 64 rays a face and a solve each");
+    ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces")).on_hover_text(
+        "light one part sends through the air to another: up to 64 rays a face and a solve each",
+    );
     // Transport-oracle thresholds (relative errors): smaller refines more.
     oracle(ui, &mut p.oracle, p.profile);
     ui.checkbox(&mut state.show_clusters, "figure 6.9: clusters gathered by a triangle");
