@@ -28,7 +28,7 @@
 //! Without the split, light entering near a terminator spreads into the shadow as if it had
 //! entered head-on: 3.6x the path tracer's radiance on the dim side of a 10 cm marble sphere.
 //! With the far-field share carried everywhere, the few millimetres past the terminator of a
-//! 2 cm marble sphere were a third too dark (worst 8x8 block 33% beyond noise, 19% with `g`).
+//! 2 cm marble sphere were a third too dark (worst 8x8 block 33% beyond noise, 17% with `g`).
 //!
 //! Both parts are tabulated over the outside cosine `μ_i` (33 points, linear; they are smooth),
 //! and their zonal band weights serve the SH environment.
