@@ -459,7 +459,9 @@ impl FrameSession {
         timings.irradiance_ms = ms_since(t);
 
         let e = std::mem::take(&mut self.irradiance);
-        let (mut face_b, links) = self.transport_once(&self.entered_carried(&e), &changes, &mut timings);
+        let oracle = self.oracle();
+        let (mut face_b, links) =
+            self.transport_once(&self.entered_carried(&e), &changes, oracle, &mut timings);
         let t = Instant::now();
         self.add_local(&mut face_b, &e);
         // Each bounce: the light the last solve sent out, caught by facing parts, solved again
@@ -472,16 +474,14 @@ impl FrameSession {
             let unchanged = Changes::default();
             // On the fly, a bounce links anew; its light is a small part of `B`, so its links
             // may err more (stored links are reused as they are).
-            let saved = self.settings.oracle;
+            let mut bounce_oracle = oracle;
             if self.settings.mode == SolveMode::OnTheFly {
-                let mut o = self.oracle();
-                o.eps1 *= BOUNCE_ORACLE_SLACK;
-                o.eps2 *= BOUNCE_ORACLE_SLACK;
-                o.eps_abs *= BOUNCE_ORACLE_SLACK;
-                self.settings.oracle = Some(o);
+                bounce_oracle.eps1 *= BOUNCE_ORACLE_SLACK;
+                bounce_oracle.eps2 *= BOUNCE_ORACLE_SLACK;
+                bounce_oracle.eps_abs *= BOUNCE_ORACLE_SLACK;
             }
-            last = self.transport_once(&self.entered_carried(&e2), &unchanged, &mut Timings::default()).0;
-            self.settings.oracle = saved;
+            let carried = self.entered_carried(&e2);
+            last = self.transport_once(&carried, &unchanged, bounce_oracle, &mut Timings::default()).0;
             self.add_local(&mut last, &e2);
             face_b.iter_mut().zip(&last).for_each(|(b, l)| *b += *l);
         }
@@ -528,11 +528,12 @@ impl FrameSession {
     }
 
     /// `B` per face for irradiance `e` by the settings' method, updating the hierarchical
-    /// solver for `changes` first: `(B, links)`.
+    /// solver for `changes` first and linking with the thresholds `oracle`: `(B, links)`.
     fn transport_once(
         &mut self,
         e: &[Rgb],
         changes: &Changes,
+        oracle: Oracle,
         timings: &mut Timings,
     ) -> (Vec<Rgb>, Option<usize>) {
         if self.settings.method == Method::Exact {
@@ -546,7 +547,6 @@ impl FrameSession {
             timings.gather_ms += ms_since(t);
             return (b, None);
         }
-        let oracle = self.oracle();
         let mode = self.settings.mode;
         self.make_solver();
         let Self { solver, mesh, dipole, face_gain, .. } = self;

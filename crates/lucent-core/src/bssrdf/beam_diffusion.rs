@@ -74,28 +74,68 @@ pub(crate) fn integrate_geometric(
     sum
 }
 
+/// Photon beam diffusion's dipole for one point source (Habel et al. 2013, as pbrt-v3): Grosjean's
+/// diffusion coefficient, the extrapolated boundary, and the exitance's fluence and flux weights.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointSource {
+    /// Grosjean's diffusion coefficient `D = (2σ_a + σ_s) / (3σ_t²)` (length).
+    pub d_g: f64,
+    /// `σ_tr = sqrt(σ_a / D)` (1/length).
+    pub sigma_tr: f64,
+    /// The extrapolated boundary's height `z_e` (length, negative: above the surface).
+    pub z_e: f64,
+    /// Weights of the fluence and of the normal flux in the exitance (unitless).
+    pub c_phi: f64,
+    pub c_e: f64,
+}
+
+impl PointSource {
+    /// For scattering `sigma_s`, absorption `sigma_a` (any common length unit) and relative
+    /// index `eta`.
+    pub fn new(sigma_s: f64, sigma_a: f64, eta: f64) -> Self {
+        let sigma_t = sigma_s + sigma_a;
+        let d_g = (2.0 * sigma_a + sigma_s) / (3.0 * sigma_t * sigma_t);
+        let (fm1, fm2) = (fresnel_moment1(eta), fresnel_moment2(eta));
+        PointSource {
+            d_g,
+            sigma_tr: (sigma_a / d_g).sqrt(),
+            z_e: -2.0 * d_g * (1.0 + 3.0 * fm2) / (1.0 - 2.0 * fm1),
+            c_phi: 0.25 * (1.0 - 2.0 * fm1),
+            c_e: 0.5 * (1.0 - 3.0 * fm2),
+        }
+    }
+
+    /// Depth of the virtual source mirroring a real one at depth `z_r` (negative: above).
+    pub fn virtual_depth(&self, z_r: f64) -> f64 {
+        -z_r + 2.0 * self.z_e
+    }
+
+    /// Exitance per unit source of a real source at depth `z_r` and its virtual one at `z_v`,
+    /// at distances `d_r` and `d_v` from the exit point (before PBD's near-source `κ`).
+    pub fn exitance(&self, z_r: f64, z_v: f64, d_r: f64, d_v: f64) -> f64 {
+        let sigma_tr = self.sigma_tr;
+        let (e_r, e_v) = ((-sigma_tr * d_r).exp(), (-sigma_tr * d_v).exp());
+        let phi = (e_r / d_r - e_v / d_v) / (4.0 * PI * self.d_g);
+        let e_n = (z_r * (1.0 + sigma_tr * d_r) * e_r / (d_r * d_r * d_r)
+            - z_v * (1.0 + sigma_tr * d_v) * e_v / (d_v * d_v * d_v))
+            / (4.0 * PI);
+        self.c_phi * phi + self.c_e * e_n
+    }
+}
+
 /// Multiple-scattering radial profile `R(r)` (per unit area, length^-2 in the units of
 /// `1/σ`) of photon beam diffusion for scattering `sigma_s`, absorption `sigma_a` (any common
 /// length unit, `σ_s + σ_a > 0`) and relative index `eta`, at distance `r ≥ 0`.
 pub fn beam_diffusion_multiple(sigma_s: f64, sigma_a: f64, eta: f64, r: f64) -> f64 {
     let sigma_t = sigma_s + sigma_a;
     let rho = sigma_s / sigma_t;
-    let d_g = (2.0 * sigma_a + sigma_s) / (3.0 * sigma_t * sigma_t);
-    let sigma_tr = (sigma_a / d_g).sqrt();
-    let (fm1, fm2) = (fresnel_moment1(eta), fresnel_moment2(eta));
-    let z_e = -2.0 * d_g * (1.0 + 3.0 * fm2) / (1.0 - 2.0 * fm1);
-    let (c_phi, c_e) = (0.25 * (1.0 - 2.0 * fm1), 0.5 * (1.0 - 3.0 * fm2));
+    let source = PointSource::new(sigma_s, sigma_a, eta);
     let exitance = |z_r: f64| {
-        let z_v = -z_r + 2.0 * z_e;
+        let z_v = source.virtual_depth(z_r);
         let d_r = (r * r + z_r * z_r).sqrt();
         let d_v = (r * r + z_v * z_v).sqrt();
-        let (e_r, e_v) = ((-sigma_tr * d_r).exp(), (-sigma_tr * d_v).exp());
-        let phi = (e_r / d_r - e_v / d_v) / (4.0 * PI * d_g);
-        let e_n = (z_r * (1.0 + sigma_tr * d_r) * e_r / (d_r * d_r * d_r)
-            - z_v * (1.0 + sigma_tr * d_v) * e_v / (d_v * d_v * d_v))
-            / (4.0 * PI);
         let kappa = 1.0 - (-2.0 * sigma_t * (d_r + z_r)).exp();
-        sigma_t * (-sigma_t * z_r).exp() * rho * rho * kappa * (c_phi * phi + c_e * e_n)
+        sigma_t * (-sigma_t * z_r).exp() * rho * rho * kappa * source.exitance(z_r, z_v, d_r, d_v)
     };
     let first = 1e-4 / sigma_t;
     integrate_geometric(first, 60.0 / sigma_t, 1.5, true, exitance).max(0.0)

@@ -33,7 +33,8 @@
 //! Both parts are tabulated over the outside cosine `μ_i` (33 points, linear; they are smooth),
 //! and their zonal band weights serve the SH environment.
 
-use super::fresnel::{fresnel_moment1, fresnel_moment2, fresnel_transmittance};
+use super::beam_diffusion::PointSource;
+use super::fresnel::fresnel_transmittance;
 use super::halfspace::HalfSpace;
 use crate::Rgb;
 use std::f64::consts::PI;
@@ -164,11 +165,8 @@ fn interpolate(table: &[[f32; 3]], mu: f32) -> [f32; 3] {
 #[derive(Clone, Copy, Debug)]
 struct BeyondOneMfp {
     rho: f64,
-    d_g: f64,
-    sigma_tr: f64,
-    z_e: f64,
-    c_phi: f64,
-    c_e: f64,
+    /// PBD's dipole in optical units (`σ_t = 1`).
+    source: PointSource,
     /// `M(1)`.
     normal: f64,
 }
@@ -179,17 +177,7 @@ impl BeyondOneMfp {
 
     fn new(rho: f64, eta: f64) -> Self {
         let rho = rho.clamp(0.0, 1.0);
-        let d_g = (2.0 - rho) / 3.0;
-        let (fm1, fm2) = (fresnel_moment1(eta), fresnel_moment2(eta));
-        let mut b = BeyondOneMfp {
-            rho,
-            d_g,
-            sigma_tr: ((1.0 - rho) / d_g).sqrt(),
-            z_e: -2.0 * d_g * (1.0 + 3.0 * fm2) / (1.0 - 2.0 * fm1),
-            c_phi: 0.25 * (1.0 - 2.0 * fm1),
-            c_e: 0.5 * (1.0 - 3.0 * fm2),
-            normal: 1.0,
-        };
+        let mut b = BeyondOneMfp { rho, source: PointSource::new(rho, 1.0 - rho, eta), normal: 1.0 };
         b.normal = b.beyond(1.0);
         b
     }
@@ -198,19 +186,17 @@ impl BeyondOneMfp {
     /// of the fluence and flux terms in closed form, less PBD's near-source correction
     /// `κ = 1 - e^{-2(d_r + z_r)}`, which fades within a few mean free paths, by quadrature.
     fn point(&self, z_r: f64) -> f64 {
-        let z_v = -z_r + 2.0 * self.z_e;
+        let PointSource { d_g, sigma_tr, c_phi, c_e, .. } = self.source;
+        let z_v = self.source.virtual_depth(z_r);
         let (d_r, d_v) = ((1.0 + z_r * z_r).sqrt(), (1.0 + z_v * z_v).sqrt());
-        let (e_r, e_v) = ((-self.sigma_tr * d_r).exp(), (-self.sigma_tr * d_v).exp());
+        let (e_r, e_v) = ((-sigma_tr * d_r).exp(), (-sigma_tr * d_v).exp());
         // ∫_1^∞ 2πr e^{-σd}/d dr = 2π e^{-σ d_0} / σ; the real and virtual sources' difference
         // has the limit 2π (d_v0 - d_r0) as σ → 0.
-        let phi = if self.sigma_tr > 1e-9 {
-            (e_r - e_v) / (2.0 * self.d_g * self.sigma_tr)
-        } else {
-            (d_v - d_r) / (2.0 * self.d_g)
-        };
+        let phi =
+            if sigma_tr > 1e-9 { (e_r - e_v) / (2.0 * d_g * sigma_tr) } else { (d_v - d_r) / (2.0 * d_g) };
         // ∫_1^∞ 2πr z(1+σd)e^{-σd}/d³ dr = 2π z e^{-σ d_0} / d_0.
         let e_n = 0.5 * (z_r * e_r / d_r - z_v * e_v / d_v);
-        self.c_phi * phi + self.c_e * e_n - self.kappa_correction(z_r, z_v, d_r)
+        c_phi * phi + c_e * e_n - self.kappa_correction(z_r, z_v, d_r)
     }
 
     /// `∫_1^∞ 2πr e^{-2(d_r + z_r)} (c_φ φ + c_E E) dr`, over `d_r` (`r dr = d_r dd_r`) by the
@@ -222,12 +208,7 @@ impl BeyondOneMfp {
         for k in 0..STEPS {
             let d_r = d_r0 + (k as f64 + 0.5) * h;
             let d_v = (d_r * d_r - z_r * z_r + z_v * z_v).sqrt();
-            let (e_r, e_v) = ((-self.sigma_tr * d_r).exp(), (-self.sigma_tr * d_v).exp());
-            let phi = (e_r / d_r - e_v / d_v) / (4.0 * PI * self.d_g);
-            let e_n = (z_r * (1.0 + self.sigma_tr * d_r) * e_r / (d_r * d_r * d_r)
-                - z_v * (1.0 + self.sigma_tr * d_v) * e_v / (d_v * d_v * d_v))
-                / (4.0 * PI);
-            sum += (-2.0 * (d_r + z_r)).exp() * (self.c_phi * phi + self.c_e * e_n) * 2.0 * PI * d_r;
+            sum += (-2.0 * (d_r + z_r)).exp() * self.source.exitance(z_r, z_v, d_r, d_v) * 2.0 * PI * d_r;
         }
         sum * h
     }
@@ -326,21 +307,10 @@ mod tests {
                     for i in 0..400 {
                         let (r0, r1) = (1.015f64.powi(i), 1.015f64.powi(i + 1));
                         let r = 0.5 * (r0 + r1);
-                        let z_v = -z_r + 2.0 * b.z_e;
+                        let z_v = b.source.virtual_depth(z_r);
                         let (d_r, d_v) = ((r * r + z_r * z_r).sqrt(), (r * r + z_v * z_v).sqrt());
-                        let (e_r, e_v) = ((-b.sigma_tr * d_r).exp(), (-b.sigma_tr * d_v).exp());
-                        let phi = (e_r / d_r - e_v / d_v) / (4.0 * std::f64::consts::PI * b.d_g);
-                        let e_n = (z_r * (1.0 + b.sigma_tr * d_r) * e_r / d_r.powi(3)
-                            - z_v * (1.0 + b.sigma_tr * d_v) * e_v / d_v.powi(3))
-                            / (4.0 * std::f64::consts::PI);
                         let kappa = 1.0 - (-2.0 * (d_r + z_r)).exp();
-                        m += kappa
-                            * (b.c_phi * phi + b.c_e * e_n)
-                            * 2.0
-                            * std::f64::consts::PI
-                            * r
-                            * (r1 - r0)
-                            / 200.0;
+                        m += kappa * b.source.exitance(z_r, z_v, d_r, d_v) * 2.0 * PI * r * (r1 - r0) / 200.0;
                     }
                 }
                 m

@@ -67,12 +67,7 @@ const FACES_PER_DISC: f64 = 64.0;
 /// and the image moved by 0.24% at the median pixel, 2.1% at the 99th percentile (low-frequency
 /// blotches, not speckle: the profile smooths them).
 fn strata_for(mesh: &Mesh, dipole: &Dipole) -> usize {
-    let sigma_tr = (0..3)
-        .map(|c| {
-            let (t, a) = (dipole.sigma_t[c], dipole.alpha_prime[c]);
-            (3.0 * t * (1.0 - a) * t).sqrt()
-        })
-        .fold(0.0f64, f64::max);
+    let sigma_tr = dipole.sigma_tr.into_iter().fold(0.0f64, f64::max);
     let faces = mesh.triangles.len().max(1);
     let area: f64 = (0..faces).map(|f| mesh.face_area(f) as f64).sum::<f64>() / faces as f64;
     let usable = sigma_tr.is_finite() && sigma_tr > 0.0 && area.is_finite() && area > 0.0;
