@@ -268,6 +268,7 @@ fn bunny_accuracy(kind: ProfileKind, single: bool) {
     let h = face_cluster::build(&mesh);
     let lights = light_for(&mesh);
     let mut worst = 0.0f64;
+    let mut failed = Vec::new();
     for name in ["marble", "skimmilk", "ketchup"] {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
@@ -288,12 +289,19 @@ fn bunny_accuracy(kind: ProfileKind, single: bool) {
                 100.0 * err_render,
                 sol.stats.links as f64 / mesh.triangles.len() as f64
             );
-            assert!(err <= 0.01, "{name} at {scale} m: {:.3}%", 100.0 * err);
-            assert!(err_render <= 0.01, "{name} at {scale} m (render): {:.3}%", 100.0 * err_render);
+            if err.max(err_render) > 0.01 {
+                failed.push(format!(
+                    "{name} at {scale} m: {:.3}% (render {:.3}%)",
+                    100.0 * err,
+                    100.0 * err_render
+                ));
+            }
             worst = worst.max(err);
         }
     }
     println!("bunny {kind} worst rel RMSE {:.3}%", 100.0 * worst);
+    // All nine cases first, so a failure shows the whole table.
+    assert!(failed.is_empty(), "over 1% against the exact solve: {}", failed.join(", "));
 }
 
 /// On the bunny, after a twist and a bump, incremental mode (stored links updated in place)

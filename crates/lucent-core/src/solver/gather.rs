@@ -5,6 +5,12 @@
 //! on-the-fly mode gathers each link as the refinement accepts it and pushes down the traversal
 //! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
 //! the energy bound of [`super::energy`].
+//!
+//! With linear receivers ([`super::Oracle::linear_receivers`]) a receiver cluster gathers its
+//! `B` at its midpoint *and* the gradient of `B` there (each link's steepness along the line
+//! from its emitter), and the push hands each child the parent's value moved to the child's
+//! midpoint: first-order (linear-basis) hierarchical radiosity at the receiver, which lets
+//! receivers stay whole as far as emitters do.
 
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef;
@@ -12,7 +18,7 @@ use super::link_set::LinkSet;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -60,17 +66,28 @@ impl HierarchicalSolver {
     fn render_stored(&mut self, face_irradiance: &[Rgb]) -> Solution {
         let t0 = Instant::now();
         let [mut e_node, mut b_node] = std::mem::take(&mut self.frame);
+        let mut g_node = std::mem::take(&mut self.frame_grad);
         e_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         self.pull_into(face_irradiance, &mut e_node);
         let t1 = Instant::now();
         let links = self.links.as_ref().expect("links stored");
-        gather_links(links, &e_node, &mut b_node);
+        let linear = self.linear_receivers();
+        if linear {
+            g_node.resize(self.hierarchy.len(), [Vec3A::ZERO; 3]);
+            let mid = self
+                .midpoints
+                .get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect());
+            gather_links_linear(&self.hierarchy, links, &e_node, mid, &mut b_node, &mut g_node);
+        } else {
+            gather_links(links, &e_node, &mut b_node);
+        }
         let t2 = Instant::now();
-        let face_b = self.push(&mut b_node);
+        let face_b = self.push(&mut b_node, linear.then_some(&mut g_node[..]));
         let t3 = Instant::now();
         let links = links.len();
         self.frame = [e_node, b_node];
+        self.frame_grad = g_node;
         Solution {
             face_b,
             stats: SolveStats {
@@ -84,12 +101,16 @@ impl HierarchicalSolver {
         }
     }
 
-    /// Push: accumulates every cluster's gathered `B` down to its leaves (in parallel over
-    /// subtrees) and returns `B` per original face.
-    fn push(&self, b_node: &mut [Vec3A]) -> Vec<Rgb> {
+    /// Push: accumulates every cluster's gathered `B` (and, with linear receivers, its
+    /// gradient `g_node`) down to its leaves, in parallel over subtrees, and returns `B` per
+    /// original face.
+    fn push(&self, b_node: &mut [Vec3A], g_node: Option<&mut [Grad]>) -> Vec<Rgb> {
         let h = &self.hierarchy;
         if !h.is_empty() {
-            push_subtree(h, 0, Vec3A::ZERO, b_node);
+            match g_node {
+                Some(g) => push_linear(h, 0, Linear::default(), b_node, g),
+                None => push_subtree(h, 0, Vec3A::ZERO, b_node),
+            }
         }
         h.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
     }
@@ -108,7 +129,7 @@ impl HierarchicalSolver {
         let mut leaf_b = vec![[Rgb::ZERO; 2]; h.leaf_count()];
         let mut ctx = Ctx::new(self);
         self.start_progress("on-the-fly");
-        self.otf_rec(&mut ctx, 0, Cands::ROOT, [Vec3A::ZERO; 2], &e_node, &mut leaf_b);
+        self.otf_rec(&mut ctx, 0, Cands::ROOT, [Linear::default(); 2], &e_node, &mut leaf_b);
         self.tick_progress(None, 0);
         let t2 = Instant::now();
         let bound = self.dipole.bounds_energy();
@@ -128,38 +149,50 @@ impl HierarchicalSolver {
     }
 
     /// On-the-fly mode below receiver `r`: refines its candidates `cands`, gathering `E F`
-    /// of every accepted link into `b_acc` (`B` and, for the energy bound, `B` under uniform
-    /// irradiance 1, both with what `r`'s ancestors gathered), and writes the totals at `r`'s
-    /// leaves into `out` (one entry per leaf of the subtree, in leaf order).
+    /// of every accepted link into `acc` (`B` and, for the energy bound, `B` under uniform
+    /// irradiance 1, both at `r`'s midpoint with what `r`'s ancestors gathered), and writes
+    /// the totals at `r`'s leaves into `out` (one entry per leaf of the subtree, in leaf
+    /// order).
     fn otf_rec(
         &self,
         ctx: &mut Ctx,
         r: usize,
         cands: Cands,
-        b_acc: [Vec3A; 2],
+        acc: [Linear; 2],
         e_node: &[Vec3A],
         out: &mut [[Rgb; 2]],
     ) {
+        let h = &self.hierarchy;
         let mut defer = Deferred::default();
         // `B` and, for the energy bound, `B` under uniform irradiance 1.
-        let [mut b, mut u] = b_acc;
+        let [mut b, mut u] = acc;
+        let m_r = h.geom[r].midpoint;
         ctx.receive(
             &self.oracle,
             r,
             cands.iter(),
             &mut defer,
-            &mut Evaluate(|e, _, f| {
+            &mut Evaluate(|e: usize, _, f: [f32; 3], slope: f32| {
                 let f = Vec3A::from_array(f);
-                b += e_node[e] * f;
-                u += f;
+                let t = e_node[e] * f;
+                b.value += t;
+                u.value += f;
+                if slope > 0.0 {
+                    let (k, dv) = steepness(m_r, h.geom[e].midpoint, slope);
+                    b.add_gradient(t * k, dv);
+                    u.add_gradient(f * k, dv);
+                }
             }),
         );
-        let b = [b, u];
         let n = self.hierarchy.nodes[r];
         if n.is_leaf() {
-            out[0] = b.map(Into::into);
+            out[0] = [b.value.into(), u.value.into()];
             return;
         }
+        let at = |c: usize| {
+            let offset = Vec3A::from(h.geom[c].midpoint - m_r);
+            [b.moved(offset), u.moved(offset)]
+        };
         let parts = split_leaves(&self.hierarchy.nodes, r, out);
         if n.leaf_count() > PAR_LEAVES {
             let subs: Vec<Ctx> = parts
@@ -167,7 +200,7 @@ impl HierarchicalSolver {
                 .enumerate()
                 .map(|(k, (c, o))| {
                     let mut sub = Ctx::new(self);
-                    self.otf_rec(&mut sub, c, Cands::of_child(&defer, k), b, e_node, o);
+                    self.otf_rec(&mut sub, c, Cands::of_child(&defer, k), at(c), e_node, o);
                     self.tick_progress(Some(r), c);
                     sub
                 })
@@ -175,7 +208,7 @@ impl HierarchicalSolver {
             subs.iter().for_each(|s| ctx.absorb(s));
         } else {
             for (k, (c, o)) in parts.into_iter().enumerate() {
-                self.otf_rec(ctx, c, Cands::of_child(&defer, k), b, e_node, o);
+                self.otf_rec(ctx, c, Cands::of_child(&defer, k), at(c), e_node, o);
                 self.tick_progress(Some(r), c);
             }
         }
@@ -190,6 +223,123 @@ fn gather_links(links: &LinkSet, e_node: &[Vec3A], b_node: &mut [Vec3A]) {
     b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
         link_coef::gather(e_node, stored, ci * CHUNK, b);
     });
+}
+
+/// Per channel, the gradient of `B` (per mesh unit of length) at a receiver's midpoint.
+pub(crate) type Grad = [Vec3A; 3];
+
+/// A receiver's gathered `B` as a linear function: its value at the receiver's midpoint and
+/// its gradient there.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Linear {
+    value: Vec3A,
+    grad: Grad,
+}
+
+impl Linear {
+    /// Adds `w[c] dv` to channel `c`'s gradient.
+    #[inline]
+    fn add_gradient(&mut self, w: Vec3A, dv: Vec3A) {
+        self.grad[0] += dv * w.x;
+        self.grad[1] += dv * w.y;
+        self.grad[2] += dv * w.z;
+    }
+
+    /// The same function about a point `offset` from the midpoint.
+    #[inline]
+    fn moved(self, offset: Vec3A) -> Self {
+        Linear { value: self.value + along(&self.grad, offset), grad: self.grad }
+    }
+}
+
+/// `g += h`, channel by channel.
+#[inline]
+fn add_grad(g: &mut Grad, h: &Grad) {
+    g.iter_mut().zip(h).for_each(|(g, h)| *g += *h);
+}
+
+/// Each channel's gradient of `g` dotted with `offset`.
+#[inline]
+fn along(g: &Grad, offset: Vec3A) -> Vec3A {
+    Vec3A::new(g[0].dot(offset), g[1].dot(offset), g[2].dot(offset))
+}
+
+/// For a link from an emitter at `m_e` to a receiver at `m_r` with steepness `slope`: the
+/// factor `k` and the line `D = m_r - m_e` such that the link's `E F` contributes `k E F D`
+/// to the receiver's gradient (`F (1 - s (x - m_r).D / |D|^2)`, `oracle::Samples::slope`;
+/// render mode's gather writes the same inline).
+#[inline]
+fn steepness(m_r: Vec3, m_e: Vec3, slope: f32) -> (f32, Vec3A) {
+    let dv = Vec3A::from(m_r - m_e);
+    (-slope / dv.length_squared(), dv)
+}
+
+/// [`gather_links`] with linear receivers: a leaf's `B` as there, an inner receiver's `B`
+/// and its gradient `g_node` in one pass over its links (`mid`: every cluster's midpoint).
+fn gather_links_linear(
+    h: &Hierarchy,
+    links: &LinkSet,
+    e_node: &[Vec3A],
+    mid: &[Vec3A],
+    b_node: &mut [Vec3A],
+    g_node: &mut [Grad],
+) {
+    const CHUNK: usize = 1024;
+    let stored = links.view();
+    b_node.par_chunks_mut(CHUNK).zip(g_node.par_chunks_mut(CHUNK)).enumerate().for_each(|(ci, (b, g))| {
+        let isa = crate::simd::Isa::best();
+        for (i, (b, g)) in b.iter_mut().zip(g.iter_mut()).enumerate() {
+            let r = ci * CHUNK + i;
+            let (emitter, coef, scale) = stored.of(r);
+            if h.nodes[r].is_leaf() {
+                *b = link_coef::gather_sum(isa, e_node, emitter, coef) * scale;
+                *g = [Vec3A::ZERO; 3];
+                continue;
+            }
+            let m_r = mid[r];
+            let mut acc = Linear::default();
+            for (&w, &c) in emitter.iter().zip(coef) {
+                let e = (w & !link_coef::FF_BIT) as usize;
+                let t = e_node[e] * link_coef::decode(c);
+                acc.value += t;
+                let slope = c.slope();
+                if slope > 0.0 {
+                    let dv = m_r - mid[e];
+                    acc.add_gradient(t * (-slope / dv.length_squared()), dv);
+                }
+            }
+            *b = acc.value * scale;
+            *g = acc.grad.map(|v| v * scale);
+        }
+    });
+}
+
+/// [`push_subtree`] with gradients: every cluster's `B` and gradient `g`, gathered at its
+/// midpoint, plus its ancestors' `above` (moved to its midpoint), parents before children.
+fn push_linear(h: &Hierarchy, r: usize, above: Linear, b: &mut [Vec3A], g: &mut [Grad]) {
+    let n = h.nodes[r];
+    b[0] += above.value;
+    add_grad(&mut g[0], &above.grad);
+    if n.leaf_count() > PAR_LEAVES {
+        let own = Linear { value: b[0], grad: g[0] };
+        let m_r = h.geom[r].midpoint;
+        let (_, b_rest) = b.split_at_mut(1);
+        let (_, g_rest) = g.split_at_mut(1);
+        split_subtrees(&h.nodes, r, b_rest)
+            .into_par_iter()
+            .zip(split_subtrees(&h.nodes, r, g_rest))
+            .for_each(|((c, bs), (_, gs))| {
+                push_linear(h, c, own.moved(Vec3A::from(h.geom[c].midpoint - m_r)), bs, gs);
+            });
+        return;
+    }
+    for i in r + 1..n.subtree_end as usize {
+        let p = h.nodes[i].parent as usize;
+        let offset = Vec3A::from(h.geom[i].midpoint - h.geom[p].midpoint);
+        let gp = g[p - r];
+        b[i - r] += b[p - r] + along(&gp, offset);
+        add_grad(&mut g[i - r], &gp);
+    }
 }
 
 /// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children

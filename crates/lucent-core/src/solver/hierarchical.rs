@@ -110,6 +110,11 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     pub(super) frame: [Vec<Vec3A>; 2],
+    /// Render mode's per-cluster gradient of the gathered `B` (linear receivers), likewise.
+    pub(super) frame_grad: Vec<super::gather::Grad>,
+    /// Every cluster's midpoint, packed for render mode's gather with linear receivers; made
+    /// on first use after the geometry last changed.
+    pub(super) midpoints: std::sync::OnceLock<Vec<Vec3A>>,
     /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
@@ -142,11 +147,21 @@ impl HierarchicalSolver {
             spare: None,
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
+            frame_grad: Vec::new(),
+            midpoints: Default::default(),
             bound: None,
             face_gain: None,
             locality,
             local,
         }
+    }
+
+    /// Whether receivers take links with a steepness ([`Oracle::linear_receivers`]): the
+    /// transport oracle with a distance-form profile.
+    pub(super) fn linear_receivers(&self) -> bool {
+        self.oracle.linear_receivers
+            && self.oracle.mode == super::oracle::OracleMode::Transport
+            && !self.dipole.profile.uses_normals()
     }
 
     /// The stored links, if [`HierarchicalSolver::link`] has run.
@@ -244,6 +259,7 @@ impl HierarchicalSolver {
         self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.links = None;
         self.bound = None;
+        self.midpoints = Default::default();
     }
 
     /// Sets the finite-body gain per face (`None`: none); the stored bound is remade.
@@ -251,6 +267,7 @@ impl HierarchicalSolver {
         if self.face_gain != gain {
             self.face_gain = gain;
             self.bound = None;
+            self.midpoints = Default::default();
         }
     }
 
@@ -273,6 +290,7 @@ impl HierarchicalSolver {
         self.dipole = dipole;
         self.spare = None;
         self.bound = None;
+        self.midpoints = Default::default();
         if let Some(l) = self.links.as_mut() {
             l.mark_all_dirty();
         }

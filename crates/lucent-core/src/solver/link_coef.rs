@@ -66,8 +66,11 @@ pub fn receiver_scale(max: f32) -> f32 {
 }
 
 /// A link's transport coefficient per channel (unitless, `F(E, x_R)` of Mertens eq. 6) as
-/// IEEE half floats relative to its receiver's scale (see the module documentation); the
-/// fourth lane is 0, so that eight aligned bytes load into one register.
+/// IEEE half floats relative to its receiver's scale (see the module documentation), and in
+/// the fourth lane its steepness across the receiver (`oracle::Samples::slope`, unitless,
+/// as a half float of its own: no scale), so that eight aligned bytes load into one
+/// register. The gather kernels multiply the fourth lane too; its product lands in the
+/// fourth lane of `B`, which nothing reads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
 #[repr(C, align(8))]
 pub struct LinkCoef([u16; 4]);
@@ -78,16 +81,41 @@ impl LinkCoef {
     /// values above the half float range saturate.
     #[inline]
     pub fn pack(f: Vec3A, scale: f32) -> Self {
+        Self::pack_with_slope(f, scale, 0.0)
+    }
+
+    /// [`LinkCoef::pack`] with the link's steepness `slope` (>= 0; see the type).
+    #[inline]
+    pub fn pack_with_slope(f: Vec3A, scale: f32, slope: f32) -> Self {
         let y = f / scale;
-        LinkCoef([half_bits(y.x), half_bits(y.y), half_bits(y.z), 0])
+        LinkCoef([half_bits(y.x), half_bits(y.y), half_bits(y.z), half_bits(slope)])
+    }
+
+    /// The link's steepness across its receiver (0 for a receiver taken as one value).
+    #[inline]
+    pub fn slope(self) -> f32 {
+        half_value(self.0[3])
     }
 
     /// The coefficient per channel, given its receiver's scale.
     #[inline]
     pub fn unpack(self, scale: f32) -> Vec3A {
-        let h = |c: usize| f32::from_bits((self.0[c] as u32) << SHIFT) * HALF_RESCALE;
+        let h = |c: usize| half_value(self.0[c]);
         Vec3A::new(h(0), h(1), h(2)) * scale
     }
+}
+
+/// `s` rounded to the half float it is stored as (see [`LinkCoef`]), so that the oracle
+/// tests the steepness the gather will use.
+#[inline]
+pub(crate) fn round_slope(s: f32) -> f32 {
+    half_value(half_bits(s))
+}
+
+/// The value of the half float with bits `h`.
+#[inline]
+fn half_value(h: u16) -> f32 {
+    f32::from_bits((h as u32) << SHIFT) * HALF_RESCALE
 }
 
 /// The half float nearest `y` (`y` ≥ 0, below the largest half float), as bits.
@@ -159,9 +187,10 @@ fn gather_one(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
     s0 + s1
 }
 
-/// The three half floats of `c` as one SIMD vector (fourth lane 0), exactly.
+/// The three half floats of `c` as one SIMD vector (its fourth lane the steepness), exactly,
+/// before the receiver's scale.
 #[inline]
-fn decode(c: LinkCoef) -> Vec3A {
+pub(crate) fn decode(c: LinkCoef) -> Vec3A {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::*;

@@ -90,6 +90,7 @@ impl Store {
             emitter: (w & !FF_BIT) as usize,
             kind: if w & FF_BIT != 0 { LinkKind::FormFactor } else { LinkKind::PointSample },
             coef: self.coef[j].unpack(scale),
+            slope: self.coef[j].slope(),
             dirty: self.dirty[j],
         }
     }
@@ -121,6 +122,9 @@ pub struct Link {
     /// Transport coefficient `F(E, x_R)` per channel (unitless), as stored (half floats under
     /// the receiver's scale: relative error at most [`super::link_coef::MAX_REL_ERROR`]).
     pub coef: Vec3A,
+    /// Its steepness across an inner receiver (`oracle::Samples::slope`, unitless; 0 where
+    /// the receiver takes one value).
+    pub slope: f32,
     /// Whether the coefficient is stale (an incremental update ran out of budget); the next
     /// update recomputes it first.
     pub dirty: bool,
@@ -419,9 +423,9 @@ pub(crate) struct LinkChunk {
     receivers: Vec<ReceiverLinks>,
     emitter: Vec<u32>,
     coef: Vec<LinkCoef>,
-    /// The coefficients of the receiver being linked, packed by
+    /// The coefficients (and steepness) of the receiver being linked, packed by
     /// [`LinkChunk::close_receiver`] once its scale is known.
-    staged: Vec<Vec3A>,
+    staged: Vec<(Vec3A, f32)>,
     dirty: Vec<bool>,
     /// `(receiver, candidate count)` of the receivers visited, in preorder, and their
     /// candidates.
@@ -445,7 +449,7 @@ impl LinkChunk {
     /// Adds the link `e -> r` to the receiver being linked (`r`, until
     /// [`LinkChunk::close_receiver`]).
     #[inline]
-    pub fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: Vec3A, dirty: bool) {
+    pub fn push(&mut self, r: usize, e: usize, kind: LinkKind, f: Vec3A, slope: f32, dirty: bool) {
         match self.receivers.last_mut() {
             Some(q) if q.r == r as u32 => q.links += 1,
             _ => self.receivers.push(ReceiverLinks { r: r as u32, links: 1, scale: 1.0 }),
@@ -454,7 +458,7 @@ impl LinkChunk {
             LinkKind::FormFactor => e as u32 | FF_BIT,
             LinkKind::PointSample => e as u32,
         });
-        self.staged.push(f);
+        self.staged.push((f, slope));
         self.dirty.push(dirty);
     }
 
@@ -464,7 +468,7 @@ impl LinkChunk {
     #[inline]
     pub fn push_old(&mut self, old: &LinkSet, r: usize, j: usize) {
         let l = old.link_at(r, j);
-        self.push(r, l.emitter, l.kind, l.coef, l.dirty);
+        self.push(r, l.emitter, l.kind, l.coef, l.slope, l.dirty);
     }
 
     /// Packs the staged coefficients of the receiver being linked, under its scale.
@@ -472,10 +476,10 @@ impl LinkChunk {
         if self.staged.is_empty() {
             return;
         }
-        let max = self.staged.iter().fold(0.0f32, |m, f| m.max(f.max_element()));
+        let max = self.staged.iter().fold(0.0f32, |m, (f, _)| m.max(f.max_element()));
         let scale = receiver_scale(max);
         self.receivers.last_mut().expect("staged links have a receiver").scale = scale;
-        self.coef.extend(self.staged.drain(..).map(|f| LinkCoef::pack(f, scale)));
+        self.coef.extend(self.staged.drain(..).map(|(f, s)| LinkCoef::pack_with_slope(f, scale, s)));
     }
 
     /// Empties the chunk, keeping its buffers.

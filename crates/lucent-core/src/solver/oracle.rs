@@ -101,6 +101,14 @@ pub struct Oracle {
     /// bounds the latter by the irradiance itself (a shadow edge across every emitter).
     /// Default 1.
     pub irradiance_contrast: f32,
+    /// [`OracleMode::Transport`] with a distance-form profile only: a receiver cluster's
+    /// point-sample links carry the transport's first-order change across the receiver (see
+    /// [`Samples::slope`]), and the push hands each child the gathered `B` *plus* its gradient
+    /// times the child's offset, instead of one value for the whole cluster. The receiver
+    /// test then bounds the second-order remainder, not the first-order change, so receivers
+    /// stay whole up to about a third of their distance to the emitter, as emitters do, not
+    /// a fifteenth (the cause of most links on dense scanned meshes). Default true.
+    pub linear_receivers: bool,
 }
 
 impl Oracle {
@@ -132,6 +140,7 @@ impl Default for Oracle {
             eps_abs: 1e-3,
             eps_share: 0.0,
             irradiance_contrast: 1.0,
+            linear_receivers: true,
         }
     }
 }
@@ -178,6 +187,13 @@ pub(crate) struct Samples {
     /// Out, with [`Decision::SplitReceiver`]: the estimates from the emitter to the receiver's
     /// children's midpoints (in order), when the receiver test made them.
     pub at_children: Option<[[f32; 3]; 4]>,
+    /// Out, with a link at an inner receiver that passed the linear receiver test
+    /// ([`Oracle::linear_receivers`]): the link's *steepness* `s` (unitless, >= 0; 0 when
+    /// the receiver is taken as one value). Within the receiver the coefficient is
+    /// `F(x) = F (1 - s (x - m_R).D / |D|^2)`, with `D = m_R - m_E` the line from the
+    /// emitter's midpoint to the receiver's: the distance-form profile's gradient points
+    /// along it, and `s = -dln F/dln d` is about `σ_tr d + 3` for a dipole tail.
+    pub slope: f32,
     /// Out: why the receiver test and the emitter test decided as they did (for
     /// [`super::census`]; [`Cause::None`] where a test did not run).
     pub why: [Cause; 2],
@@ -278,6 +294,7 @@ impl Samples {
         self.recv_scale = None;
         self.children = None;
         self.at_children = None;
+        self.slope = 0.0;
         self.why = [Cause::None; 2];
         known
     }
@@ -442,11 +459,17 @@ impl Oracle {
         }
         // The distance-form profiles do not depend on the receiver's normal, so nothing above
         // splits a receiver for its size: estimate the variation of `R` over the receiver from
-        // its radius, as the emitter test does.
+        // its radius, as the emitter test does: its first-order change over half the radius
+        // (the children's midpoints), or with a linear receiver the second-order remainder
+        // `(k r)² / 2` at its edge (at the children's midpoints, a quarter of that let the
+        // bunny at 1 cm err by 2%: the children's estimates cannot see the leaves' curvature).
+        let linear = self.linear_receivers && d.normal_weight == 0.0;
         if d.normal_weight == 0.0 {
             let dist = view.src.nearest(d, eg.midpoint);
-            let err: [f32; 3] =
-                std::array::from_fn(|c| (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius * 0.5 * f_mid[c]);
+            let err: [f32; 3] = std::array::from_fn(|c| {
+                let x = (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius;
+                if linear { 0.5 * x * x * f_mid[c] } else { 0.5 * x * f_mid[c] }
+            });
             if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
                 samples.why[0] = Cause::Size;
                 return true;
@@ -457,6 +480,11 @@ impl Oracle {
         let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
         let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
         samples.at_children = Some(f_children);
+        // With a linear receiver, the children are measured against the line through the
+        // midpoint's estimate along `D` (its steepness fitted to theirs), not against the
+        // midpoint's estimate itself.
+        let (slope, offsets) =
+            if linear { linear_slope(h, rn, rg, eg, f, &f_children) } else { (0.0, [0.0; 4]) };
         for (k, &c) in rn.children().iter().enumerate() {
             let cg = &h.geom[c as usize];
             if solid_angle(cg.midpoint, eg) == INSIDE {
@@ -464,7 +492,8 @@ impl Oracle {
                 return true;
             }
             let fc = f_children[k];
-            let diff = std::array::from_fn(|c| (f[c] - fc[c]).abs());
+            let line = 1.0 - slope * offsets[k];
+            let diff = std::array::from_fn(|c| (f[c] * line - fc[c]).abs());
             if !self.within(diff, f, self.eps1, view.inv_rtot) {
                 samples.why[0] = Cause::Variation;
                 return true;
@@ -477,6 +506,7 @@ impl Oracle {
         // exceeds F at R's midpoint (R_d is convex): as at the emitter, extrapolate from the
         // children's average.
         samples.why[0] = Cause::Pass;
+        samples.slope = slope;
         let k = rn.child_count as f32;
         samples.recv_scale = Some(std::array::from_fn(|c| {
             if f[c] > 0.0 { ((avg[c] + (avg[c] - f[c]) / (k - 1.0)) / f[c]).max(0.0) } else { 1.0 }
@@ -582,4 +612,47 @@ impl Oracle {
         samples.estimate = Some(std::array::from_fn(|c| (sum[c] + (sum[c] - f[c]) / (k - 1.0)).max(0.0)));
         self.within(err, sum, self.eps2, view.inv_rtot)
     }
+}
+
+/// The steepness `s` of [`Samples::slope`] that best fits the estimates `fk` at receiver
+/// `rn`'s children to the line `f (1 - s t_k)` through the midpoint's estimate `f`, with
+/// `t_k = (m_k - m_R).D / |D|^2` the children's offsets along `D = m_R - m_E` (returned
+/// too). Least squares over children and channels, each channel weighted by its estimate
+/// (so relative to `f`, the brighter channels count more); 0 when the fit says the transport
+/// grows away from the emitter (no distance-form profile does) or nothing constrains it.
+/// One steepness serves all channels: a channel that falls off differently fails the test.
+/// The line must stay non-negative over the receiver's bounding sphere (`s <= |D| / r_R`),
+/// and where the children barely spread along `D` the fit says nothing about the leaves
+/// that do (a fitted `s` of thousands put black blotches on a sphere): then 0, and the
+/// test is the first-order one.
+#[inline]
+fn linear_slope(
+    h: &Hierarchy,
+    rn: &Node,
+    rg: &ClusterGeom,
+    eg: &ClusterGeom,
+    f: [f32; 3],
+    fk: &[[f32; 3]; 4],
+) -> (f32, [f32; 4]) {
+    let dv = rg.midpoint - eg.midpoint;
+    let inv_d2 = 1.0 / dv.length_squared();
+    let f_sum = f[0] + f[1] + f[2];
+    let mut t = [0.0f32; 4];
+    let (mut num, mut den) = (0.0f32, 0.0f32);
+    for (k, &c) in rn.children().iter().enumerate() {
+        t[k] = (h.geom[c as usize].midpoint - rg.midpoint).dot(dv) * inv_d2;
+        // Σ_c f_c (fk_c / f_c - 1) t_k, and Σ_c f_c t_k².
+        num += (f_sum - (fk[k][0] + fk[k][1] + fk[k][2])) * t[k];
+        den += f_sum * t[k] * t[k];
+    }
+    // The children's offsets along `D`, against the receiver's extent along it (`r / |D|`).
+    let extent2 = rg.radius * rg.radius * inv_d2;
+    let spread2: f32 = t.iter().map(|t| t * t).sum();
+    let s = if den > 0.0 && spread2 >= 0.01 * extent2 {
+        (num / den).clamp(0.0, (1.0 / extent2).sqrt())
+    } else {
+        0.0
+    };
+    // Stored as a half float (`LinkCoef`): test with the value the gather will use.
+    (super::link_coef::round_slope(s), t)
 }

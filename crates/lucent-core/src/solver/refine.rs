@@ -9,7 +9,7 @@
 
 use super::evaluate::Evaluator;
 use super::hierarchical::{HierarchicalSolver, SolveStats};
-use super::link_set::{ChunkPool, LinkChunk, LinkSet};
+use super::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
 use super::local::Locality;
 use super::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
 use super::point_sample::ReceiverSources;
@@ -225,10 +225,10 @@ pub(super) trait LinkSink {
     );
 }
 
-/// Evaluates each accepted link and passes `(e, kind, F)` on.
+/// Evaluates each accepted link and passes `(e, kind, F, steepness)` on.
 pub(super) struct Evaluate<F>(pub(super) F);
 
-impl<F: FnMut(usize, LinkKind, [f32; 3])> LinkSink for Evaluate<F> {
+impl<F: FnMut(usize, LinkKind, [f32; 3], f32)> LinkSink for Evaluate<F> {
     #[inline]
     fn link(
         &mut self,
@@ -240,7 +240,7 @@ impl<F: FnMut(usize, LinkKind, [f32; 3])> LinkSink for Evaluate<F> {
         samples: &Samples,
     ) {
         let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
-        (self.0)(e, kind, f);
+        (self.0)(e, kind, f, samples.slope);
     }
 }
 
@@ -260,9 +260,9 @@ struct Reusing<'a, 'b> {
 }
 
 impl Reusing<'_, '_> {
-    /// The old link `e -> r` (kind, coefficient, dirty), if any.
+    /// The old link `e -> r`, if any.
     #[inline]
-    fn old_link(&mut self, r: usize, e: usize) -> Option<(LinkKind, Vec3A, bool)> {
+    fn old_link(&mut self, r: usize, e: usize) -> Option<Link> {
         let old = self.reuse.old;
         let index = self.old_of_r.get_or_insert_with(|| {
             let mut v: Vec<(u32, u32)> = old.emitters_of(r).map(|(j, x)| (x, j as u32)).collect();
@@ -270,8 +270,7 @@ impl Reusing<'_, '_> {
             v
         });
         let i = index.binary_search_by_key(&(e as u32), |&(x, _)| x).ok()?;
-        let l = old.link_at(r, index[i].1 as usize);
-        Some((l.kind, l.coef, l.dirty))
+        Some(old.link_at(r, index[i].1 as usize))
     }
 }
 
@@ -279,8 +278,8 @@ impl LinkSink for Reusing<'_, '_> {
     #[inline]
     fn kept(&mut self, r: usize, e: usize) -> bool {
         let unchanged = !self.reuse.changed[r] && !self.reuse.changed[e];
-        if unchanged && let Some((kind, f, false)) = self.old_link(r, e) {
-            self.chunk.push(r, e, kind, f, false);
+        if unchanged && let Some(l) = self.old_link(r, e).filter(|l| !l.dirty) {
+            self.chunk.push(r, e, l.kind, l.coef, l.slope, false);
             return true;
         }
         false
@@ -300,17 +299,17 @@ impl LinkSink for Reusing<'_, '_> {
             && self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
         if over {
             let f = match self.old_link(r, e) {
-                Some((LinkKind::FormFactor, f, _)) => f,
+                Some(l) if l.kind == LinkKind::FormFactor => l.coef,
                 _ => {
                     ctx.point_samples += 1;
                     Vec3A::from_array(ctx.ev.eval(src, r, e, LinkKind::PointSample))
                 }
             };
-            self.chunk.push(r, e, kind, f, true);
+            self.chunk.push(r, e, kind, f, samples.slope, true);
             return;
         }
         let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
-        self.chunk.push(r, e, kind, Vec3A::from_array(f), false);
+        self.chunk.push(r, e, kind, Vec3A::from_array(f), samples.slope, false);
     }
 }
 
@@ -363,6 +362,7 @@ impl HierarchicalSolver {
         self.links = Some(set);
         self.links_have_candidates = self.keep_candidates;
         self.bound = None;
+        self.midpoints = Default::default();
         stats
     }
 
@@ -455,7 +455,7 @@ impl HierarchicalSolver {
                 r,
                 fresh,
                 &mut defer,
-                &mut Evaluate(|e, kind, f| chunk.push(r, e, kind, Vec3A::from_array(f), false)),
+                &mut Evaluate(|e, kind, f, slope| chunk.push(r, e, kind, Vec3A::from_array(f), slope, false)),
             ),
             Some(reuse) => {
                 ctx.receive(&self.oracle, r, fresh, &mut defer, &mut Reusing { reuse, chunk, old_of_r: None })
