@@ -13,7 +13,7 @@
 //! receivers stay whole as far as emitters do.
 
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
-use super::link_coef;
+use super::link_coef::{self, LinkCoef};
 use super::link_set::LinkSet;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
@@ -297,19 +297,27 @@ fn gather_links_linear(
                 continue;
             }
             let m_r = mid[r];
-            let mut acc = Linear::default();
-            for (&w, &c) in emitter.iter().zip(coef) {
+            // Four independent sums: one is bound by the adds' latency.
+            let mut acc = [Linear::default(); 4];
+            let term = |acc: &mut Linear, w: u32, c: LinkCoef| {
                 let e = (w & !link_coef::FF_BIT) as usize;
                 let t = e_node[e] * link_coef::decode(c);
                 acc.value += t;
-                let slope = c.slope();
-                if slope > 0.0 {
-                    let dv = m_r - mid[e];
-                    acc.add_gradient(t * (-slope / dv.length_squared()), dv);
+                // Links without steepness have 0 here and add nothing.
+                let dv = m_r - mid[e];
+                acc.add_gradient(t * (-c.slope() / dv.length_squared().max(f32::MIN_POSITIVE)), dv);
+            };
+            let n4 = emitter.len() / 4 * 4;
+            for (w, c) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)) {
+                for k in 0..4 {
+                    term(&mut acc[k], w[k], c[k]);
                 }
             }
-            *b = acc.value * scale;
-            *g = acc.grad.map(|v| v * scale);
+            for (k, (&w, &c)) in emitter[n4..].iter().zip(&coef[n4..]).enumerate() {
+                term(&mut acc[k], w, c);
+            }
+            *b = acc.iter().map(|a| a.value).sum::<Vec3A>() * scale;
+            *g = std::array::from_fn(|c| acc.iter().map(|a| a.grad[c]).sum::<Vec3A>() * scale);
         }
     });
 }
