@@ -624,7 +624,9 @@ impl Oracle {
 /// The line must stay non-negative over the receiver's bounding sphere (`s <= |D| / r_R`),
 /// and where the children barely spread along `D` the fit says nothing about the leaves
 /// that do (a fitted `s` of thousands put black blotches on a sphere): then 0, and the
-/// test is the first-order one.
+/// children are tested against the constant. Such a receiver barely extends along `D`, the
+/// one direction the transport changes in, so the first-order bound is not asked for again:
+/// asking it cost 3% more links on the 48K dragon at the same error (0.83%).
 #[inline]
 fn linear_slope(
     h: &Hierarchy,
