@@ -414,4 +414,30 @@ mod tests {
             }
         }
     }
+
+    /// A link's steepness rides in the fourth lane without touching its coefficient, and
+    /// every gather path gives the same `B` with and without it (its product lands in the
+    /// fourth lane of the sum, which nothing reads), whatever the irradiance's fourth lane.
+    #[test]
+    fn steepness_leaves_coefficients_and_gathers_unchanged() {
+        let f = Vec3A::new(0.3, 1e-3, 7.0);
+        let scale = receiver_scale(7.0);
+        for s in [0.0f32, 0.37, 3.0, 41.5, 6.0e4] {
+            let c = LinkCoef::pack_with_slope(f, scale, s);
+            assert_eq!(c.unpack(scale), LinkCoef::pack(f, scale).unpack(scale));
+            assert_eq!(c.slope(), round_slope(s));
+            assert!((c.slope() - s).abs() <= s * MAX_REL_ERROR);
+        }
+        // Irradiance whose fourth lane is not 0 (glam's `Vec3A::new` repeats z there).
+        let e_node: Vec<Vec3A> = (0..9).map(|i| Vec3A::new(1.0 + i as f32, 0.5, 3.0e4)).collect();
+        let emitter: Vec<u32> = (0..9).map(|j| (5 * j % 9) as u32).collect();
+        let flat: Vec<LinkCoef> = (0..9).map(|j| LinkCoef::pack(f / (1.0 + j as f32), scale)).collect();
+        let steep: Vec<LinkCoef> =
+            (0..9).map(|j| LinkCoef::pack_with_slope(f / (1.0 + j as f32), scale, 1e3 * j as f32)).collect();
+        for isa in Isa::available() {
+            let a = gather_sum(isa, &e_node, &emitter, &flat);
+            let b = gather_sum(isa, &e_node, &emitter, &steep);
+            assert_eq!(a.to_array(), b.to_array(), "{isa:?}");
+        }
+    }
 }
