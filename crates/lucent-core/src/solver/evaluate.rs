@@ -19,6 +19,12 @@ enum Smooth {
     Quarters([[Vec3; 3]; 4]),
 }
 
+/// `k ρ` of triangle `t` about its vertex average ([`ReceiverSources::k_rho`]).
+fn triangle_k_rho(src: &ReceiverSources, d: &DipoleF32, t: &[Vec3; 3]) -> f32 {
+    let c = (t[0] + t[1] + t[2]) / 3.0;
+    src.k_rho(d, c, t.iter().map(|p| p.distance(c)).fold(0.0, f32::max))
+}
+
 /// The four triangles of the midpoint subdivision of `t` (equal areas).
 fn quarters(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
     let [a, b, c] = t;
@@ -58,9 +64,10 @@ impl<'a> Evaluator<'a> {
     /// How face `e` is integrated where `R_d` from `src` is smooth over it, so that the `f32`
     /// cubature stands in for the form factor: whole when its `k ρ` is within
     /// [`FormFactorOptions::cubature_max_k_rho`] (the form factor would take the same short
-    /// cut in `f64`), or as its four midpoint-subdivision quarters when each of theirs is (up
-    /// to `k ρ` of about three: 28 points, four to six times cheaper than the edge integrals,
-    /// which on dense scanned meshes were a third of the solve).
+    /// cut in `f64`), or as its four midpoint-subdivision quarters when each of theirs is (a
+    /// quarter has half the radius, so faces up to about twice the limit; none are tried past
+    /// four times it): 28 points, four to six times cheaper than the edge integrals, which on
+    /// dense scanned meshes were a third of the solve.
     #[inline]
     fn smooth_face(&self, src: &ReceiverSources, e: usize) -> Option<Smooth> {
         let eg = &self.h.geom[e];
@@ -80,11 +87,7 @@ impl<'a> Evaluator<'a> {
         let quarters = quarters(tri);
         quarters
             .iter()
-            .all(|q| {
-                let c = (q[0] + q[1] + q[2]) / 3.0;
-                let r = q.iter().map(|p| p.distance_squared(c)).fold(0.0, f32::max).sqrt();
-                src.k_rho(&self.d32, c, r) <= max
-            })
+            .all(|q| triangle_k_rho(src, &self.d32, q) <= max)
             .then_some(Smooth::Quarters(quarters))
     }
 
@@ -182,14 +185,8 @@ mod tests {
                 Vec3::new(dist + 0.03, 0.01, 0.0),
                 Vec3::new(dist + 0.01, 0.03, 0.002),
             ];
-            let mid = (tri[0] + tri[1] + tri[2]) / 3.0;
-            let radius = tri.iter().map(|p| p.distance(mid)).fold(0.0, f32::max);
-            let smooth_quarters = quarters(tri).iter().all(|q| {
-                let c = (q[0] + q[1] + q[2]) / 3.0;
-                let r = q.iter().map(|p| p.distance(c)).fold(0.0, f32::max);
-                src.k_rho(&d, c, r) <= max
-            });
-            if src.k_rho(&d, mid, radius) <= max || !smooth_quarters {
+            let smooth_quarters = quarters(tri).iter().all(|q| triangle_k_rho(&src, &d, q) <= max);
+            if triangle_k_rho(&src, &d, &tri) <= max || !smooth_quarters {
                 continue;
             }
             let t64 = tri.map(|p| p.as_dvec3());

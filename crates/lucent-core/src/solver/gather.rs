@@ -18,7 +18,7 @@ use super::link_set::LinkSet;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -166,7 +166,7 @@ impl HierarchicalSolver {
         let mut defer = Deferred::default();
         // `B` and, for the energy bound, `B` under uniform irradiance 1.
         let [mut b, mut u] = acc;
-        let m_r = h.geom[r].midpoint;
+        let m_r = Vec3A::from(h.geom[r].midpoint);
         ctx.receive(
             &self.oracle,
             r,
@@ -178,7 +178,7 @@ impl HierarchicalSolver {
                 b.value += t;
                 u.value += f;
                 if slope > 0.0 {
-                    let (k, dv) = steepness(m_r, h.geom[e].midpoint, slope);
+                    let (k, dv) = steepness(m_r, h.geom[e].midpoint.into(), slope);
                     b.add_gradient(t * k, dv);
                     u.add_gradient(f * k, dv);
                 }
@@ -190,7 +190,7 @@ impl HierarchicalSolver {
             return;
         }
         let at = |c: usize| {
-            let offset = Vec3A::from(h.geom[c].midpoint - m_r);
+            let offset = Vec3A::from(h.geom[c].midpoint) - m_r;
             [b.moved(offset), u.moved(offset)]
         };
         let parts = split_leaves(&self.hierarchy.nodes, r, out);
@@ -266,12 +266,12 @@ fn along(g: &Grad, offset: Vec3A) -> Vec3A {
 
 /// For a link from an emitter at `m_e` to a receiver at `m_r` with steepness `slope`: the
 /// factor `k` and the line `D = m_r - m_e` such that the link's `E F` contributes `k E F D`
-/// to the receiver's gradient (`F (1 - s (x - m_r).D / |D|^2)`, `oracle::Samples::slope`;
-/// render mode's gather writes the same inline).
+/// to the receiver's gradient (`F (1 - s (x - m_r).D / |D|^2)`, `oracle::Samples::slope`).
+/// A link without steepness gives `k = 0`, whatever `D`.
 #[inline]
-fn steepness(m_r: Vec3, m_e: Vec3, slope: f32) -> (f32, Vec3A) {
-    let dv = Vec3A::from(m_r - m_e);
-    (-slope / dv.length_squared(), dv)
+fn steepness(m_r: Vec3A, m_e: Vec3A, slope: f32) -> (f32, Vec3A) {
+    let dv = m_r - m_e;
+    (-slope / dv.length_squared().max(f32::MIN_POSITIVE), dv)
 }
 
 /// [`gather_links`] with linear receivers: a leaf's `B` as there, an inner receiver's `B`
@@ -303,9 +303,9 @@ fn gather_links_linear(
                 let e = (w & !link_coef::FF_BIT) as usize;
                 let t = e_node[e] * link_coef::decode(c);
                 acc.value += t;
-                // Links without steepness have 0 here and add nothing.
-                let dv = m_r - mid[e];
-                acc.add_gradient(t * (-c.slope() / dv.length_squared().max(f32::MIN_POSITIVE)), dv);
+                // Links without steepness add nothing (no branch: most links have one).
+                let (k, dv) = steepness(m_r, mid[e], c.slope());
+                acc.add_gradient(t * k, dv);
             };
             let n4 = emitter.len() / 4 * 4;
             for (w, c) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)) {

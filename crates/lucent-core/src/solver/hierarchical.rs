@@ -113,7 +113,7 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster gradient of the gathered `B` (linear receivers), likewise.
     pub(super) frame_grad: Vec<super::gather::Grad>,
     /// Every cluster's midpoint, packed for render mode's gather with linear receivers; made
-    /// on first use after the geometry last changed.
+    /// on first use, dropped wherever the hierarchy is refitted.
     pub(super) midpoints: std::sync::OnceLock<Vec<Vec3A>>,
     /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
     /// under uniform irradiance, until the links change.
@@ -200,6 +200,7 @@ impl HierarchicalSolver {
             self.keep_candidates = true;
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit(&self.mesh);
+            self.midpoints = Default::default();
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
             return self.link();
         }
@@ -229,6 +230,7 @@ impl HierarchicalSolver {
         if any_moved {
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit_changed(&self.mesh, &changed);
+            self.midpoints = Default::default();
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         }
         if !changed[0] && !stale[0] {
@@ -256,10 +258,10 @@ impl HierarchicalSolver {
         assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
         self.mesh.positions.copy_from_slice(positions);
         self.hierarchy.refit(&self.mesh);
+        self.midpoints = Default::default();
         self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.links = None;
         self.bound = None;
-        self.midpoints = Default::default();
     }
 
     /// Sets the finite-body gain per face (`None`: none); the stored bound is remade.
@@ -267,7 +269,6 @@ impl HierarchicalSolver {
         if self.face_gain != gain {
             self.face_gain = gain;
             self.bound = None;
-            self.midpoints = Default::default();
         }
     }
 
@@ -290,7 +291,6 @@ impl HierarchicalSolver {
         self.dipole = dipole;
         self.spare = None;
         self.bound = None;
-        self.midpoints = Default::default();
         if let Some(l) = self.links.as_mut() {
             l.mark_all_dirty();
         }

@@ -362,7 +362,6 @@ impl HierarchicalSolver {
         self.links = Some(set);
         self.links_have_candidates = self.keep_candidates;
         self.bound = None;
-        self.midpoints = Default::default();
         stats
     }
 
