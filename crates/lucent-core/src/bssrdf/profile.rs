@@ -202,6 +202,27 @@ impl RadialTable {
         self.cell(r).map_or(0.0, |(i, t)| self.tail[i] * (1.0 - t) + self.tail[i + 1] * t)
     }
 
+    /// `TABLE_SIZE / √r_max`: the grid position of distance `r` is `√r` times this, so tables of
+    /// several channels can share the square root ([`RadialTable::tail_at_root`]).
+    #[inline]
+    pub fn root_scale(&self) -> f64 {
+        TABLE_SIZE as f64 / self.r_max.sqrt()
+    }
+
+    /// [`RadialTable::tail`] at the distance whose square root is `root_r`, given this table's
+    /// [`RadialTable::root_scale`] `scale`.
+    #[inline]
+    pub fn tail_at_root(&self, root_r: f64, scale: f64) -> f64 {
+        let x = root_r * scale;
+        if x < TABLE_SIZE as f64 {
+            let i = x as usize;
+            let t = x - i as f64;
+            self.tail[i] * (1.0 - t) + self.tail[i + 1] * t
+        } else {
+            0.0
+        }
+    }
+
     /// `∫ R dA` over the plane, `2π Q(0)` (unitless).
     pub fn total(&self) -> f64 {
         std::f64::consts::TAU * self.tail[0]

@@ -455,6 +455,7 @@ impl Oracle {
         }
         if !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, rg.radius, view.spread) {
             samples.why[0] = Cause::Poles;
+            samples.at_children = Some(point_samples_from(&view.child_src, d, eg.midpoint, eg.area));
             return true;
         }
         // The distance-form profiles do not depend on the receiver's normal, so nothing above
@@ -472,6 +473,7 @@ impl Oracle {
             });
             if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
                 samples.why[0] = Cause::Size;
+                samples.at_children = Some(point_samples_from(&view.child_src, d, eg.midpoint, eg.area));
                 return true;
             }
         }
