@@ -236,6 +236,29 @@ impl Dipole {
         })
     }
 
+    /// `∫ R dA` over a whole plane parallel to the entry point's and `t` mesh units from it, per
+    /// channel, unitless: what a distance-form profile carries through a slab of thickness `t`
+    /// to its far side under uniform light there (`t = 0`: [`Dipole::total_diffuse_reflectance`]).
+    /// The profile's tail at `t`: `2π Q(t)`, for each pole `α'/2 · z e^{-σ_tr s}/s` at
+    /// `s = √(t² + z²)`. [`ProfileKind::Mertens`], whose poles sit on the normal, is taken in the
+    /// distance form.
+    pub fn plane_reflectance(&self, t: f64) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            let mut total = 0.0;
+            if self.has_analytic() {
+                let pole = |z: f64| {
+                    let s = (t * t + z * z).sqrt();
+                    z * (-self.sigma_tr[c] * s).exp() / s
+                };
+                total += 0.5 * self.alpha_prime[c] * (pole(self.z_r[c]) + pole(self.z_v[c]));
+            }
+            if let Some(tables) = &self.tables {
+                total += std::f64::consts::TAU * tables.channels[c].tail(t);
+            }
+            total
+        })
+    }
+
     /// The factor `1 / c`, `c = 1 - 2 FM_1(1/η)`, that normalises the exit term `F_t(η, ω_o) /
     /// (c π)` so that it integrates to 1 over the hemisphere (pbrt-v3's separable BSSRDF).
     /// 1 at `η = 1`, and 1 for [`ProfileKind::Mertens`], which keeps the paper's `F_t / π`.

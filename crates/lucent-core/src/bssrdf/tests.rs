@@ -117,3 +117,48 @@ fn materials_by_name() {
     assert!(Material::custom("x", [1.0, 0.0, 1.0], [1.0; 3], 1.3).is_err());
     assert!(Material::custom("x", [1.0; 3], [1.0; 3], f64::NAN).is_err());
 }
+
+/// `plane_reflectance(t)` is the profile integrated over a plane `t` away (numerically, in
+/// `ln s` from `s = t`, as `R` depends on distance only): equal to the total at 0, falling
+/// with `t`, for both distance-form profiles.
+#[test]
+fn plane_reflectance_is_the_profile_over_a_parallel_plane() {
+    let m = Material::by_name("skimmilk").unwrap();
+    for kind in [ProfileKind::Pbd, ProfileKind::Dipole] {
+        let d = Dipole::with_profile(&m, 1.0, kind, false);
+        let total = d.total_diffuse_reflectance();
+        let at0 = d.plane_reflectance(0.0);
+        for c in 0..3 {
+            assert!(
+                (at0[c] / total[c] - 1.0).abs() < 1e-9,
+                "{kind:?} channel {c}: {} vs {}",
+                at0[c],
+                total[c]
+            );
+        }
+        let mut last = at0;
+        for t in [0.3f64, 1.0, 3.0, 10.0] {
+            // 2π ∫_t^∞ R(s) s ds, in u = ln s.
+            let n = 200_000;
+            let (u0, u1) = (t.ln(), 9.0f64);
+            let du = (u1 - u0) / n as f64;
+            let mut want = [0.0; 3];
+            for i in 0..n {
+                let s = (u0 + (i as f64 + 0.5) * du).exp();
+                let rd = d.rd_planar(s);
+                (0..3).for_each(|c| want[c] += 2.0 * PI * rd[c] * s * s * du);
+            }
+            let got = d.plane_reflectance(t);
+            for c in 0..3 {
+                assert!(got[c] <= last[c], "{kind:?} not falling at {t}");
+                assert!(
+                    (got[c] - want[c]).abs() < 2e-3 * total[c],
+                    "{kind:?} at {t} mm, channel {c}: {} vs {}",
+                    got[c],
+                    want[c]
+                );
+            }
+            last = got;
+        }
+    }
+}
