@@ -131,14 +131,18 @@ pub fn parse_single_scattering(s: &str) -> Result<SingleScattering, String> {
 
 /// Parses the refinement oracle of `--oracle` (Mertens §5.2): `transport` (lucent's default),
 /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` (`CONTRAST`, the oracle's
-/// `irradiance_contrast`, is capped at 1) or `solid-angle:EPS1,EPS2` (the paper's criteria, `ε`
-/// in steradians). Every threshold must be a positive, finite number; the rest stay at their
-/// defaults ([`Oracle::default`]).
+/// `irradiance_contrast`, is capped at 1), `transport-constant:EPS1,EPS2[,...]` (the same
+/// thresholds, given, with one value per receiver cluster as in the paper instead of linear
+/// receivers: [`Oracle::linear_receivers`] off, to compare) or `solid-angle:EPS1,EPS2` (the paper's
+/// criteria, `ε` in steradians). Every threshold must be a positive, finite number; the rest
+/// stay at their defaults ([`Oracle::default`]).
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
-    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` or `solid-angle:EPS1,EPS2`";
+    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`, `transport-constant:EPS1,EPS2[,...]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
+    let linear_receivers = mode != "transport-constant";
     let (mode, counts) = match mode {
         "transport" => (OracleMode::Transport, [0, 2, 3, 4, 5].as_slice()),
+        "transport-constant" => (OracleMode::Transport, [2, 3, 4, 5].as_slice()),
         "solid-angle" => (OracleMode::SolidAngle, [2].as_slice()),
         _ => return Err(format!("{usage}, got `{s}`")),
     };
@@ -159,7 +163,7 @@ pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     if !counts.contains(&eps.len()) {
         return Err(format!("{usage}, got {} threshold(s) in `{s}`", eps.len()));
     }
-    let mut oracle = Oracle { mode, ..Oracle::default() };
+    let mut oracle = Oracle { mode, linear_receivers, ..Oracle::default() };
     if let [e1, e2, ref rest @ ..] = eps[..] {
         (oracle.eps1, oracle.eps2) = (e1, e2);
         let mut rest = rest.iter().copied();
@@ -283,9 +287,11 @@ pub struct RenderArgs {
     /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default: the
     /// profile's thresholds, ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 for pbd and dipole, 0.3, 0.1,
     /// 1e-3 for mertens, ε_share = 0, contrast 1, within 1% of exact on the bunny),
-    /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`, or the paper's solid angles
-    /// `solid-angle:EPS1,EPS2` (steradians). Larger thresholds: fewer links, faster, less
-    /// accurate (`lucent bench solver --sweep` measures the trade).
+    /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`,
+    /// `transport-constant:EPS1,EPS2[,...]` (one value per receiver cluster, as the paper,
+    /// instead of a value and its gradient: to compare), or the paper's solid angles `solid-angle:EPS1,EPS2` (steradians). Larger
+    /// thresholds: fewer links, faster, less accurate (`lucent bench solver --sweep` measures
+    /// the trade).
     #[arg(long, default_value = "transport", value_parser = parse_oracle)]
     pub oracle: Oracle,
     /// Mode of the hierarchical solve (Mertens §5.5): `on-the-fly` (refine and gather from
@@ -576,6 +582,10 @@ mod tests {
             (o.mode, o.eps1, o.eps2, o.eps_abs),
             (OracleMode::Transport, 0.5, 0.2, Oracle::default().eps_abs)
         );
+        assert!(parse_oracle("transport").unwrap().linear_receivers);
+        let constant = parse_oracle("transport-constant:0.5,0.2").unwrap();
+        assert!(!constant.linear_receivers && constant.mode == OracleMode::Transport && constant.eps1 == 0.5);
+        assert!(parse_oracle("transport-constant").is_err());
         let o = parse_oracle("transport:0.5,0.2,1e-3,0.01,0.5").unwrap();
         assert_eq!((o.eps_abs, o.eps_share, o.irradiance_contrast), (1e-3, 0.01, 0.5));
         let o = parse_oracle("solid-angle:0.02,0.05").unwrap();

@@ -83,8 +83,8 @@ fn oracle_name(o: &Oracle) -> String {
         OracleMode::SolidAngle => format!("solid-angle eps1={} eps2={}", o.eps1, o.eps2),
         OracleMode::Transport => {
             format!(
-                "transport eps1={} eps2={} eps_abs={} eps_share={} irradiance_contrast={}",
-                o.eps1, o.eps2, o.eps_abs, o.eps_share, o.irradiance_contrast
+                "transport eps1={} eps2={} eps_abs={} eps_share={} irradiance_contrast={} linear_receivers={}",
+                o.eps1, o.eps2, o.eps_abs, o.eps_share, o.irradiance_contrast, o.linear_receivers
             )
         }
     }

@@ -32,6 +32,7 @@ use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
 use lucent_core::mesh::{Mesh, embedded, load_mesh};
 use lucent_core::session::Transport;
+use lucent_core::solver::oracle::OracleMode;
 use lucent_core::solver::{HierarchicalSolver, Oracle, exact};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -363,8 +364,12 @@ fn measure(
         exact_ms,
         threads: rayon::current_num_threads(),
         oracle: format!(
-            "{:?}:{},{},{},{},{}",
-            oracle.mode,
+            "{}:{},{},{},{},{}",
+            match (oracle.mode, oracle.linear_receivers) {
+                (OracleMode::Transport, false) => "transport-constant",
+                (OracleMode::Transport, true) => "transport",
+                (OracleMode::SolidAngle, _) => "solid-angle",
+            },
             oracle.eps1,
             oracle.eps2,
             oracle.eps_abs,
