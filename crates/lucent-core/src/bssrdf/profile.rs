@@ -98,6 +98,16 @@ pub struct RadialTable {
     pub r_floor: f64,
 }
 
+/// Cell index and fraction of grid position `x` (`√(r / r_max)` times [`TABLE_SIZE`]), or
+/// `None` beyond the grid.
+#[inline]
+fn cell_at(x: f64) -> Option<(usize, f64)> {
+    (x < TABLE_SIZE as f64).then(|| {
+        let i = x as usize;
+        (i, x - i as f64)
+    })
+}
+
 impl RadialTable {
     /// Tabulates a profile given in *optical* units (`σ_t = 1`) for a medium with extinction
     /// `sigma_t` (per mesh unit): `R(r) = σ_t² R_opt(σ_t r)`, `Q(r) = Q_opt(σ_t r)`.
@@ -180,11 +190,7 @@ impl RadialTable {
     /// Grid position of distance `r`: cell index and fraction, or `None` beyond `r_max`.
     #[inline]
     fn cell(&self, r: f64) -> Option<(usize, f64)> {
-        let x = (r.max(0.0) / self.r_max).sqrt() * TABLE_SIZE as f64;
-        (x < TABLE_SIZE as f64).then(|| {
-            let i = x as usize;
-            (i, x - i as f64)
-        })
+        cell_at((r.max(0.0) / self.r_max).sqrt() * TABLE_SIZE as f64)
     }
 
     /// `R(r)` (per mesh unit²) at distance `r` (mesh units).
@@ -199,7 +205,13 @@ impl RadialTable {
     /// `Q(r)` (unitless) at distance `r` (mesh units).
     #[inline]
     pub fn tail(&self, r: f64) -> f64 {
-        self.cell(r).map_or(0.0, |(i, t)| self.tail[i] * (1.0 - t) + self.tail[i + 1] * t)
+        self.cell(r).map_or(0.0, |(i, t)| self.tail_in(i, t))
+    }
+
+    /// `Q` at fraction `t` of cell `i`.
+    #[inline]
+    fn tail_in(&self, i: usize, t: f64) -> f64 {
+        self.tail[i] * (1.0 - t) + self.tail[i + 1] * t
     }
 
     /// `TABLE_SIZE / √r_max`: the grid position of distance `r` is `√r` times this, so tables of
@@ -213,14 +225,7 @@ impl RadialTable {
     /// [`RadialTable::root_scale`] `scale`.
     #[inline]
     pub fn tail_at_root(&self, root_r: f64, scale: f64) -> f64 {
-        let x = root_r * scale;
-        if x < TABLE_SIZE as f64 {
-            let i = x as usize;
-            let t = x - i as f64;
-            self.tail[i] * (1.0 - t) + self.tail[i + 1] * t
-        } else {
-            0.0
-        }
+        cell_at(root_r * scale).map_or(0.0, |(i, t)| self.tail_in(i, t))
     }
 
     /// `∫ R dA` over the plane, `2π Q(0)` (unitless).

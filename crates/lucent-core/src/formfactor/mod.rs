@@ -228,29 +228,24 @@ pub fn form_factor_counted(
             let t_a = w.dot(u);
             let t_b = t_a + len;
             let s2 = r_s * r_s + s.h2;
-            match (&channels, s.tail) {
-                (Some(tails), _) => {
-                    let (i2, segs) = edge_i2(r_s.abs(), s2, tails, t_a, t_b, &seg);
-                    for (c, i2) in i2.into_iter().enumerate() {
-                        src[c].i2 += i2.copysign(r_s);
-                    }
-                    // Counted per source, as the paper counts them.
-                    segments += 3 * segs;
+            if let Some(tails) = &channels {
+                let (i2, segs) = edge_i2(r_s.abs(), s2, tails, t_a, t_b, &seg);
+                for (c, i2) in i2.into_iter().enumerate() {
+                    src[c].i2 += i2.copysign(r_s);
                 }
-                (None, Tail::Pole) => {
-                    let ([i2], segs) =
-                        edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, &seg);
-                    s.i2 += i2.copysign(r_s);
-                    segments += segs;
-                }
-                (None, Tail::Table(c)) => {
-                    let table = &dipole.tables.as_ref().expect("table source without tables").channels[c];
-                    let ([i2], segs) =
-                        edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg);
-                    s.i2 += i2.copysign(r_s);
-                    segments += segs;
-                }
+                // Counted per source, as the paper counts them.
+                segments += 3 * segs;
+                continue;
             }
+            let ([i2], segs) = match s.tail {
+                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, &seg),
+                Tail::Table(c) => {
+                    let table = &dipole.tables.as_ref().expect("table source without tables").channels[c];
+                    edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg)
+                }
+            };
+            s.i2 += i2.copysign(r_s);
+            segments += segs;
         }
     }
     if channels.is_some() {

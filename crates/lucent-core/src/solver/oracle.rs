@@ -453,9 +453,12 @@ impl Oracle {
             samples.why[0] = Cause::NotSeparated;
             return true;
         }
+        // The emitter's estimates at the children's midpoints: made in one batch whether the
+        // receiver splits (the children would make each alone) or stays whole (the test below).
+        let at_children = || point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
         if !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, rg.radius, view.spread) {
             samples.why[0] = Cause::Poles;
-            samples.at_children = Some(point_samples_from(&view.child_src, d, eg.midpoint, eg.area));
+            samples.at_children = Some(at_children());
             return true;
         }
         // The distance-form profiles do not depend on the receiver's normal, so nothing above
@@ -473,14 +476,14 @@ impl Oracle {
             });
             if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
                 samples.why[0] = Cause::Size;
-                samples.at_children = Some(point_samples_from(&view.child_src, d, eg.midpoint, eg.area));
+                samples.at_children = Some(at_children());
                 return true;
             }
         }
         let f = f_mid;
         let mut avg = [0.0f32; 3];
         let inv_a = if rg.area > 0.0 { 1.0 / rg.area } else { 0.0 };
-        let f_children = point_samples_from(&view.child_src, d, eg.midpoint, eg.area);
+        let f_children = at_children();
         samples.at_children = Some(f_children);
         // With a linear receiver, the children are measured against the line through the
         // midpoint's estimate along `D` (its steepness fitted to theirs), not against the
