@@ -28,7 +28,7 @@ use std::f64::consts::PI;
 const NODES: usize = 24;
 
 /// `n`-point Gauss-Legendre nodes and weights on `[a, b]` (Newton's method on `P_n`).
-fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
+pub(crate) fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
     (0..n)
         .map(|i| {
             let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();

@@ -12,6 +12,7 @@ mod fresnel;
 pub mod halfspace;
 mod material;
 pub mod profile;
+pub mod walk;
 
 pub use entry::{Entry, zonal_band_weights};
 pub use fresnel::{
