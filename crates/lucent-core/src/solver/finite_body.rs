@@ -3,9 +3,7 @@
 //! Every radial profile is a response of a flat, semi-infinite medium. Light that wanders deep
 //! into a half-space and is absorbed there reaches another part of a finite body's surface
 //! instead, so a finite body returns more: against Mitsuba's path tracer (spectral MIS
-//! references, `validation/`) lucent was 5-11% dark on every case before this gain, while
-//! `validation/finite_body.py` predicts +3.6% (marble bunny at 10 cm) to +13% (skim-milk bunny
-//! under a sky at `η = 1.3`) from the geometry alone.
+//! references, `validation/`) lucent was 5-11% dark on every case before this gain.
 //!
 //! The gain of a face is the multiple-scattering albedo of a sphere over that of a half-space,
 //! both under uniform light, by random walk ([`crate::bssrdf::walk`]: transport, not
