@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The multiple-scattering albedo of a sphere against a half-space, by an analog random walk.
 
-An independent check of lucent's finite-body gain (crates/lucent-core/src/bssrdf/sphere.rs),
+An independent check of lucent's finite-body gain (crates/lucent-core/src/bssrdf/walk.rs),
 written separately in numpy. A sphere of radius R (mean free paths, isotropic scattering with
 albedo rho, a smooth boundary of relative index eta) is lit uniformly: light arrives with the
 Lambertian distribution of outside cosines, Fresnel's transmittance weights what enters, and
