@@ -68,7 +68,7 @@ pub struct FiniteBody {
 const SLAB_STEPS: usize = 48;
 
 impl FiniteBody {
-    /// The table for the material and scale of `dipole`: 10-50 ms on two cores for a new
+    /// The table for the material and scale of `dipole`: 10-150 ms on two cores for a new
     /// albedo and index (the random walks; most for albedos near 1 at `eta > 1`, whose paths
     /// are long), microseconds for one seen before.
     pub fn new(dipole: &Dipole) -> Self {
