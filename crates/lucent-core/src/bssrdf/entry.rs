@@ -34,7 +34,7 @@
 //! and their zonal band weights serve the SH environment.
 
 use super::beam_diffusion::PointSource;
-use super::fresnel::fresnel_transmittance;
+use super::fresnel::{fresnel_transmittance, refracted_cosine};
 use super::halfspace::HalfSpace;
 use crate::Rgb;
 use std::f64::consts::PI;
@@ -81,7 +81,7 @@ impl Entry {
         });
         Self::from_fn(eta, |mu_i| {
             // Snell: the refracted cosine inside.
-            let mu_t = (1.0 - (1.0 - mu_i * mu_i) / (eta * eta)).max(0.0).sqrt();
+            let mu_t = refracted_cosine(mu_i, eta);
             let f_t = fresnel_transmittance(mu_i, eta);
             let mut carried = [0.0; 3];
             let mut local = [0.0; 3];

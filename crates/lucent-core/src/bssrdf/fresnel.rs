@@ -22,6 +22,20 @@ pub fn fresnel_transmittance(cos_theta: f64, eta: f64) -> f64 {
     1.0 - fresnel_dielectric(cos_theta, eta)
 }
 
+/// The cosine to the normal inside a dielectric of relative index `eta` (>= 1) of light that
+/// arrives from outside at cosine `cos_i` (0..=1): Snell's law.
+pub fn refracted_cosine(cos_i: f64, eta: f64) -> f64 {
+    (1.0 - (1.0 - cos_i * cos_i) / (eta * eta)).max(0.0).sqrt()
+}
+
+/// The boundary's `A = (1 + F_dr) / (1 - F_dr)` (Jensen et al. 2001), with `F_dr` from
+/// [`fresnel_diffuse_reflectance`]: how far internal reflection at a smooth boundary raises
+/// the fluence there (about 1 at `eta = 1`, 2.6 at 1.3).
+pub fn boundary_a(eta: f64) -> f64 {
+    let f_dr = fresnel_diffuse_reflectance(eta);
+    (1.0 + f_dr) / (1.0 - f_dr)
+}
+
 /// The diffuse Fresnel reflectance `F_dr` by the polynomial fit of Jensen et al. 2001 (and
 /// Mertens table 1), valid for `eta` roughly 1..2.
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {

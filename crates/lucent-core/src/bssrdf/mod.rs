@@ -16,7 +16,8 @@ pub mod walk;
 
 pub use entry::{Entry, zonal_band_weights};
 pub use fresnel::{
-    fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2, fresnel_transmittance,
+    boundary_a, fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2,
+    fresnel_transmittance, refracted_cosine,
 };
 pub use material::{ALBEDO, MEAN_FREE_PATH_MM, Material, MaterialError, PRESETS, albedo_range};
 pub use profile::{ProfileKind, RadialTable, UnknownProfile};
@@ -76,8 +77,7 @@ impl Dipole {
         kind: ProfileKind,
         single_scattering: bool,
     ) -> Self {
-        let f_dr = fresnel_diffuse_reflectance(material.eta);
-        let a = (1.0 + f_dr) / (1.0 - f_dr);
+        let a = boundary_a(material.eta);
         let mut d = Dipole {
             sigma_tr: [0.0; 3],
             z_r: [0.0; 3],
@@ -221,8 +221,7 @@ impl Dipole {
     /// for the dipoles the closed form of Jensen et al. 2001 (eq. 6), plus the tabulated
     /// single-scattering total where included; for PBD its table's effective albedo.
     pub fn total_diffuse_reflectance(&self) -> [f64; 3] {
-        let f_dr = fresnel_diffuse_reflectance(self.eta);
-        let a = (1.0 + f_dr) / (1.0 - f_dr);
+        let a = boundary_a(self.eta);
         std::array::from_fn(|c| {
             let mut total = 0.0;
             if self.has_analytic() {

@@ -22,8 +22,9 @@
 //! it scatters twice; 0.75 at albedo 0.999 and 2 mean free paths). `validation/sphere_walk.py`
 //! is an independent numpy walk of the same quantity.
 
-use super::fresnel::fresnel_dielectric;
+use super::fresnel::{fresnel_dielectric, refracted_cosine};
 use super::halfspace::HalfSpace;
+use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::f64::consts::PI;
@@ -33,14 +34,10 @@ const ROULETTE: f64 = 0.1;
 /// No path is followed further (only reached at albedo 1 in very large spheres).
 const MAX_STEPS: usize = 1 << 20;
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// Mean multiple-scattering exitance per unit incident flux of a sphere of `radius` mean free
-/// paths (optical units) under uniform light, for
-/// albedo `rho` (0..=1) and relative index `eta` (>= 1), from `paths` photons with stratified
-/// outside cosines, seeded by `seed` (the same arguments give the same value on any machine).
+/// paths (optical units) under uniform light, for albedo `rho` (0..=1) and relative index `eta`
+/// (>= 1), from `paths` photons with stratified outside cosines, seeded by `seed` (the same
+/// arguments give the same value on any machine).
 pub fn multiple_albedo(radius: f64, rho: f64, eta: f64, paths: usize, seed: u64) -> f64 {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let mut sum = 0.0;
@@ -48,10 +45,10 @@ pub fn multiple_albedo(radius: f64, rho: f64, eta: f64, paths: usize, seed: u64)
         // Lambertian outside cosine (stratified), refracted, weighted by the transmittance.
         let mu_i = ((k as f64 + rng.random::<f64>()) / paths as f64).sqrt();
         let weight = 1.0 - fresnel_dielectric(mu_i, eta);
-        let mu_t = (1.0 - (1.0 - mu_i * mu_i) / (eta * eta)).max(0.0).sqrt();
+        let mu_t = refracted_cosine(mu_i, eta);
         let phi = 2.0 * PI * rng.random::<f64>();
         let s = (1.0 - mu_t * mu_t).sqrt();
-        sum += weight * walk(radius, rho, eta, [s * phi.cos(), s * phi.sin(), -mu_t], &mut rng);
+        sum += weight * walk(radius, rho, eta, DVec3::new(s * phi.cos(), s * phi.sin(), -mu_t), &mut rng);
     }
     sum / paths as f64
 }
@@ -59,33 +56,33 @@ pub fn multiple_albedo(radius: f64, rho: f64, eta: f64, paths: usize, seed: u64)
 /// One photon entering the sphere at its pole `(0, 0, R)` along `dir` (unit, inward): the
 /// weight it takes out as multiple scattering (0 if absorbed, unscattered or directly single
 /// scattered).
-fn walk(radius: f64, rho: f64, eta: f64, mut dir: [f64; 3], rng: &mut Pcg64Mcg) -> f64 {
-    let mut pos = [0.0, 0.0, radius];
+fn walk(radius: f64, rho: f64, eta: f64, mut dir: DVec3, rng: &mut Pcg64Mcg) -> f64 {
+    let mut pos = DVec3::new(0.0, 0.0, radius);
     let mut weight = 1.0;
     let (mut scatters, mut reflected) = (0u32, false);
     for _ in 0..MAX_STEPS {
         let step = -(1.0 - rng.random::<f64>()).ln();
         // Distance to the boundary from inside (`pos` may sit on it).
-        let b = dot(pos, dir);
-        let exit = -b + (b * b - (dot(pos, pos) - radius * radius)).max(0.0).sqrt();
+        let b = pos.dot(dir);
+        let exit = -b + (b * b - (pos.dot(pos) - radius * radius)).max(0.0).sqrt();
         if step >= exit {
-            pos = std::array::from_fn(|i| pos[i] + dir[i] * exit);
-            let normal = pos.map(|x| x / radius);
-            let mu = dot(dir, normal);
+            pos += dir * exit;
+            let normal = pos / radius;
+            let mu = dir.dot(normal);
             if rng.random::<f64>() < fresnel_dielectric(mu, 1.0 / eta) {
-                dir = std::array::from_fn(|i| dir[i] - 2.0 * mu * normal[i]);
+                dir -= normal * (2.0 * mu);
                 reflected = true;
                 continue;
             }
             return if scatters >= 2 || (scatters == 1 && reflected) { weight } else { 0.0 };
         }
-        pos = std::array::from_fn(|i| pos[i] + dir[i] * step);
+        pos += dir * step;
         weight *= rho;
         scatters += 1;
         let z = 1.0 - 2.0 * rng.random::<f64>();
         let a = 2.0 * PI * rng.random::<f64>();
         let r = (1.0 - z * z).max(0.0).sqrt();
-        dir = [r * a.cos(), r * a.sin(), z];
+        dir = DVec3::new(r * a.cos(), r * a.sin(), z);
         if weight < ROULETTE {
             if rng.random::<f64>() < 0.5 {
                 return 0.0;
@@ -106,7 +103,7 @@ pub fn half_space_multiple_albedo(rho: f64, eta: f64) -> f64 {
         .map(|(u, w)| {
             // u = μ_i², so du = 2 μ_i dμ_i is the Lambertian measure.
             let mu_i = u.sqrt();
-            let mu_t = (1.0 - (1.0 - u) / (eta * eta)).max(0.0).sqrt();
+            let mu_t = refracted_cosine(mu_i, eta);
             w * (1.0 - fresnel_dielectric(mu_i, eta)) * (hs.albedo(mu_t) - hs.single_albedo(mu_t))
         })
         .sum()

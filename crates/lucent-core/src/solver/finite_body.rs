@@ -35,7 +35,7 @@
 
 use crate::Rgb;
 use crate::bssrdf::walk;
-use crate::bssrdf::{Dipole, fresnel_diffuse_reflectance};
+use crate::bssrdf::{Dipole, boundary_a};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use rayon::prelude::*;
@@ -220,12 +220,7 @@ impl OpticalGain {
             .collect();
         if walked < RADII {
             // Beyond the walk, diffusion's excess over 1, scaled to meet the last walked radius.
-            let a_boundary = if eta > 1.0 {
-                let f_dr = fresnel_diffuse_reflectance(eta);
-                (1.0 + f_dr) / (1.0 - f_dr)
-            } else {
-                1.0
-            };
+            let a_boundary = if eta > 1.0 { boundary_a(eta) } else { 1.0 };
             let half = diffuse_albedo(30.0 * diffusion_length, rho, 1.0 - rho, a_boundary, false);
             let excess = |r: f64| diffuse_albedo(r, rho, 1.0 - rho, a_boundary, true) / half - 1.0;
             let at_join = excess(radius[walked - 1]);
