@@ -132,7 +132,7 @@ pub struct FrameSettings {
     pub environment_shadows: bool,
     /// Bounces of subsurface light between facing parts through the air
     /// ([`interreflection`]), 0..=4; 0 (this struct's default) switches them off. The `lucent`
-    /// command line, scenes and viewer default to 1 (`ranges::DEFAULT_BOUNCES` there).
+    /// command line, scenes and viewer default to 3 (`ranges::DEFAULT_BOUNCES` there).
     pub bounces: u32,
 }
 
@@ -240,6 +240,8 @@ pub struct FrameSession {
     hierarchy: Option<Hierarchy>,
     solver: Option<HierarchicalSolver>,
     caster: Option<ShadowCaster>,
+    /// The bounce's rays between parts, traced on the first bounce after the mesh last moved.
+    bounce_rays: Option<interreflection::BounceRays>,
     /// Irradiance at the faces as last computed (reused when only the solver changed).
     irradiance: Vec<Entering>,
     /// Per-face entry factors of a texture (`sqrt` of its colour over the face), if any.
@@ -284,6 +286,7 @@ impl FrameSession {
             hierarchy,
             solver: None,
             caster: None,
+            bounce_rays: None,
             irradiance: Vec::new(),
             entry: None,
             eye: None,
@@ -346,6 +349,7 @@ impl FrameSession {
         if self.mesh.positions != positions {
             self.mesh.positions.copy_from_slice(positions);
             self.changes.geometry = true;
+            self.bounce_rays = None;
         }
     }
 
@@ -470,7 +474,11 @@ impl FrameSession {
         let t_bounces = Instant::now();
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
-            let e2 = interreflection::bounced_irradiance(&self.mesh, caster, &last, &self.dipole);
+            if !self.bounce_rays.as_ref().is_some_and(|r| r.fits(&self.mesh, &self.dipole)) {
+                self.bounce_rays = Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole));
+            }
+            let rays = self.bounce_rays.as_ref().expect("traced above");
+            let e2 = interreflection::bounced_irradiance(rays, &last, &self.dipole);
             let unchanged = Changes::default();
             // On the fly, a bounce links anew; its light is a small part of `B`, so its links
             // may err more (stored links are reused as they are).

@@ -224,8 +224,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_shadows: bool,
     /// Bounces of subsurface light between facing parts of the object through the air (a
-    /// crevice, feet under a body): 0 switches them off; each bounce casts up to 64 rays per face and
-    /// solves again. Default: the scene's `bounces`, else 1.
+    /// crevice, feet under a body): 0 switches them off. Up to 64 rays per face, traced once
+    /// until the mesh moves; each bounce then gathers over the stored links again (links anew
+    /// on the fly). Default: the scene's `bounces`, else 3.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::BOUNCES), allow_negative_numbers = true)]
     pub bounces: Option<u32>,
     /// Environment light and reflection map: `courtyard`, `forest` (the maps in assets/) or an
@@ -297,7 +298,9 @@ pub struct RenderArgs {
     /// Mode of the hierarchical solve (Mertens §5.5): `on-the-fly` (refine and gather from
     /// scratch, no stored links), `render` (store the links, then pull, gather and push over
     /// them) or `incremental` (link on the rest mesh, then update the links to the deformed
-    /// one). Default on-the-fly for one image, incremental for an animation.
+    /// one). Default for one image: render with bounces between parts (links made once,
+    /// each bounce a gather; on the fly if the links would not fit in half the free memory),
+    /// on-the-fly without; incremental for an animation.
     #[arg(long, value_parser = names::<SolveMode>(&SolveMode::ALL.map(SolveMode::name)))]
     pub mode: Option<SolveMode>,
     /// Deform the mesh before solving: `twist:DEGREES`, `bump:x,y,z,radius,height` (mesh

@@ -90,7 +90,7 @@ pub struct SceneFile {
     #[serde(default = "yes")]
     pub surface: bool,
     /// Bounces of subsurface light between facing parts through the air (0..=4; 0 switches
-    /// them off), as `lucent render --bounces`. Default 1 (see the README's path-tracer
+    /// them off), as `lucent render --bounces`. Default 3 (see the README's path-tracer
     /// comparison for why).
     #[serde(default = "default_bounces")]
     pub bounces: u32,

@@ -18,37 +18,74 @@ use crate::bssrdf::{Dipole, fresnel_transmittance};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
+/// The rays of the bounce that hit the front of another face, per face: the geometry of
+/// [`bounced_irradiance`], traced once and reused by every bounce and every solve until the
+/// mesh moves or the profile asks for another ray count (a moving light, a new material with
+/// the same reach). Tracing them was most of a bounce: 0.8 s a bounce on the 48K Stanford
+/// dragon against a 10 ms gather over stored links.
+#[derive(Clone, Debug, Default)]
+pub struct BounceRays {
+    /// Strata per side the rays were cast with ([`strata_for`]).
+    strata: usize,
+    /// Face `f`'s hits are `hits[offsets[f]..offsets[f + 1]]`.
+    offsets: Vec<u32>,
+    /// `(k, cos, mu_k)`: the face hit, the ray's cosine at the caster, and at the hit face.
+    hits: Vec<(u32, f32, f32)>,
+}
+
+impl BounceRays {
+    /// Traces the bounce rays of every face of `mesh` (`caster` built on it) at the ray count
+    /// the profile `dipole` asks for.
+    pub fn trace(mesh: &Mesh, caster: &ShadowCaster, dipole: &Dipole) -> Self {
+        let eps = caster.offset();
+        let strata = strata_for(mesh, dipole);
+        let per_face: Vec<Vec<(u32, f32, f32)>> = (0..mesh.triangles.len())
+            .into_par_iter()
+            .map(|f| {
+                let (p, n) = (mesh.face_centroid(f), mesh.face_normal(f));
+                let origin = p + n * eps;
+                stratified_cosine_rays(n, f, strata)
+                    .filter_map(|(dir, cos)| {
+                        let (_, k) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY)?;
+                        let mu_k = -mesh.face_normal(k as usize).dot(dir);
+                        (mu_k > 0.0).then_some((k, cos, mu_k))
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(per_face.len() + 1);
+        offsets.push(0u32);
+        let mut hits = Vec::with_capacity(per_face.iter().map(Vec::len).sum());
+        for h in per_face {
+            hits.extend(h);
+            offsets.push(u32::try_from(hits.len()).expect("fewer than 2^32 bounce hits"));
+        }
+        BounceRays { strata, offsets, hits }
+    }
+
+    /// Whether these rays serve `mesh` (as traced: the caller drops them when it moves) under
+    /// `dipole`.
+    pub fn fits(&self, mesh: &Mesh, dipole: &Dipole) -> bool {
+        self.offsets.len() == mesh.triangles.len() + 1 && self.strata == strata_for(mesh, dipole)
+    }
+}
+
 /// Transmitted irradiance per face from the light the other faces emit, given their exitant
 /// radiosity `face_b` (per face, the solve's `B`) under the profile `dipole` (its exit term and
-/// entry term, in both its parts). Zero where a face sees no other face's front.
-pub fn bounced_irradiance(
-    mesh: &Mesh,
-    caster: &ShadowCaster,
-    face_b: &[Rgb],
-    dipole: &Dipole,
-) -> Vec<Entering> {
-    assert_eq!(face_b.len(), mesh.triangles.len());
+/// entry term, in both its parts), along the traced `rays`. Zero where a face sees no other
+/// face's front.
+pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], dipole: &Dipole) -> Vec<Entering> {
+    assert_eq!(face_b.len() + 1, rays.offsets.len());
     let exit = (dipole.exit_normalization() / std::f64::consts::PI) as f32;
     let eta = dipole.eta;
-    let eps = caster.offset();
-    let strata = strata_for(mesh, dipole);
-    let weight = std::f32::consts::PI / (strata * strata) as f32;
-    (0..mesh.triangles.len())
-        .into_par_iter()
-        .map(|f| {
-            let (p, n) = (mesh.face_centroid(f), mesh.face_normal(f));
-            let origin = p + n * eps;
+    let weight = std::f32::consts::PI / (rays.strata * rays.strata) as f32;
+    rays.offsets
+        .par_windows(2)
+        .map(|w| {
             let mut e = Entering::default();
-            for (dir, cos) in stratified_cosine_rays(n, f, strata) {
-                let Some((_, k)) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY) else {
-                    continue;
-                };
-                let mu_k = -mesh.face_normal(k as usize).dot(dir);
-                if mu_k > 0.0 {
-                    let radiance =
-                        face_b[k as usize] * (exit * fresnel_transmittance(mu_k as f64, eta) as f32);
-                    e.add(radiance, &dipole.entry, cos);
-                }
+            for &(k, cos, mu_k) in &rays.hits[w[0] as usize..w[1] as usize] {
+                let radiance = face_b[k as usize] * (exit * fresnel_transmittance(mu_k as f64, eta) as f32);
+                e.add(radiance, &dipole.entry, cos);
             }
             e * weight
         })
@@ -145,7 +182,8 @@ mod tests {
         let sphere = generate::icosphere(3);
         let d = Dipole::with_profile(&m, 10.0, crate::bssrdf::ProfileKind::Pbd, true);
         let b = vec![Rgb::ONE; sphere.triangles.len()];
-        let e = bounced_irradiance(&sphere, &ShadowCaster::new(&sphere), &b, &d);
+        let rays = BounceRays::trace(&sphere, &ShadowCaster::new(&sphere), &d);
+        let e = bounced_irradiance(&rays, &b, &d);
         assert!(e.iter().all(|v| *v == Entering::default()));
 
         // Two large parallel plates facing each other at a small gap, B = 1 on both, eta = 1:
@@ -156,7 +194,9 @@ mod tests {
         let d1 = Dipole::with_profile(&m1, 1.0, crate::bssrdf::ProfileKind::Pbd, true);
         let plates = facing_plates(16, 20.0, 0.2);
         let b = vec![Rgb::ONE; plates.triangles.len()];
-        let e = bounced_irradiance(&plates, &ShadowCaster::new(&plates), &b, &d1);
+        let rays = BounceRays::trace(&plates, &ShadowCaster::new(&plates), &d1);
+        assert!(rays.fits(&plates, &d1));
+        let e = bounced_irradiance(&rays, &b, &d1);
         assert!(plates.face_normal(0).y > 0.9 && plates.face_normal(plates.triangles.len() - 1).y < -0.9);
         let centre = (0..plates.triangles.len())
             .min_by(|&a, &c| plates.face_centroid(a).length().total_cmp(&plates.face_centroid(c).length()))

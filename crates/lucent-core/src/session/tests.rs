@@ -183,3 +183,45 @@ fn moving_the_eye_redoes_only_single_scattering() {
     assert!(c.vertex_radiance.iter().zip(&a.vertex_radiance).all(|(c, a)| (*a - *c).min_element() >= 0.0));
     assert!(c.vertex_radiance.iter().zip(&a.vertex_radiance).any(|(c, a)| (*a - *c).max_element() > 0.0));
 }
+
+/// Bounces between parts trace their rays once: a light change reuses them (render mode: the
+/// same `B` as a new session under that light), a deformation traces them again (on the fly:
+/// the same `B` as a new session at that pose, which stale rays would not give).
+#[test]
+fn bounce_rays_are_kept_until_the_mesh_moves() {
+    let bunny = crate::mesh::embedded::bunny();
+    let key = vec![SceneLight::from(Light::Directional {
+        direction: Vec3::new(-0.5, -0.7, -0.5).normalize(),
+        irradiance: Vec3::ONE,
+    })];
+    let bounced = |mode| {
+        let settings = FrameSettings { mode, bounces: 2, ..FrameSettings::default() };
+        let mut s = FrameSession::new(bunny.clone(), None, marble(), settings);
+        s.set_lights(key.clone());
+        s
+    };
+    let mut s = bounced(SolveMode::Render);
+    let first = s.solve().face_b.clone();
+    let mut unbounced = FrameSession::new(bunny.clone(), None, marble(), FrameSettings::default());
+    unbounced.set_lights(key.clone());
+    assert_ne!(first, unbounced.solve().face_b, "the bunny's parts light each other");
+
+    let other = vec![SceneLight::from(Light::Directional {
+        direction: Vec3::new(0.6, -0.8, 0.0),
+        irradiance: Vec3::ONE,
+    })];
+    s.set_lights(other.clone());
+    let relit = s.solve().face_b.clone();
+    let mut fresh = bounced(SolveMode::Render);
+    fresh.set_lights(other);
+    assert_eq!(relit, fresh.solve().face_b);
+
+    let bent = deform::twist(Vec3::ZERO, Vec3::Y, 0.8).deformed(&bunny).positions;
+    let mut s = bounced(SolveMode::OnTheFly);
+    s.solve();
+    s.set_positions(&bent);
+    let moved = s.solve().face_b.clone();
+    let mut fresh = bounced(SolveMode::OnTheFly);
+    fresh.set_positions(&bent);
+    assert_eq!(moved, fresh.solve().face_b);
+}

@@ -347,7 +347,7 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
         });
     }
     ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces")).on_hover_text(
-        "light one part sends through the air to another: up to 64 rays a face and a solve each",
+        "light one part sends through the air to another: up to 64 rays a face, traced once until the mesh moves, and a gather each",
     );
     // Transport-oracle thresholds (relative errors): smaller refines more.
     oracle(ui, &mut p.oracle, p.profile);
