@@ -48,6 +48,17 @@ pub const BOUNCES: RangeInclusive<u32> = 0..=4;
 /// rays between parts are traced once until the mesh moves, so three cost little more than
 /// one; on the fly each bounce links anew.
 pub const DEFAULT_BOUNCES: u32 = 3;
+
+/// The default number of bounces for `profile`: [`DEFAULT_BOUNCES`], but none for `mertens`,
+/// the paper's model (which has none), kept to reproduce its tables: it does not bound energy
+/// on thin parts (a face of the bunny at 1 cm returns 15,504 times its light), and bounces
+/// carried that glow on (the 11K dragon's bias +9% at one bounce, +161% at three).
+pub fn default_bounces(profile: lucent_core::bssrdf::ProfileKind) -> u32 {
+    match profile {
+        lucent_core::bssrdf::ProfileKind::Mertens => 0,
+        _ => DEFAULT_BOUNCES,
+    }
+}
 /// HTSM: extra absorption of density 1, per object unit.
 pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
 

@@ -90,10 +90,10 @@ pub struct SceneFile {
     #[serde(default = "yes")]
     pub surface: bool,
     /// Bounces of subsurface light between facing parts through the air (0..=4; 0 switches
-    /// them off), as `lucent render --bounces`. Default 3 (see the README's path-tracer
-    /// comparison for why).
-    #[serde(default = "default_bounces")]
-    pub bounces: u32,
+    /// them off), as `lucent render --bounces`. Default 3, or 0 with the `mertens` profile
+    /// ([`crate::ranges::default_bounces`]).
+    #[serde(default)]
+    pub bounces: Option<u32>,
     /// Diffusion profile: `"pbd"` (photon beam diffusion, the default), `"dipole"` (Jensen's
     /// distance form) or `"mertens"` (the paper's dipole on the receiver's normal), as
     /// `lucent render --profile`.
@@ -128,9 +128,6 @@ fn default_mesh() -> String {
 }
 fn default_scale() -> f64 {
     resolve::DEFAULT_SCALE_M
-}
-fn default_bounces() -> u32 {
-    crate::ranges::DEFAULT_BOUNCES
 }
 fn one() -> f32 {
     1.0
@@ -315,7 +312,9 @@ impl SceneFile {
         let ok = |e: String| anyhow::anyhow!(e);
         check("scale (metres)", self.scale, &r::SCALE_M).map_err(ok)?;
         check("exposure", self.exposure, &r::EXPOSURE).map_err(ok)?;
-        check("bounces", self.bounces, &r::BOUNCES).map_err(ok)?;
+        if let Some(b) = self.bounces {
+            check("bounces", b, &r::BOUNCES).map_err(ok)?;
+        }
         self.material()?;
         for (i, l) in self.lights.iter().enumerate() {
             validate_light(l).with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;

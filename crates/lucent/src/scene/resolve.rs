@@ -147,7 +147,10 @@ impl Scene {
             mode: o.mode.unwrap_or_default(),
             oracle: o.oracle,
             environment_shadows: !o.no_shadows,
-            bounces: o.bounces.or(file.as_ref().map(|f| f.bounces)).unwrap_or(crate::ranges::DEFAULT_BOUNCES),
+            bounces: o
+                .bounces
+                .or(file.as_ref().and_then(|f| f.bounces))
+                .unwrap_or(crate::ranges::default_bounces(transport.profile)),
         };
         Ok(Scene {
             source,

@@ -89,3 +89,15 @@ fn orbit_turns_about_the_vertical_axis() {
     let Light::Point { position, .. } = turned[0].light else { panic!() };
     assert!((position - (c - Vec3::Z)).length() < 1e-6, "{position}");
 }
+
+/// Three bounces between parts by default, none with the paper's `mertens` profile (which does
+/// not bound energy on thin parts); a flag or scene key sets them for any profile.
+#[test]
+fn bounces_default_by_profile() {
+    let bounces = |o: Overrides| Scene::resolve(&o).unwrap().settings.bounces;
+    assert_eq!(bounces(Overrides::default()), crate::ranges::DEFAULT_BOUNCES);
+    let mertens = || Overrides { profile: Some(ProfileKind::Mertens), ..Default::default() };
+    assert_eq!(bounces(mertens()), 0);
+    assert_eq!(bounces(Overrides { bounces: Some(2), ..mertens() }), 2);
+    assert_eq!(bounces(Overrides { scene: candle(), ..Default::default() }), crate::ranges::DEFAULT_BOUNCES);
+}
