@@ -475,7 +475,9 @@ impl FrameSession {
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
             if !self.bounce_rays.as_ref().is_some_and(|r| r.fits(&self.mesh, &self.dipole)) {
-                self.bounce_rays = Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole));
+                let progress = self.progress.as_deref();
+                self.bounce_rays =
+                    Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole, progress));
             }
             let rays = self.bounce_rays.as_ref().expect("traced above");
             let e2 = interreflection::bounced_irradiance(rays, &last, &self.dipole);
