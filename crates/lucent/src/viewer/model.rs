@@ -172,6 +172,8 @@ mod tests {
         let worker = Worker::spawn(|| {});
         let lights = vec![crate::viewer::ui::point_light(glam::Vec3::new(1.0, 1.1, 1.8))];
         let mut scene = ViewModel::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05, lights));
+        // No bounces: their rays would be the last stage counted, after the link.
+        scene.state.params.bounces = 0;
         let bunny = crate::viewer::core_adapter::normalise(lucent_core::mesh::embedded::bunny());
         worker.send(Request::Load(MeshOrigin::Loaded(Box::new(bunny), None)));
         wait_for(&mut scene, &worker, |s| s.base.is_some());
