@@ -30,9 +30,12 @@ pub struct BounceRays {
     strata: usize,
     /// Face `f`'s hits are `hits[offsets[f]..offsets[f + 1]]`.
     offsets: Vec<u32>,
-    /// `(k, cos, mu_k)`: the face hit, the ray's cosine at the caster, and at the hit face.
-    hits: Vec<(u32, f32, f32)>,
+    hits: Vec<Hit>,
 }
+
+/// A bounce ray's hit: `(k, cos, mu_k)`, the face hit, the ray's cosine at the caster, and at
+/// the hit face.
+type Hit = (u32, f32, f32);
 
 impl BounceRays {
     /// Traces the bounce rays of every face of `mesh` (`caster` built on it) at the ray count
@@ -41,32 +44,43 @@ impl BounceRays {
     pub fn trace(mesh: &Mesh, caster: &ShadowCaster, dipole: &Dipole, progress: Option<&Progress>) -> Self {
         let eps = caster.offset();
         let strata = strata_for(mesh, dipole);
+        let faces = mesh.triangles.len();
         if let Some(p) = progress {
-            p.start("bounce rays", mesh.triangles.len());
+            p.start("bounce rays", faces);
         }
-        let per_face: Vec<Vec<(u32, f32, f32)>> = (0..mesh.triangles.len())
+        // Faces in runs of `RUN`: one progress count and one hit buffer per run, not per face.
+        const RUN: usize = 256;
+        let runs: Vec<(Vec<u32>, Vec<Hit>)> = (0..faces.div_ceil(RUN))
             .into_par_iter()
-            .map(|f| {
-                if let Some(p) = progress {
-                    p.add(1);
-                }
-                let n = mesh.face_normal(f);
-                let origin = mesh.face_centroid(f) + n * eps;
-                stratified_cosine_rays(n, f, strata)
-                    .filter_map(|(dir, cos)| {
+            .map(|run| {
+                let range = run * RUN..faces.min((run + 1) * RUN);
+                let (mut counts, mut hits) = (Vec::with_capacity(range.len()), Vec::new());
+                for f in range.clone() {
+                    let n = mesh.face_normal(f);
+                    let origin = mesh.face_centroid(f) + n * eps;
+                    let before = hits.len();
+                    hits.extend(stratified_cosine_rays(n, f, strata).filter_map(|(dir, cos)| {
                         let (_, k) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY)?;
                         let mu_k = -mesh.face_normal(k as usize).dot(dir);
                         (mu_k > 0.0).then_some((k, cos, mu_k))
-                    })
-                    .collect()
+                    }));
+                    counts.push((hits.len() - before) as u32);
+                }
+                if let Some(p) = progress {
+                    p.add(range.len());
+                }
+                (counts, hits)
             })
             .collect();
-        let mut offsets = Vec::with_capacity(per_face.len() + 1);
+        let mut offsets = Vec::with_capacity(faces + 1);
         offsets.push(0u32);
-        let mut hits = Vec::with_capacity(per_face.iter().map(Vec::len).sum());
-        for h in per_face {
-            hits.extend(h);
-            offsets.push(u32::try_from(hits.len()).expect("fewer than 2^32 bounce hits"));
+        let mut hits = Vec::with_capacity(runs.iter().map(|(_, h)| h.len()).sum());
+        for (counts, run_hits) in runs {
+            for c in counts {
+                let end = offsets.last().expect("starts at 0").checked_add(c);
+                offsets.push(end.expect("fewer than 2^32 bounce hits"));
+            }
+            hits.extend(run_hits);
         }
         BounceRays { strata, offsets, hits }
     }
