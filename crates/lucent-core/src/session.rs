@@ -240,8 +240,11 @@ pub struct FrameSession {
     hierarchy: Option<Hierarchy>,
     solver: Option<HierarchicalSolver>,
     caster: Option<ShadowCaster>,
-    /// The bounce's rays between parts, traced on the first bounce after the mesh last moved.
+    /// The bounce's rays between parts, traced on the first bounce, refitted after small
+    /// deformations and traced again after large ones (`BounceRays::fits`).
     bounce_rays: Option<interreflection::BounceRays>,
+    /// Whether the mesh moved since `bounce_rays` were traced or last refitted.
+    bounce_rays_moved: bool,
     /// Irradiance at the faces as last computed (reused when only the solver changed).
     irradiance: Vec<Entering>,
     /// Per-face entry factors of a texture (`sqrt` of its colour over the face), if any.
@@ -287,6 +290,7 @@ impl FrameSession {
             solver: None,
             caster: None,
             bounce_rays: None,
+            bounce_rays_moved: false,
             irradiance: Vec::new(),
             entry: None,
             eye: None,
@@ -349,7 +353,7 @@ impl FrameSession {
         if self.mesh.positions != positions {
             self.mesh.positions.copy_from_slice(positions);
             self.changes.geometry = true;
-            self.bounce_rays = None;
+            self.bounce_rays_moved = true;
         }
     }
 
@@ -474,11 +478,19 @@ impl FrameSession {
         let t_bounces = Instant::now();
         for _ in 0..self.settings.bounces {
             let Some(caster) = &self.caster else { break };
-            if !self.bounce_rays.as_ref().is_some_and(|r| r.fits(&self.mesh, &self.dipole)) {
-                let progress = self.progress.as_deref();
-                self.bounce_rays =
-                    Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole, progress));
+            match &mut self.bounce_rays {
+                Some(rays) if rays.fits(&self.mesh, &self.dipole) => {
+                    if self.bounce_rays_moved {
+                        rays.refit(&self.mesh, caster);
+                    }
+                }
+                _ => {
+                    let progress = self.progress.as_deref();
+                    self.bounce_rays =
+                        Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole, progress));
+                }
             }
+            self.bounce_rays_moved = false;
             let rays = self.bounce_rays.as_ref().expect("traced above");
             let e2 = interreflection::bounced_irradiance(rays, &last, &self.dipole);
             let unchanged = Changes::default();

@@ -10,6 +10,12 @@
 //! of another face `k` bring its exitant radiance `B_k F_t(η, μ_k) / (c π)` (the exit lobe of
 //! [`crate::shading`]), through the receiver's entry term. On meshes with many faces within a
 //! diffusion length each face casts fewer of those rays (`strata_for`).
+//!
+//! The rays are traced once and kept. When the mesh deforms a little they are *refitted*, not
+//! traced again: each hit keeps its face and its place on that face (barycentric), and its
+//! cosines, distance and weight follow the new positions ([`BounceRays::refit`]); what a ray
+//! sees is not asked again until some vertex has moved [`RETRACE_DISPLACEMENT`] of the extent
+//! since the trace.
 
 use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, stratified_cosine_rays};
 use super::{Entering, ShadowCaster};
@@ -17,7 +23,13 @@ use crate::Rgb;
 use crate::bssrdf::{Dipole, fresnel_transmittance};
 use crate::mesh::Mesh;
 use crate::solver::Progress;
+use glam::Vec3;
 use rayon::prelude::*;
+
+/// Largest vertex displacement since the trace, as a share of the mesh's extent then, up to
+/// which a deformed mesh refits its bounce rays instead of tracing them again. Refitting keeps
+/// each ray's hit face, so it misses what the deformation newly hides or reveals.
+pub const RETRACE_DISPLACEMENT: f32 = 0.02;
 
 /// The rays of the bounce that hit the front of another face, per face: the geometry of
 /// [`bounced_irradiance`], traced once and reused by every bounce and every solve until the
@@ -30,12 +42,46 @@ pub struct BounceRays {
     strata: usize,
     /// Face `f`'s hits are `hits[offsets[f]..offsets[f + 1]]`.
     offsets: Vec<u32>,
+    /// The hits on the mesh as last traced or refitted.
     hits: Vec<Hit>,
+    /// The hits as traced, one per entry of `hits`: what a refit starts from.
+    traced: Vec<TracedHit>,
+    /// Vertex positions and face areas when traced (mesh units, mesh units²).
+    traced_positions: Vec<Vec3>,
+    traced_area: Vec<f32>,
+    /// The mesh's extent when traced (mesh units).
+    traced_extent: f32,
 }
 
-/// A bounce ray's hit: `(k, cos, mu_k)`, the face hit, the ray's cosine at the caster, and at
-/// the hit face.
-type Hit = (u32, f32, f32);
+/// A bounce ray's hit as [`bounced_irradiance`] weighs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Hit {
+    /// The face hit.
+    k: u32,
+    /// The ray's cosine at the casting face (its entry angle there).
+    cos: f32,
+    /// The ray's cosine at the face hit (its exit angle there).
+    mu_k: f32,
+    /// The hit's share of the cosine-weighted estimate against a traced ray's (1 as traced;
+    /// a refit scales it by the change of the solid angle and cosine the hit stands for).
+    weight: f32,
+}
+
+/// A run of faces as traced: their hit counts and hits.
+type Run = (Vec<u32>, Vec<(Hit, TracedHit)>);
+
+/// Where a hit was when traced: its place on the face hit and the geometry its weight is
+/// relative to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TracedHit {
+    /// Barycentric coordinates of the hit point on face `k` (of its second and third corner).
+    uv: [f32; 2],
+    /// `cos` and `mu_k` as traced.
+    cos: f32,
+    mu_k: f32,
+    /// Squared distance from the ray's origin to the hit (mesh units²).
+    r2: f32,
+}
 
 impl BounceRays {
     /// Traces the bounce rays of every face of `mesh` (`caster` built on it) at the ray count
@@ -50,7 +96,7 @@ impl BounceRays {
         }
         // Faces in runs of `RUN`: one progress count and one hit buffer per run, not per face.
         const RUN: usize = 256;
-        let runs: Vec<(Vec<u32>, Vec<Hit>)> = (0..faces.div_ceil(RUN))
+        let runs: Vec<Run> = (0..faces.div_ceil(RUN))
             .into_par_iter()
             .map(|run| {
                 let range = run * RUN..faces.min((run + 1) * RUN);
@@ -60,9 +106,11 @@ impl BounceRays {
                     let origin = mesh.face_centroid(f) + n * eps;
                     let before = hits.len();
                     hits.extend(stratified_cosine_rays(n, f, strata).filter_map(|(dir, cos)| {
-                        let (_, k) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY)?;
+                        let (t, k) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY)?;
                         let mu_k = -mesh.face_normal(k as usize).dot(dir);
-                        (mu_k > 0.0).then_some((k, cos, mu_k))
+                        let uv = barycentric(origin + dir * t, mesh.corners(k as usize));
+                        let traced = TracedHit { uv, cos, mu_k, r2: t * t };
+                        (mu_k > 0.0).then_some((Hit { k, cos, mu_k, weight: 1.0 }, traced))
                     }));
                     counts.push((hits.len() - before) as u32);
                 }
@@ -74,22 +122,111 @@ impl BounceRays {
             .collect();
         let mut offsets = Vec::with_capacity(faces + 1);
         offsets.push(0u32);
-        let mut hits = Vec::with_capacity(runs.iter().map(|(_, h)| h.len()).sum());
+        let total = runs.iter().map(|(_, h)| h.len()).sum();
+        let (mut hits, mut traced) = (Vec::with_capacity(total), Vec::with_capacity(total));
         for (counts, run_hits) in runs {
             for c in counts {
                 let end = offsets.last().expect("starts at 0").checked_add(c);
                 offsets.push(end.expect("fewer than 2^32 bounce hits"));
             }
-            hits.extend(run_hits);
+            for (hit, at) in run_hits {
+                hits.push(hit);
+                traced.push(at);
+            }
         }
-        BounceRays { strata, offsets, hits }
+        BounceRays {
+            strata,
+            offsets,
+            hits,
+            traced,
+            traced_positions: mesh.positions.clone(),
+            traced_area: (0..faces).map(|f| mesh.face_area(f)).collect(),
+            traced_extent: mesh.extent(),
+        }
     }
 
-    /// Whether these rays serve `mesh` (as traced: the caller drops them when it moves) under
-    /// `dipole`.
+    /// Whether these rays serve `mesh` under `dipole`, as they are or refitted ([`Self::refit`]):
+    /// the same faces, the ray count the profile asks for, and no vertex moved more than
+    /// [`RETRACE_DISPLACEMENT`] of the extent since the trace.
     pub fn fits(&self, mesh: &Mesh, dipole: &Dipole) -> bool {
-        self.offsets.len() == mesh.triangles.len() + 1 && self.strata == strata_for(mesh, dipole)
+        if self.offsets.len() != mesh.triangles.len() + 1
+            || self.traced_positions.len() != mesh.positions.len()
+            || self.strata != strata_for(mesh, dipole)
+        {
+            return false;
+        }
+        let reach = RETRACE_DISPLACEMENT * self.traced_extent;
+        let reach2 = reach * reach;
+        mesh.positions.par_iter().zip(&self.traced_positions).all(|(p, q)| p.distance_squared(*q) <= reach2)
     }
+
+    /// Moves every hit with the deformed `mesh` (the one traced, vertices moved): each ray
+    /// still ends on the face it hit, at the same barycentric place, and is cast from the
+    /// casting face's centroid. Its cosines follow the new directions, and its weight the
+    /// change of what it stands for in the cosine-weighted estimate, `cos dω` with
+    /// `dω = A_k μ_k / r²` (the hit face's area at that place): a hit whose faces turned away
+    /// from each other weighs 0. Visibility is not asked again (see [`RETRACE_DISPLACEMENT`]).
+    /// Refitting the mesh as traced restores the traced hits.
+    ///
+    /// # Panics
+    /// If `mesh` has other faces or vertices than the one traced.
+    pub fn refit(&mut self, mesh: &Mesh, caster: &ShadowCaster) {
+        assert_eq!(self.offsets.len(), mesh.triangles.len() + 1, "refit on the mesh traced");
+        assert_eq!(self.traced_positions.len(), mesh.positions.len(), "refit on the mesh traced");
+        let faces = mesh.triangles.len();
+        let eps = caster.offset();
+        let area_ratio: Vec<f32> = (0..faces)
+            .into_par_iter()
+            .map(|f| {
+                let a0 = self.traced_area[f];
+                if a0 > 0.0 { mesh.face_area(f) / a0 } else { 0.0 }
+            })
+            .collect();
+        let (offsets, traced) = (&self.offsets, &self.traced);
+        let mut runs: Vec<&mut [Hit]> = Vec::with_capacity(faces);
+        let mut rest = self.hits.as_mut_slice();
+        for w in offsets.windows(2) {
+            let (face, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+            runs.push(face);
+            rest = tail;
+        }
+        runs.into_par_iter().enumerate().for_each(|(f, face_hits)| {
+            let n = mesh.face_normal(f);
+            let origin = mesh.face_centroid(f) + n * eps;
+            let start = offsets[f] as usize;
+            for (hit, at) in face_hits.iter_mut().zip(&traced[start..]) {
+                let k = hit.k as usize;
+                let [a, b, c] = mesh.corners(k);
+                let to = a + (b - a) * at.uv[0] + (c - a) * at.uv[1] - origin;
+                let r2 = to.length_squared();
+                let dir = to * r2.sqrt().recip();
+                let (cos, mu_k) = (n.dot(dir), -mesh.face_normal(k).dot(dir));
+                let weight = if cos > 0.0 && mu_k > 0.0 && r2 > 0.0 {
+                    (cos / at.cos) * (mu_k / at.mu_k) * area_ratio[k] * (at.r2 / r2)
+                } else {
+                    0.0
+                };
+                *hit = if weight.is_finite() && weight > 0.0 {
+                    Hit { k: hit.k, cos, mu_k, weight }
+                } else {
+                    Hit { k: hit.k, cos: at.cos, mu_k: at.mu_k, weight: 0.0 }
+                };
+            }
+        });
+    }
+}
+
+/// Barycentric coordinates `(u, v)` of `p` (projected on the triangle's plane) in the
+/// triangle `[a, b, c]`: `p ≈ a + u (b - a) + v (c - a)`. `(0, 0)` for a degenerate triangle.
+fn barycentric(p: Vec3, [a, b, c]: [Vec3; 3]) -> [f32; 2] {
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det.is_nan() || det <= 0.0 {
+        return [0.0, 0.0];
+    }
+    [(d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det]
 }
 
 /// Transmitted irradiance per face from the light the other faces emit, given their exitant
@@ -105,9 +242,10 @@ pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], dipole: &Dipole) ->
         .par_windows(2)
         .map(|w| {
             let mut e = Entering::default();
-            for &(k, cos, mu_k) in &rays.hits[w[0] as usize..w[1] as usize] {
-                let radiance = face_b[k as usize] * (exit * fresnel_transmittance(mu_k as f64, eta) as f32);
-                e.add(radiance, &dipole.entry, cos);
+            for h in &rays.hits[w[0] as usize..w[1] as usize] {
+                let radiance = face_b[h.k as usize]
+                    * (h.weight * exit * fresnel_transmittance(h.mu_k as f64, eta) as f32);
+                e.add(radiance, &dipole.entry, h.cos);
             }
             e * weight
         })
@@ -196,6 +334,40 @@ mod tests {
             }
         }
         Mesh::new(positions, triangles)
+    }
+
+    /// A refit follows a move as a new trace does: plates brought closer catch more of each
+    /// other's light (the solid angles grow), and a refit on the mesh as traced restores the
+    /// traced hits.
+    #[test]
+    fn refitted_rays_follow_a_move_as_a_new_trace_does() {
+        let m1 = Material::custom("m", [1.0; 3], [0.01; 3], 1.0).unwrap();
+        let d1 = Dipole::with_profile(&m1, 1.0, ProfileKind::Pbd, true);
+        let plates = facing_plates(12, 4.0, 1.0);
+        let total = |rays: &BounceRays| -> f32 {
+            let b = vec![Rgb::ONE; plates.triangles.len()];
+            bounced_irradiance(rays, &b, &d1).iter().map(|e| e.carried.x + e.local.x).sum()
+        };
+        let mut rays = BounceRays::trace(&plates, &ShadowCaster::new(&plates), &d1, None);
+        let traced_hits = rays.hits.clone();
+        let before = total(&rays);
+        let closer = facing_plates(12, 4.0, 0.9);
+        rays.refit(&closer, &ShadowCaster::new(&closer));
+        let refitted = total(&rays);
+        let retraced = total(&BounceRays::trace(&closer, &ShadowCaster::new(&closer), &d1, None));
+        eprintln!("before {before} refitted {refitted} retraced {retraced}");
+        assert!(retraced > 1.03 * before, "closer plates catch more: {before} -> {retraced}");
+        assert!((refitted / retraced - 1.0).abs() < 0.01, "refitted {refitted} against traced {retraced}");
+
+        rays.refit(&plates, &ShadowCaster::new(&plates));
+        for (h, t) in rays.hits.iter().zip(&traced_hits) {
+            assert_eq!(h.k, t.k);
+            assert!(
+                (h.weight - 1.0).abs() < 1e-4
+                    && (h.cos - t.cos).abs() < 1e-4
+                    && (h.mu_k - t.mu_k).abs() < 1e-4
+            );
+        }
     }
 
     #[test]
