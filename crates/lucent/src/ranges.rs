@@ -45,8 +45,8 @@ pub const BOUNCES: RangeInclusive<u32> = 0..=4;
 /// what the path tracer shows and a solve without it lacks (against Mitsuba, median / bias /
 /// worst 8x8 block: no bounce −11.4 / −15.7 / 46%, one −5.9 / −7.8 / 29%, three −3.9 / −5.0 /
 /// 21%, four −3.8 / −4.7 / 21%). With stored links each bounce is a gather over them and the
-/// rays between parts are traced once until the mesh moves, so three cost little more than
-/// one; on the fly each bounce links anew.
+/// rays between parts are traced once (refitted as the mesh deforms), so three cost little
+/// more than one; on the fly each bounce links anew.
 pub const DEFAULT_BOUNCES: u32 = 3;
 
 /// The default number of bounces for `profile`: [`DEFAULT_BOUNCES`], but none for `mertens`,
@@ -58,6 +58,16 @@ pub fn default_bounces(profile: lucent_core::bssrdf::ProfileKind) -> u32 {
         lucent_core::bssrdf::ProfileKind::Mertens => 0,
         _ => DEFAULT_BOUNCES,
     }
+}
+
+/// The bounces after the profile changed from `before` to `after` (the viewer's profile
+/// switch): a count left at `before`'s default follows to `after`'s, one the user chose stays.
+pub fn bounces_after_profile_change(
+    bounces: u32,
+    before: lucent_core::bssrdf::ProfileKind,
+    after: lucent_core::bssrdf::ProfileKind,
+) -> u32 {
+    if bounces == default_bounces(before) { default_bounces(after) } else { bounces }
 }
 /// HTSM: extra absorption of density 1, per object unit.
 pub const DENSITY_SCALE: RangeInclusive<f32> = 0.0..=1e4;
@@ -99,5 +109,15 @@ mod tests {
         assert!(parser(IMAGE_SIDE)("0").is_err());
         assert_eq!(parser(IMAGE_SIDE)("640"), Ok(640));
         assert!(parser(EXPOSURE)("abc").unwrap_err().contains("not a number"));
+    }
+
+    #[test]
+    fn default_bounces_follow_a_profile_switch_and_chosen_ones_stay() {
+        use lucent_core::bssrdf::ProfileKind::{Dipole, Mertens, Pbd};
+        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Mertens), 0);
+        assert_eq!(bounces_after_profile_change(0, Mertens, Pbd), DEFAULT_BOUNCES);
+        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Dipole), DEFAULT_BOUNCES);
+        assert_eq!(bounces_after_profile_change(1, Pbd, Mertens), 1, "chosen by hand");
+        assert_eq!(bounces_after_profile_change(2, Mertens, Pbd), 2, "chosen by hand");
     }
 }

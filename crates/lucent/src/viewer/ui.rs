@@ -331,12 +331,15 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
             ui.radio_value(&mut p.mode, m, m.name());
         }
     });
+    let before = p.profile;
     ui.horizontal(|ui| {
         ui.label("profile");
         for k in lucent_core::bssrdf::ProfileKind::ALL {
             ui.radio_value(&mut p.profile, k, k.name());
         }
     });
+    // As on the command line: `mertens` takes no bounces unless asked.
+    p.bounces = crate::ranges::bounces_after_profile_change(p.bounces, before, p.profile);
     if p.profile != lucent_core::bssrdf::ProfileKind::Mertens {
         ui.horizontal(|ui| {
             use lucent_core::shading::SingleScattering as S;
@@ -347,7 +350,7 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
         });
     }
     ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces")).on_hover_text(
-        "light one part sends through the air to another: up to 64 rays a face, traced once until the mesh moves, and a gather each",
+        "light one part sends through the air to another: up to 64 rays a face, traced once (refitted as the mesh deforms), and a gather each; none by default for mertens",
     );
     // Transport-oracle thresholds (relative errors): smaller refines more.
     oracle(ui, &mut p.oracle, p.profile);
