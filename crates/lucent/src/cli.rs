@@ -490,9 +490,10 @@ pub struct BenchArgs {
     /// `bench solver` only: cost over sigma (1e-4..1e3 mm^-1) and scale (1 mm..10 m), bunny.
     #[arg(long)]
     pub locality: bool,
-    /// `bench solver` table 3 and `--real`: the oracle (as `render --oracle`), e.g. `solid-angle:0.2,0.8`.
+    /// `bench solver` table 3 and `--real`, `bench energy`: the oracle (as `render --oracle`:
+    /// plain `transport` is the profile's own thresholds), e.g. `solid-angle:0.2,0.8`.
     #[arg(long, value_parser = parse_oracle)]
-    pub oracle: Option<Oracle>,
+    oracle: Option<Oracle>,
     /// `bench energy` only: the mesh (a file, or a built-in name: bunny, candle, cube, sphere).
     /// Default bunny.
     #[arg(long)]
@@ -506,6 +507,14 @@ pub struct BenchArgs {
     /// `bench energy` only: the diffusion profile (as `lucent render --profile`). Default pbd.
     #[arg(long, value_parser = parse_profile)]
     pub profile: Option<ProfileKind>,
+}
+
+impl BenchArgs {
+    /// The oracle asked for, `None` for the profile's own ([`Oracle::for_profile`]): as for
+    /// `render`, plain `transport` (the default thresholds) means the profile's.
+    pub fn oracle(&self) -> Option<Oracle> {
+        self.oracle.filter(|o| *o != Oracle::default())
+    }
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

@@ -21,7 +21,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         kind.single_scattering_by_default(),
     );
     let t = std::time::Instant::now();
-    let r = energy::uniform_report(&mesh, &dipole, args.oracle.unwrap_or(Oracle::for_profile(kind)));
+    let r = energy::uniform_report(&mesh, &dipole, args.oracle().unwrap_or(Oracle::for_profile(kind)));
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if args.json {
         println!(

@@ -21,11 +21,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 anyhow::bail!("--real takes neither --sweep nor --table5");
             }
             if std::env::var_os("LUCENT_BENCH_CENSUS").is_some() {
-                return solver_real::census(args.json, args.oracle);
+                return solver_real::census(args.json, args.oracle());
             }
-            solver_real::run(args.json, args.oracle)
+            solver_real::run(args.json, args.oracle())
         }
         BenchTarget::Solver if args.locality => solver_locality::run(args.json),
-        BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle),
+        BenchTarget::Solver => solver::run(args.json, args.sweep, args.table5, args.oracle()),
     }
 }
