@@ -14,7 +14,7 @@ impl Bvh {
         let any_hit = |range: Range<usize>, lo: f32| {
             self.tris[range].iter().any(|t| ray_triangle(origin, dir, t, lo, t_max))
         };
-        match self.ray_leaves(origin, dir, t_min, t_max, |range, lo| any_hit(range, *lo)) {
+        match self.ray_leaves(origin, dir, t_min, t_max, |range, lo, _| any_hit(range, *lo)) {
             RayWalk::Stopped => true,
             RayWalk::Done => false,
             RayWalk::TooDeep => any_hit(0..self.tris.len(), t_min),
@@ -29,18 +29,19 @@ impl Bvh {
     /// camera wants `t_min` a little above 0 and `t_max = f32::INFINITY`.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
-        let mut nearest = |range: Range<usize>, _: &mut f32| {
+        let mut nearest = |range: Range<usize>, _: &mut f32, hi: &mut f32| {
             for (slot, t) in range.clone().zip(&self.tris[range]) {
-                let upper = best.map_or(t_max, |b| b.0);
-                if let Some(th) = ray_triangle_t(origin, dir, t, t_min, upper) {
+                if let Some(th) = ray_triangle_t(origin, dir, t, t_min, *hi) {
                     best = Some((th, self.faces[slot]));
+                    *hi = th;
                 }
             }
             false
         };
         if let RayWalk::TooDeep = self.ray_leaves(origin, dir, t_min, t_max, &mut nearest) {
-            let mut lo = t_min;
-            nearest(0..self.tris.len(), &mut lo);
+            // All triangles again: the nearest of them all, whatever was found before.
+            let (mut lo, mut hi) = (t_min, t_max);
+            nearest(0..self.tris.len(), &mut lo, &mut hi);
         }
         best
     }
@@ -49,7 +50,7 @@ impl Bvh {
     /// `t_min < t < t_max`: `(t, mesh face)`, or `None` if it hits nothing.
     pub fn farthest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
-        let mut farthest = |range: Range<usize>, lo: &mut f32| {
+        let mut farthest = |range: Range<usize>, lo: &mut f32, _: &mut f32| {
             for (slot, t) in range.clone().zip(&self.tris[range]) {
                 if let Some(th) = ray_triangle_t(origin, dir, t, *lo, t_max) {
                     best = Some((th, self.faces[slot]));
@@ -59,8 +60,8 @@ impl Bvh {
             false
         };
         if let RayWalk::TooDeep = self.ray_leaves(origin, dir, t_min, t_max, &mut farthest) {
-            let mut lo = t_min;
-            farthest(0..self.tris.len(), &mut lo);
+            let (mut lo, mut hi) = (t_min, t_max);
+            farthest(0..self.tris.len(), &mut lo, &mut hi);
         }
         best
     }
@@ -72,7 +73,7 @@ impl Bvh {
             self.tris[range].iter().filter(|t| ray_triangle(origin, dir, t, t_min, t_max)).count()
         };
         let mut count = 0;
-        match self.ray_leaves(origin, dir, t_min, t_max, |range, _| {
+        match self.ray_leaves(origin, dir, t_min, t_max, |range, _, _| {
             count += hits(range);
             false
         }) {
@@ -133,43 +134,67 @@ impl Bvh {
     }
 
     /// Depth-first walk over the leaves whose boxes the ray `origin + t dir` enters for
-    /// `lo < t < t_max`, calling `leaf(triangle slots, &mut lo)` for each; `leaf` may raise `lo`
-    /// (a farthest-hit search) and stops the walk by returning true. A tree deeper than the
-    /// fixed stack (only for pathological inputs) ends the walk with [`RayWalk::TooDeep`], and
-    /// the caller answers by brute force rather than overflow.
+    /// `lo < t < hi` (from `t_min` and `t_max`), nearer child first, calling
+    /// `leaf(triangle slots, &mut lo, &mut hi)` for each. `leaf` may raise `lo` (a farthest-hit
+    /// search) or lower `hi` (a closest-hit search, which then skips every box beyond its best
+    /// hit), and stops the walk by returning true. A tree deeper than the fixed stack (only for
+    /// pathological inputs) ends the walk with [`RayWalk::TooDeep`], and the caller answers by
+    /// brute force rather than overflow.
     fn ray_leaves(
         &self,
         origin: Vec3,
         dir: Vec3,
         t_min: f32,
         t_max: f32,
-        mut leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
+        mut leaf: impl FnMut(Range<usize>, &mut f32, &mut f32) -> bool,
     ) -> RayWalk {
         if self.nodes.is_empty() {
             return RayWalk::Done;
         }
         let inv = dir.recip();
-        let mut lo = t_min;
-        let mut stack = [0u32; 64];
+        let (mut lo, mut hi) = (t_min, t_max);
+        let Some(root) = ray_box(origin, inv, &self.nodes[0], lo, hi) else {
+            return RayWalk::Done;
+        };
+        // Each entry: a node and the span of the ray inside its box when it was pushed.
+        let mut stack = [(0u32, root); 64];
         let mut top = 1usize;
         while top > 0 {
             top -= 1;
-            let index = stack[top];
-            let node = &self.nodes[index as usize];
-            if !ray_box(origin, inv, node.min, node.max, lo, t_max) {
+            let (index, (near, far)) = stack[top];
+            // The bounds may have moved since the node was pushed.
+            if near > hi || far < lo {
                 continue;
             }
+            let node = &self.nodes[index as usize];
             if node.is_leaf() {
-                if leaf(node.first as usize..(node.first + node.count) as usize, &mut lo) {
+                if leaf(node.first as usize..(node.first + node.count) as usize, &mut lo, &mut hi) {
                     return RayWalk::Stopped;
                 }
-            } else if top + 2 <= stack.len() {
-                stack[top] = node.first;
-                stack[top + 1] = index + 1;
-                top += 2;
-            } else {
+                continue;
+            }
+            let (l, r) = (index + 1, node.first);
+            let spans = (
+                ray_box(origin, inv, &self.nodes[l as usize], lo, hi),
+                ray_box(origin, inv, &self.nodes[r as usize], lo, hi),
+            );
+            let (a, b) = match spans {
+                (Some(sl), Some(sr)) if sl.0 <= sr.0 => (Some((r, sr)), (l, sl)),
+                (Some(sl), Some(sr)) => (Some((l, sl)), (r, sr)),
+                (Some(sl), None) => (None, (l, sl)),
+                (None, Some(sr)) => (None, (r, sr)),
+                (None, None) => continue,
+            };
+            if top + 2 > stack.len() {
                 return RayWalk::TooDeep;
             }
+            // The farther child first, so the nearer one is popped next.
+            if let Some(farther) = a {
+                stack[top] = farther;
+                top += 1;
+            }
+            stack[top] = b;
+            top += 1;
         }
         RayWalk::Done
     }
@@ -231,16 +256,17 @@ pub fn closest_on_triangle(p: Vec3, t: &[Vec3; 3]) -> Vec3 {
     a + ab * (vb / denom) + ac * (vc / denom)
 }
 
-/// Slab test: whether the ray overlaps the box within `(t_min, t_max)`.
+/// Slab test: the span `(near, far)` of the ray inside the node's box within `(t_min, t_max)`,
+/// or `None` if it misses it there.
 #[inline]
-fn ray_box(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> bool {
-    let t0 = (min - origin) * inv_dir;
-    let t1 = (max - origin) * inv_dir;
+fn ray_box(origin: Vec3, inv_dir: Vec3, n: &BvhNode, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+    let t0 = (n.min - origin) * inv_dir;
+    let t1 = (n.max - origin) * inv_dir;
     // NaN (0 * inf on a slab the ray lies in) is ignored by min/max of glam's lane-wise ops on
     // most targets; a ray parallel to a face counts as inside, which is conservative.
     let near = t0.min(t1).max_element().max(t_min);
     let far = t0.max(t1).min_element().min(t_max);
-    near <= far
+    (near <= far).then_some((near, far))
 }
 
 /// Möller–Trumbore, both sides: whether the ray hits triangle `t` at `t_min < t < t_max`.
@@ -273,4 +299,57 @@ fn ray_triangle_t(origin: Vec3, dir: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f
     }
     let t = e2.dot(q) * inv;
     (t > t_min && t < t_max).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ray queries against every triangle tried in turn, on random rays through and around
+    /// the bunny, from outside and from on its surface (as the bounce and thickness rays are).
+    #[test]
+    fn ray_queries_agree_with_brute_force() {
+        let mesh = crate::mesh::embedded::bunny();
+        let bvh = Bvh::build(&mesh);
+        let (lo, hi) = mesh.bounds();
+        let mut seed = 0x2545_f491_u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        let tris: Vec<[Vec3; 3]> = (0..mesh.triangles.len()).map(|f| mesh.corners(f)).collect();
+        let mut hits = 0;
+        for i in 0..400 {
+            let origin = if i % 2 == 0 {
+                lo - (hi - lo) * 0.25 + (hi - lo) * 1.5 * Vec3::new(rnd(), rnd(), rnd())
+            } else {
+                mesh.face_centroid((rnd() * mesh.triangles.len() as f32) as usize % mesh.triangles.len())
+            };
+            let dir = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+            let (t_min, t_max) = (1e-4, if i % 3 == 0 { 5.0 } else { f32::INFINITY });
+            let ts: Vec<f32> =
+                tris.iter().filter_map(|t| ray_triangle_t(origin, dir, t, t_min, t_max)).collect();
+            let nearest = ts.iter().copied().fold(f32::INFINITY, f32::min);
+            let farthest = ts.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            assert_eq!(
+                bvh.closest_hit(origin, dir, t_min, t_max).map(|h| h.0),
+                (!ts.is_empty()).then_some(nearest)
+            );
+            assert_eq!(
+                bvh.farthest_hit(origin, dir, t_min, t_max).map(|h| h.0),
+                (!ts.is_empty()).then_some(farthest)
+            );
+            assert_eq!(bvh.occluded(origin, dir, t_min, t_max), !ts.is_empty());
+            assert_eq!(bvh.hit_count(origin, dir, t_min, t_max), ts.len());
+            if let Some((t, f)) = bvh.closest_hit(origin, dir, t_min, t_max) {
+                assert_eq!(
+                    ray_triangle_t(origin, dir, &tris[f as usize], t_min, t_max),
+                    Some(t),
+                    "the face hit"
+                );
+            }
+            hits += ts.len().min(1);
+        }
+        assert!(hits > 100, "{hits} of 400 rays hit");
+    }
 }
