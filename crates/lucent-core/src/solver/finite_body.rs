@@ -253,13 +253,15 @@ fn slab_table(dipole: &Dipole) -> (Vec<f64>, Vec<f64>) {
     (ts, share)
 }
 
-/// Radiant exitance per unit irradiance of a sphere of radius `radius_mm` (or a half-space cut
-/// at that depth) under uniform normal irradiance, in diffusion theory, one channel.
-fn diffuse_albedo(radius_mm: f64, sigma_s: f64, sigma_a: f64, a_boundary: f64, sphere: bool) -> f64 {
+/// Radiant exitance per unit irradiance of a sphere of radius `radius` (or a half-space cut at
+/// that depth) under uniform normal irradiance, in diffusion theory, one channel. Any length
+/// unit, the coefficients `sigma_s`, `sigma_a` in its inverse (the table calls it in mean free
+/// paths, `sigma_s + sigma_a = 1`).
+fn diffuse_albedo(radius: f64, sigma_s: f64, sigma_a: f64, a_boundary: f64, sphere: bool) -> f64 {
     let sigma_t = sigma_s + sigma_a;
     let d_coef = 1.0 / (3.0 * sigma_t);
-    let n = ((radius_mm * sigma_t / 0.05) as usize).clamp(50, MAX_CELLS);
-    let h = radius_mm / n as f64;
+    let n = ((radius * sigma_t / 0.05) as usize).clamp(50, MAX_CELLS);
+    let h = radius / n as f64;
     let r = |i: usize| i as f64 * h;
     // Tridiagonal system over nodes 0..=n: zero flux at the centre, extrapolated boundary at n.
     let mut lower = vec![0.0; n + 1];
@@ -269,10 +271,10 @@ fn diffuse_albedo(radius_mm: f64, sigma_s: f64, sigma_a: f64, a_boundary: f64, s
     diag[0] = -1.0;
     upper[0] = 1.0;
     for i in 1..n {
-        let mut source = sigma_s * (-sigma_t * (radius_mm - r(i))).exp();
+        let mut source = sigma_s * (-sigma_t * (radius - r(i))).exp();
         let (outer, inner, mid) = if sphere {
             // Beams converge: the power through each shell is conserved.
-            source *= (radius_mm / r(i).max(h)).powi(2);
+            source *= (radius / r(i).max(h)).powi(2);
             ((r(i) + h / 2.0).powi(2), (r(i) - h / 2.0).powi(2), r(i).powi(2))
         } else {
             (1.0, 1.0, 1.0)
