@@ -255,6 +255,9 @@ pub struct FrameSession {
     /// that bound energy; remade when the mesh moves or the transport changes.
     face_gain: Option<Arc<Vec<Rgb>>>,
     finite_body: Option<FiniteBody>,
+    /// The rays under each face that the gain measures the body with, traced once, followed
+    /// through small deformations (`ThicknessRays::fits`).
+    thickness_rays: Option<crate::solver::finite_body::ThicknessRays>,
     /// `B / (c π)` per vertex of the last solve, before single scattering is added.
     diffuse_vertex: Vec<Rgb>,
     changes: Changes,
@@ -296,6 +299,7 @@ impl FrameSession {
             eye: None,
             face_gain: None,
             finite_body: None,
+            thickness_rays: None,
             diffuse_vertex: Vec::new(),
             changes: Changes::all(),
             unsolved: Changes::default(),

@@ -14,22 +14,18 @@
 //! The rays are traced once and kept. When the mesh deforms a little they are *refitted*, not
 //! traced again: each hit keeps its face and its place on that face (barycentric), and its
 //! cosines, distance and weight follow the new positions ([`BounceRays::refit`]); what a ray
-//! sees is not asked again until some vertex has moved [`RETRACE_DISPLACEMENT`] of the extent
-//! since the trace.
+//! sees is not asked again until some vertex has moved
+//! [`RETRACE_DISPLACEMENT`](crate::mesh::deform::RETRACE_DISPLACEMENT) of the extent since the
+//! trace.
 
 use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, stratified_cosine_rays};
 use super::{Entering, ShadowCaster};
 use crate::Rgb;
 use crate::bssrdf::{Dipole, fresnel_transmittance};
 use crate::mesh::Mesh;
+use crate::mesh::deform::TracedPose;
 use crate::solver::Progress;
-use glam::Vec3;
 use rayon::prelude::*;
-
-/// Largest vertex displacement since the trace, as a share of the mesh's extent then, up to
-/// which a deformed mesh refits its bounce rays instead of tracing them again. Refitting keeps
-/// each ray's hit face, so it misses what the deformation newly hides or reveals.
-pub const RETRACE_DISPLACEMENT: f32 = 0.02;
 
 /// The rays of the bounce that hit the front of another face, per face: the geometry of
 /// [`bounced_irradiance`], traced once and reused by every bounce and every solve until the
@@ -46,11 +42,10 @@ pub struct BounceRays {
     hits: Vec<Hit>,
     /// The hits as traced, one per entry of `hits`: what a refit starts from.
     traced: Vec<TracedHit>,
-    /// Vertex positions and face areas when traced (mesh units, mesh units²).
-    traced_positions: Vec<Vec3>,
+    /// Face areas when traced (mesh units²).
     traced_area: Vec<f32>,
-    /// The mesh's extent when traced (mesh units).
-    traced_extent: f32,
+    /// The pose when traced.
+    pose: TracedPose,
 }
 
 /// A bounce ray's hit as [`bounced_irradiance`] weighs it.
@@ -108,7 +103,7 @@ impl BounceRays {
                     hits.extend(stratified_cosine_rays(n, f, strata).filter_map(|(dir, cos)| {
                         let (t, k) = caster.bvh().closest_hit(origin, dir, 0.0, f32::INFINITY)?;
                         let mu_k = -mesh.face_normal(k as usize).dot(dir);
-                        let uv = barycentric(origin + dir * t, mesh.corners(k as usize));
+                        let uv = mesh.barycentric(k as usize, origin + dir * t);
                         let traced = TracedHit { uv, cos, mu_k, r2: t * t };
                         (mu_k > 0.0).then_some((Hit { k, cos, mu_k, weight: 1.0 }, traced))
                     }));
@@ -139,25 +134,18 @@ impl BounceRays {
             offsets,
             hits,
             traced,
-            traced_positions: mesh.positions.clone(),
             traced_area: (0..faces).map(|f| mesh.face_area(f)).collect(),
-            traced_extent: mesh.extent(),
+            pose: TracedPose::of(mesh),
         }
     }
 
     /// Whether these rays serve `mesh` under `dipole`, as they are or refitted ([`Self::refit`]):
-    /// the same faces, the ray count the profile asks for, and no vertex moved more than
-    /// [`RETRACE_DISPLACEMENT`] of the extent since the trace.
+    /// the same faces, the ray count the profile asks for, and the pose traced still holds
+    /// ([`TracedPose::holds`]).
     pub fn fits(&self, mesh: &Mesh, dipole: &Dipole) -> bool {
-        if self.offsets.len() != mesh.triangles.len() + 1
-            || self.traced_positions.len() != mesh.positions.len()
-            || self.strata != strata_for(mesh, dipole)
-        {
-            return false;
-        }
-        let reach = RETRACE_DISPLACEMENT * self.traced_extent;
-        let reach2 = reach * reach;
-        mesh.positions.par_iter().zip(&self.traced_positions).all(|(p, q)| p.distance_squared(*q) <= reach2)
+        self.offsets.len() == mesh.triangles.len() + 1
+            && self.strata == strata_for(mesh, dipole)
+            && self.pose.holds(mesh)
     }
 
     /// Moves every hit with the deformed `mesh` (the one traced, vertices moved): each ray
@@ -165,14 +153,14 @@ impl BounceRays {
     /// casting face's centroid. Its cosines follow the new directions, and its weight the
     /// change of what it stands for in the cosine-weighted estimate, `cos dω` with
     /// `dω = A_k μ_k / r²` (the hit face's area at that place): a hit whose faces turned away
-    /// from each other weighs 0. Visibility is not asked again (see [`RETRACE_DISPLACEMENT`]).
+    /// from each other weighs 0. Visibility is not asked again (see
+    /// [`RETRACE_DISPLACEMENT`](crate::mesh::deform::RETRACE_DISPLACEMENT)).
     /// Refitting the mesh as traced restores the traced hits.
     ///
     /// # Panics
     /// If `mesh` has other faces or vertices than the one traced.
     pub fn refit(&mut self, mesh: &Mesh, caster: &ShadowCaster) {
         assert_eq!(self.offsets.len(), mesh.triangles.len() + 1, "refit on the mesh traced");
-        assert_eq!(self.traced_positions.len(), mesh.positions.len(), "refit on the mesh traced");
         let faces = mesh.triangles.len();
         let eps = caster.offset();
         let area_ratio: Vec<f32> = (0..faces)
@@ -196,8 +184,7 @@ impl BounceRays {
             let start = offsets[f] as usize;
             for (hit, at) in face_hits.iter_mut().zip(&traced[start..]) {
                 let k = hit.k as usize;
-                let [a, b, c] = mesh.corners(k);
-                let to = a + (b - a) * at.uv[0] + (c - a) * at.uv[1] - origin;
+                let to = mesh.point_at(k, at.uv) - origin;
                 let r2 = to.length_squared();
                 let dir = to * r2.sqrt().recip();
                 let (cos, mu_k) = (n.dot(dir), -mesh.face_normal(k).dot(dir));
@@ -214,19 +201,6 @@ impl BounceRays {
             }
         });
     }
-}
-
-/// Barycentric coordinates `(u, v)` of `p` (projected on the triangle's plane) in the
-/// triangle `[a, b, c]`: `p ≈ a + u (b - a) + v (c - a)`. `(0, 0)` for a degenerate triangle.
-fn barycentric(p: Vec3, [a, b, c]: [Vec3; 3]) -> [f32; 2] {
-    let (e1, e2, d) = (b - a, c - a, p - a);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d1, d2) = (d.dot(e1), d.dot(e2));
-    let det = d11 * d22 - d12 * d12;
-    if det.is_nan() || det <= 0.0 {
-        return [0.0, 0.0];
-    }
-    [(d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det]
 }
 
 /// Transmitted irradiance per face from the light the other faces emit, given their exitant

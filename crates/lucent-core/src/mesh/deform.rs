@@ -15,6 +15,40 @@ use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 
+/// Largest vertex displacement since rays were traced, as a share of the mesh's extent then, up
+/// to which a deformed mesh moves their hits with it instead of tracing them again (the bounce
+/// rays between parts, the rays that measure the body under each face). A refit keeps each
+/// ray's hit face, so it misses what the deformation newly hides or reveals.
+pub const RETRACE_DISPLACEMENT: f32 = 0.02;
+
+/// The pose that rays were traced at (see [`RETRACE_DISPLACEMENT`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TracedPose {
+    /// Vertex positions when traced, mesh units.
+    positions: Vec<Vec3>,
+    /// The mesh's extent when traced, mesh units.
+    extent: f32,
+}
+
+impl TracedPose {
+    /// The pose of `mesh` now.
+    pub fn of(mesh: &Mesh) -> Self {
+        TracedPose { positions: mesh.positions.clone(), extent: mesh.extent() }
+    }
+
+    /// Whether `mesh` (with the vertices traced) is still within [`RETRACE_DISPLACEMENT`] of
+    /// this pose, so that rays traced then may be refitted to it.
+    pub fn holds(&self, mesh: &Mesh) -> bool {
+        let reach = RETRACE_DISPLACEMENT * self.extent;
+        self.positions.len() == mesh.positions.len()
+            && mesh
+                .positions
+                .par_iter()
+                .zip(&self.positions)
+                .all(|(p, q)| p.distance_squared(*q) <= reach * reach)
+    }
+}
+
 /// A position-only deformation of a rest mesh.
 pub trait Deformer {
     /// Writes the deformed positions of `rest` into `out` (resized to

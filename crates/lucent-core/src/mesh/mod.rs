@@ -61,6 +61,28 @@ impl Mesh {
         self.face_cross(f).normalize_or_zero()
     }
 
+    /// Barycentric coordinates `(u, v)` of `p` (projected on face `f`'s plane) in face `f`:
+    /// `p ≈ a + u (b - a) + v (c - a)` for its corners `a, b, c`; `(0, 0)` for a degenerate
+    /// face. [`Mesh::point_at`] goes back, and follows the face as the mesh deforms.
+    pub fn barycentric(&self, f: usize, p: Vec3) -> [f32; 2] {
+        let [a, b, c] = self.corners(f);
+        let (e1, e2, d) = (b - a, c - a, p - a);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (d1, d2) = (d.dot(e1), d.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if det.is_nan() || det <= 0.0 {
+            return [0.0, 0.0];
+        }
+        [(d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det]
+    }
+
+    /// The point at barycentric coordinates `uv` ([`Mesh::barycentric`]) of face `f`.
+    #[inline]
+    pub fn point_at(&self, f: usize, [u, v]: [f32; 2]) -> Vec3 {
+        let [a, b, c] = self.corners(f);
+        a + (b - a) * u + (c - a) * v
+    }
+
     /// Centroid of face `f` (the "midpoint" of Mertens §3.1).
     #[inline]
     pub fn face_centroid(&self, f: usize) -> Vec3 {

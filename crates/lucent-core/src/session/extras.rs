@@ -5,7 +5,7 @@ use super::FrameSession;
 use crate::Rgb;
 use crate::irradiance::Entering;
 use crate::shading;
-use crate::solver::finite_body::FiniteBody;
+use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use std::sync::Arc;
 
 impl FrameSession {
@@ -36,7 +36,17 @@ impl FrameSession {
     pub(super) fn face_gains(&mut self) -> Option<Arc<Vec<Rgb>>> {
         let caster = self.caster.as_ref().filter(|_| self.dipole.bounds_energy())?;
         let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
-        Some(Arc::new(fb.face_gains(&self.mesh, caster.bvh(), caster.offset())))
+        // Traced once; a small deformation moves the hits with the mesh.
+        let rays = match self.thickness_rays.take() {
+            Some(mut rays) if rays.fits(&self.mesh) => {
+                rays.refresh(&self.mesh, caster.bvh(), caster.offset());
+                rays
+            }
+            _ => ThicknessRays::trace(&self.mesh, caster.bvh(), caster.offset()),
+        };
+        let gains = fb.gains_along(&self.mesh, &rays, caster.offset());
+        self.thickness_rays = Some(rays);
+        Some(Arc::new(gains))
     }
 
     /// `diffuse` plus view-ray single scattering where the transport asks for it and an eye is

@@ -226,8 +226,9 @@ fn bounce_rays_are_kept_until_the_mesh_moves() {
     assert_eq!(moved, fresh.solve().face_b);
 }
 
-/// A bump growing on the bunny's ear over an animation: each frame refits the rays of the
-/// frame before, and stays close to a new session at that pose, which traces them.
+/// A bump growing on the bunny's ear over an animation: each frame refits the bounce rays and
+/// the finite-body gain's rays of the frame before (tracing again the faces that turned), and
+/// stays close to a new session at that pose, which traces them.
 #[test]
 fn refitted_bounce_rays_stay_close_to_traced_ones() {
     let bunny = crate::mesh::embedded::bunny();
@@ -257,7 +258,7 @@ fn refitted_bounce_rays_stay_close_to_traced_ones() {
         rel.sort_by(f32::total_cmp);
         let (median, p99, max) = (rel[rel.len() / 2], rel[rel.len() * 99 / 100], rel[rel.len() - 1]);
         // Measured: median under 3.1e-5, 99th percentile under 2.0%, worst 13% (faces that see
-        // the ear edge-on, where one of 64 rays hits or misses the moved part).
+        // the ear edge-on, where one of 64 bounce rays hits or misses the moved part).
         assert!(median < 1e-3 && p99 < 0.04 && max < 0.3, "frame {i}: {median:.2e} / {p99:.2e} / {max:.2e}");
         refitted |= max > 0.0;
     }
