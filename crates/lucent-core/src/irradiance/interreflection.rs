@@ -40,7 +40,8 @@ pub struct BounceRays {
     offsets: Vec<u32>,
     /// The hits on the mesh as last traced or refitted.
     hits: Vec<Hit>,
-    /// The hits as traced, one per entry of `hits`: what a refit starts from.
+    /// The hits as traced, one per entry of `hits`: what a refit starts from (24 more bytes a
+    /// hit: 84 MB for the 871K dragon's 3.5M).
     traced: Vec<TracedHit>,
     /// Face areas when traced (mesh units²).
     traced_area: Vec<f32>,
@@ -158,7 +159,7 @@ impl BounceRays {
     /// Refitting the mesh as traced restores the traced hits.
     ///
     /// # Panics
-    /// If `mesh` has other faces or vertices than the one traced.
+    /// If `mesh` has another number of faces than the one traced.
     pub fn refit(&mut self, mesh: &Mesh, caster: &ShadowCaster) {
         assert_eq!(self.offsets.len(), mesh.triangles.len() + 1, "refit on the mesh traced");
         let faces = mesh.triangles.len();

@@ -184,26 +184,34 @@ fn moving_the_eye_redoes_only_single_scattering() {
     assert!(c.vertex_radiance.iter().zip(&a.vertex_radiance).any(|(c, a)| (*a - *c).max_element() > 0.0));
 }
 
+/// The validation's directional key light.
+fn validation_light() -> Vec<SceneLight> {
+    vec![SceneLight::from(Light::Directional {
+        direction: Vec3::new(-0.5, -0.7, -0.5).normalize(),
+        irradiance: Vec3::ONE,
+    })]
+}
+
+/// A session on `bunny` (marble) in `mode` with two bounces, lit by [`validation_light`].
+fn bounced_bunny(bunny: &crate::mesh::Mesh, mode: SolveMode) -> FrameSession {
+    let settings = FrameSettings { mode, bounces: 2, ..FrameSettings::default() };
+    let mut s = FrameSession::new(bunny.clone(), None, marble(), settings);
+    s.set_lights(validation_light());
+    s
+}
+
 /// Bounces between parts trace their rays once: a light change reuses them (render mode: the
-/// same `B` as a new session under that light), a deformation traces them again (on the fly:
-/// the same `B` as a new session at that pose, which stale rays would not give).
+/// same `B` as a new session under that light), a deformation past the refit's reach traces
+/// them again (on the fly: the same `B` as a new session at that pose, which stale rays would
+/// not give).
 #[test]
 fn bounce_rays_are_kept_until_the_mesh_moves() {
     let bunny = crate::mesh::embedded::bunny();
-    let key = vec![SceneLight::from(Light::Directional {
-        direction: Vec3::new(-0.5, -0.7, -0.5).normalize(),
-        irradiance: Vec3::ONE,
-    })];
-    let bounced = |mode| {
-        let settings = FrameSettings { mode, bounces: 2, ..FrameSettings::default() };
-        let mut s = FrameSession::new(bunny.clone(), None, marble(), settings);
-        s.set_lights(key.clone());
-        s
-    };
+    let bounced = |mode| bounced_bunny(&bunny, mode);
     let mut s = bounced(SolveMode::Render);
     let first = s.solve().face_b.clone();
     let mut unbounced = FrameSession::new(bunny.clone(), None, marble(), FrameSettings::default());
-    unbounced.set_lights(key.clone());
+    unbounced.set_lights(validation_light());
     assert_ne!(first, unbounced.solve().face_b, "the bunny's parts light each other");
 
     let other = vec![SceneLight::from(Light::Directional {
@@ -232,16 +240,7 @@ fn bounce_rays_are_kept_until_the_mesh_moves() {
 #[test]
 fn refitted_bounce_rays_stay_close_to_traced_ones() {
     let bunny = crate::mesh::embedded::bunny();
-    let key = vec![SceneLight::from(Light::Directional {
-        direction: Vec3::new(-0.5, -0.7, -0.5).normalize(),
-        irradiance: Vec3::ONE,
-    })];
-    let settings = FrameSettings { mode: SolveMode::Render, bounces: 2, ..FrameSettings::default() };
-    let session = || {
-        let mut s = FrameSession::new(bunny.clone(), None, marble(), settings);
-        s.set_lights(key.clone());
-        s
-    };
+    let session = || bounced_bunny(&bunny, SolveMode::Render);
     let mut s = session();
     s.solve();
     let (frames, mut refitted) = (12, false);
