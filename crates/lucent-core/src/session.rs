@@ -480,8 +480,10 @@ impl FrameSession {
         // (the solve is linear in the irradiance; stored links are reused).
         let mut last = face_b.clone();
         let t_bounces = Instant::now();
-        for _ in 0..self.settings.bounces {
-            let Some(caster) = &self.caster else { break };
+        // The rays between parts, made current once for all the bounces of this solve.
+        if self.settings.bounces > 0
+            && let Some(caster) = &self.caster
+        {
             match &mut self.bounce_rays {
                 Some(rays) if rays.fits(&self.mesh, &self.dipole) => {
                     if self.bounce_rays_moved {
@@ -495,7 +497,9 @@ impl FrameSession {
                 }
             }
             self.bounce_rays_moved = false;
-            let rays = self.bounce_rays.as_ref().expect("traced above");
+        }
+        for _ in 0..self.settings.bounces {
+            let Some(rays) = &self.bounce_rays else { break };
             let e2 = interreflection::bounced_irradiance(rays, &last, &self.dipole);
             let unchanged = Changes::default();
             // On the fly, a bounce links anew; its light is a small part of `B`, so its links
