@@ -176,6 +176,11 @@ pub struct Solved {
     /// Diffuse exitant radiance `B / (c π)` per vertex, area-weighted (§3.2), before the exit
     /// Fresnel factor (empty for [`Method::Htsm`]).
     pub vertex_radiance: Vec<Rgb>,
+    /// Single-scattered radiance along the view ray per vertex, before the exit Fresnel factor
+    /// (empty without it: see [`Transport::single_scattering_along_view`] and
+    /// [`FrameSession::set_eye`]). Shading adds it to `vertex_radiance`, blended geometrically
+    /// across a face ([`shading::single_scattering`]).
+    pub vertex_single: Vec<Rgb>,
     /// Per-stage times of the solve that made this (zero when it was reused).
     pub timings: Timings,
     /// Links of the hierarchical solve (`None` for the exact solver and HTSM).
@@ -455,7 +460,7 @@ impl FrameSession {
         let mut timings = Timings::default();
         if !changes.solve() && self.diffuse_vertex.len() == self.mesh.positions.len() {
             let t = Instant::now();
-            self.last.vertex_radiance = self.with_single_scattering(&self.diffuse_vertex);
+            self.last.vertex_single = self.single_scattering();
             timings.single_scattering_ms = ms_since(t);
             self.last.timings = timings;
             self.last.fresh = true;
@@ -520,9 +525,10 @@ impl FrameSession {
         self.diffuse_vertex = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
-        let vertex_radiance = self.with_single_scattering(&self.diffuse_vertex);
+        let vertex_single = self.single_scattering();
         timings.single_scattering_ms = ms_since(t);
-        self.last = Solved { face_b, vertex_radiance, timings, links, fresh: true };
+        let vertex_radiance = self.diffuse_vertex.clone();
+        self.last = Solved { face_b, vertex_radiance, vertex_single, timings, links, fresh: true };
         &self.last
     }
 

@@ -9,7 +9,7 @@ use lucent_core::irradiance::{Environment, Light, SceneLight};
 use lucent_core::mesh::bvh::Bvh;
 use lucent_core::mesh::{Mesh, generate};
 use lucent_core::shading::SingleScattering;
-use lucent_core::shading::single_scattering::{ViewRayScene, view_ray_radiance};
+use lucent_core::shading::single_scattering::{NEIGHBOUR_FLOOR, ViewRayScene, view_ray_radiance};
 
 /// A cube 2 units wide of a material with a mean free path of a thousandth of a unit: a
 /// half-space seen from the middle of a face. Albedos 0.3, 0.9, 0.99.
@@ -93,9 +93,12 @@ fn a_shadowed_entry_point_sends_nothing() {
     let light = Light::Directional { direction: -Vec3::Y, irradiance: Rgb::ONE };
     let eye = Vec3::Y + at_cosine(0.9, 1.0) * 1e4;
     let shadowed = radiance_at(&mesh, &d, &[SceneLight { light, shadows: true }], None, eye);
-    assert_eq!(shadowed, Rgb::ZERO);
     let unshadowed = radiance_at(&mesh, &d, &[SceneLight { light, shadows: false }], None, eye);
     assert!(unshadowed.min_element() > 0.0);
+    // Nothing of its own: only the floor share of a neighbour's (each at most the unshadowed
+    // half-space's value), which keeps the mesh pass's geometric blend finite.
+    let most = unshadowed * (NEIGHBOUR_FLOOR * 1.001);
+    assert!(shadowed.cmple(most).all(), "{shadowed} against at most {most}");
 }
 
 #[test]

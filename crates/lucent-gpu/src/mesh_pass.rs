@@ -1,6 +1,10 @@
 //! The mesh pass (Mertens 2003 §5.4): a triangle mesh with per-vertex diffuse radiance `B / pi`
 //! from the solver, Gouraud interpolated, times the exit Fresnel transmittance
-//! `F_t(eta, w_o)` evaluated per pixel (`L = F_t(eta, w_o) B / pi`, eq. 3). Optional additions
+//! `F_t(eta, w_o)` evaluated per pixel (`L = F_t(eta, w_o) B / pi`, eq. 3). Single-scattered
+//! radiance, where the session computes it per vertex, is added before that factor and
+//! interpolated geometrically (the exponential of the blended logarithms): it falls off
+//! exponentially past the terminator, by up to a thousand times across one face of a coarse
+//! mesh, and a linear blend there overstates it several times. Optional additions
 //! in the same pass: a Fresnel-weighted normalised Blinn-Phong highlight for the lights and a
 //! Fresnel-weighted reflection of an equirectangular environment map (the paper's "reflection
 //! mapping or phong shading").
@@ -103,7 +107,7 @@ impl GpuMesh {
         });
         let radiance = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lucent mesh radiance"),
-            contents: bytemuck::cast_slice(&flatten(radiance)),
+            contents: bytemuck::cast_slice(&interleave(radiance, &[])),
             usage,
         });
         let uvs = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -129,16 +133,23 @@ impl GpuMesh {
         })
     }
 
-    /// Replaces the per-vertex radiance (`B / pi`), e.g. after a new solve.
-    pub fn update_radiance(&self, ctx: &GpuContext, radiance: &[Rgb]) -> Result<(), GpuError> {
-        if radiance.len() != self.vertex_count as usize {
+    /// Replaces the per-vertex radiance, e.g. after a new solve: the diffuse part (`B / pi`)
+    /// and the single-scattered part (empty for none), both before the exit Fresnel factor.
+    pub fn update_radiance(
+        &self,
+        ctx: &GpuContext,
+        radiance: &[Rgb],
+        single: &[Rgb],
+    ) -> Result<(), GpuError> {
+        let n = self.vertex_count as usize;
+        if radiance.len() != n || !(single.is_empty() || single.len() == n) {
             return Err(GpuError::InvalidInput(format!(
-                "radiance update: {} values for {} vertices",
+                "radiance update: {} diffuse and {} single-scattering values for {n} vertices",
                 radiance.len(),
-                self.vertex_count
+                single.len(),
             )));
         }
-        ctx.queue.write_buffer(&self.radiance, 0, bytemuck::cast_slice(&flatten(radiance)));
+        ctx.queue.write_buffer(&self.radiance, 0, bytemuck::cast_slice(&interleave(radiance, single)));
         Ok(())
     }
 
@@ -173,8 +184,17 @@ impl GpuMesh {
     }
 }
 
-fn flatten(v: &[Rgb]) -> Vec<[f32; 3]> {
-    v.iter().map(|c| c.to_array()).collect()
+/// Per vertex: the diffuse radiance, then the single-scattered (zero where `single` is empty).
+fn interleave(radiance: &[Rgb], single: &[Rgb]) -> Vec<[f32; 6]> {
+    let single = |v: usize| single.get(v).copied().unwrap_or(Rgb::ZERO);
+    radiance
+        .iter()
+        .enumerate()
+        .map(|(v, d)| {
+            let s = single(v);
+            [d.x, d.y, d.z, s.x, s.y, s.z]
+        })
+        .collect()
 }
 
 /// Shading parameters of the mesh pass.
@@ -300,9 +320,9 @@ impl MeshPass {
                 attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
             }),
             Some(wgpu::VertexBufferLayout {
-                array_stride: 12,
+                array_stride: 24,
                 step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![2 => Float32x3],
+                attributes: &wgpu::vertex_attr_array![2 => Float32x3, 4 => Float32x3],
             }),
             Some(wgpu::VertexBufferLayout {
                 array_stride: 8,

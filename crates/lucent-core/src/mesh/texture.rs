@@ -201,6 +201,10 @@ impl UvSplit {
 
     /// Per-vertex values of the mesh copied to the split vertices.
     pub fn gather<T: Copy>(&self, values: &[T]) -> Vec<T> {
+        if values.is_empty() {
+            // Per-vertex data that is absent (no single scattering, say) stays absent.
+            return Vec::new();
+        }
         self.source.iter().map(|&v| values[v as usize]).collect()
     }
 }

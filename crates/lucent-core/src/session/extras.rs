@@ -49,12 +49,12 @@ impl FrameSession {
         Some(Arc::new(gains))
     }
 
-    /// `diffuse` plus view-ray single scattering where the transport asks for it and an eye is
-    /// set (the shadow BVH is current: the solve refits it first).
-    pub(super) fn with_single_scattering(&self, diffuse: &[Rgb]) -> Vec<Rgb> {
-        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return diffuse.to_vec() };
+    /// View-ray single scattering per vertex where the transport asks for it and an eye is set,
+    /// else nothing (the shadow BVH is current: the solve refits it first).
+    pub(super) fn single_scattering(&self) -> Vec<Rgb> {
+        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return Vec::new() };
         if !self.transport.single_scattering_along_view() {
-            return diffuse.to_vec();
+            return Vec::new();
         }
         let normals = self.mesh.vertex_normals();
         let scene = shading::single_scattering::ViewRayScene {
@@ -66,7 +66,6 @@ impl FrameSession {
             lights: &self.lights,
             environment: self.environment.as_ref(),
         };
-        let ss = shading::single_scattering::view_ray_radiance(&scene, eye);
-        diffuse.iter().zip(ss).map(|(d, s)| *d + s).collect()
+        shading::single_scattering::view_ray_radiance(&scene, eye)
     }
 }

@@ -28,7 +28,11 @@
 //! its band weights (tabulated over `μ_o`) convolve the environment as the irradiance's do.
 //!
 //! The result is a per-vertex radiance *before* the exit Fresnel factor, which the mesh pass
-//! applies per pixel to it and to `B / (c π)` alike ([`super`]).
+//! applies per pixel to it and to `B / (c π)` alike ([`super`]). The mesh pass blends it across
+//! a face geometrically, which follows its exponential fall past the terminator where a linear
+//! blend overstates it (the 10 cm marble sphere's darkest 8x8 block 31% -> 12% off Mitsuba on a
+//! 1.6 mm mesh); so that a vertex with none (every point on its view ray in shadow) does not
+//! blacken its faces, each vertex keeps at least [`NEIGHBOUR_FLOOR`] of its brightest neighbour.
 
 use crate::Rgb;
 use crate::bssrdf::{Dipole, fresnel_transmittance, zonal_band_weights};
@@ -96,6 +100,10 @@ const GAUSS_4: [(f32, f32); 4] = [
     (0.930_568_2, 0.173_927_42),
 ];
 
+/// The least single scattering a vertex keeps, as a share of its brightest neighbour's (per
+/// channel): the steepest fall across one edge the geometric blend reproduces.
+pub const NEIGHBOUR_FLOOR: f32 = 1e-3;
+
 /// Exit cosines at which the environment's band weights are tabulated (`μ_o = k / (N - 1)`).
 const ENV_MU_SAMPLES: usize = 17;
 
@@ -126,7 +134,7 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
     let seen = front_facing_vertices(scene.mesh, eye);
-    (0..scene.mesh.positions.len())
+    let mut radiance: Vec<Rgb> = (0..scene.mesh.positions.len())
         .into_par_iter()
         .map(|v| {
             let x = scene.mesh.positions[v];
@@ -171,7 +179,21 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
             }
             l / (eta * eta)
         })
-        .collect()
+        .collect();
+    floor_at_neighbours(scene.mesh, &mut radiance);
+    radiance
+}
+
+/// Raises each vertex to [`NEIGHBOUR_FLOOR`] times the brightest vertex it shares a face with.
+fn floor_at_neighbours(mesh: &Mesh, radiance: &mut [Rgb]) {
+    let mut floor = vec![Rgb::ZERO; radiance.len()];
+    for tri in &mesh.triangles {
+        let [a, b, c] = tri.map(|v| v as usize);
+        floor[a] = floor[a].max(radiance[b].max(radiance[c]));
+        floor[b] = floor[b].max(radiance[a].max(radiance[c]));
+        floor[c] = floor[c].max(radiance[a].max(radiance[b]));
+    }
+    radiance.iter_mut().zip(floor).for_each(|(r, f)| *r = r.max(f * NEIGHBOUR_FLOOR));
 }
 
 /// Whether each vertex belongs to a triangle that faces `eye` (its plane has the eye on the
@@ -263,5 +285,28 @@ impl EnvironmentKernel {
             Rgb::new(env.sh.convolve(d, &w[0]).x, env.sh.convolve(d, &w[1]).y, env.sh.convolve(d, &w[2]).z)
         };
         ((at(k) * (1.0 - f) + at(k + 1) * f) * env.intensity).max(Rgb::ZERO)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vertex with no single scattering keeps the floor share of its brightest neighbour, per
+    /// channel; brighter vertices keep their own.
+    #[test]
+    fn dark_vertices_keep_a_share_of_their_brightest_neighbour() {
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE, Vec3::Z * 5.0];
+        let mesh = Mesh::new(positions, vec![[0, 1, 2], [1, 3, 2]]);
+        let mut radiance =
+            vec![Rgb::new(2.0, 0.0, 1.0), Rgb::ZERO, Rgb::new(1.0, 4.0, 0.0), Rgb::splat(1e-6), Rgb::ZERO];
+        floor_at_neighbours(&mesh, &mut radiance);
+        let f = NEIGHBOUR_FLOOR;
+        assert_eq!(radiance[0], Rgb::new(2.0, 4.0 * f, 1.0));
+        assert_eq!(radiance[1], Rgb::new(2.0 * f, 4.0 * f, 1.0 * f));
+        assert_eq!(radiance[2], Rgb::new(1.0, 4.0, 1.0 * f));
+        assert_eq!(radiance[3], Rgb::new(1.0 * f, 4.0 * f, 1e-6));
+        // On no face: nothing to follow.
+        assert_eq!(radiance[4], Rgb::ZERO);
     }
 }

@@ -1,5 +1,7 @@
-// Mesh pass (Mertens 2003 §5.4): Gouraud-interpolated per-vertex diffuse radiance B/pi, times
-// the exit Fresnel transmittance F_t(eta, w_o) per pixel (eq. 3), plus a Fresnel-weighted
+// Mesh pass (Mertens 2003 §5.4): Gouraud-interpolated per-vertex diffuse radiance B/pi and
+// single-scattered radiance (interpolated geometrically: it falls off exponentially across a
+// face near the terminator, where a linear blend overstates it many times), times the exit
+// Fresnel transmittance F_t(eta, w_o) per pixel (eq. 3), plus a Fresnel-weighted
 // Blinn-Phong highlight for the lights and an optional Fresnel-weighted environment reflection.
 // Output: HDR radiance in rgb, coverage 1 in alpha (the tone-map pass composites the background
 // where alpha is 0).
@@ -49,7 +51,12 @@ struct VertexIn {
     // B / pi: diffuse exitant radiance before the exit Fresnel factor (HDR).
     @location(2) radiance: vec3<f32>,
     @location(3) uv: vec2<f32>,
+    // Single-scattered radiance before the exit Fresnel factor (HDR, >= 0).
+    @location(4) single: vec3<f32>,
 };
+
+// Below this a vertex's single scattering counts as none (HDR radiance; the log stays finite).
+const SINGLE_FLOOR: f32 = 1e-30;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -57,6 +64,9 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) radiance: vec3<f32>,
     @location(3) uv: vec2<f32>,
+    // Centroid: with multisampling a pixel centre outside the face would extrapolate the
+    // logarithm, and its exponential overshoots without bound.
+    @location(4) @interpolate(perspective, centroid) log_single: vec3<f32>,
 };
 
 @vertex
@@ -67,6 +77,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.normal = v.normal;
     o.radiance = v.radiance;
     o.uv = v.uv;
+    o.log_single = log(max(v.single, vec3<f32>(SINGLE_FLOOR)));
     return o;
 }
 
@@ -101,9 +112,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     }
     let v = normalize(u.eye.xyz - in.world);
     let cos_o = dot(n, v);
-    // L = F_t(eta, w_o) B / pi (Mertens eq. 3, §5.4), times sqrt(texture) at exit.
+    // L = F_t(eta, w_o) (B / pi + L_single) (Mertens eq. 3, §5.4), times sqrt(texture) at exit.
     let albedo = sqrt(max(textureSampleLevel(albedo_map, albedo_sampler, in.uv, 0.0).rgb, vec3<f32>(0.0)));
-    var l = (1.0 - fresnel_dielectric(cos_o, eta)) * max(in.radiance, vec3<f32>(0.0)) * albedo;
+    let subsurface = max(in.radiance, vec3<f32>(0.0)) + exp(in.log_single);
+    var l = (1.0 - fresnel_dielectric(cos_o, eta)) * subsurface * albedo;
 
     // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the
     // half vector (the light the surface reflects is the light it does not transmit).

@@ -172,7 +172,7 @@ impl Drawer {
         match self {
             Drawer::Mertens(g) => {
                 let mesh = moved.then_some(session.mesh());
-                g.draw(mesh, &solved.vertex_radiance, session.lights(), format)
+                g.draw(mesh, solved, session.lights(), format)
             }
             Drawer::Htsm(h) => h.draw(session, moved, format),
         }

@@ -10,6 +10,7 @@ use lucent_core::Rgb;
 use lucent_core::irradiance::SceneLight;
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::texture::UvSplit;
+use lucent_core::session::Solved;
 use lucent_gpu::GpuContext;
 use lucent_gpu::camera::CameraView;
 use lucent_gpu::mesh_pass::{AlbedoMap, EnvironmentMap, GpuMesh, Shading};
@@ -94,13 +95,13 @@ impl GpuFrame {
         })
     }
 
-    /// Draws the mesh with new per-vertex `radiance`, new geometry (`mesh`, when it moved) and
+    /// Draws the mesh with the per-vertex radiance of `solved`, new geometry (`mesh`, when it moved) and
     /// `lights` for the highlight, and reads the frame back: the tone-mapped image, or for
     /// [`ImageFormat::Exr`] the HDR radiance and coverage with nothing behind the object.
     pub fn draw(
         &mut self,
         mesh: Option<&Mesh>,
-        radiance: &[Rgb],
+        solved: &Solved,
         lights: &[SceneLight],
         format: ImageFormat,
     ) -> Result<Frame> {
@@ -112,9 +113,10 @@ impl GpuFrame {
             (Some(m), None) => self.mesh.update_geometry(&self.ctx, &m.positions, &m.vertex_normals())?,
             (None, _) => {}
         }
+        let (radiance, single) = (&solved.vertex_radiance, &solved.vertex_single);
         match &self.split {
-            Some(s) => self.mesh.update_radiance(&self.ctx, &s.gather(radiance))?,
-            None => self.mesh.update_radiance(&self.ctx, radiance)?,
+            Some(s) => self.mesh.update_radiance(&self.ctx, &s.gather(radiance), &s.gather(single))?,
+            None => self.mesh.update_radiance(&self.ctx, radiance, single)?,
         }
         self.shading.lights = lights.iter().map(|l| l.light).collect();
         if format == ImageFormat::Exr {

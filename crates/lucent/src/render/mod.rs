@@ -236,7 +236,7 @@ fn render_mertens(
         &solved.vertex_radiance,
         !args.no_env_background,
     )?;
-    let image = gpu.draw(None, &solved.vertex_radiance, &scene.lights, format)?;
+    let image = gpu.draw(None, solved, &scene.lights, format)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter(), links: solved.links }))
 }

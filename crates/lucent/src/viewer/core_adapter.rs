@@ -15,8 +15,10 @@ use std::sync::Arc;
 /// What one solve returns.
 #[derive(Clone, Debug, Default)]
 pub struct Solution {
-    /// Diffuse exitant radiance `B / pi` per vertex (before the exit Fresnel factor).
+    /// Diffuse exitant radiance `B / (c pi)` per vertex (before the exit Fresnel factor).
     pub vertex_radiance: Vec<Rgb>,
+    /// Single-scattered radiance per vertex (before the exit Fresnel factor; empty for none).
+    pub vertex_single: Vec<Rgb>,
     /// Per-phase times.
     pub timings: Timings,
     /// Number of links of the hierarchical solve; `None` for solvers without links.
@@ -152,6 +154,7 @@ impl SolverSession {
             .and_then(|f| session.hierarchical().and_then(|s| cluster_colours(s, f as usize)));
         Solution {
             vertex_radiance: solved.vertex_radiance,
+            vertex_single: solved.vertex_single,
             timings: solved.timings,
             links: solved.links,
             solver: "hierarchical",

@@ -73,8 +73,11 @@ pub(super) fn upload_scene(surface: &mut Surface, scene: &mut ViewModel) -> anyh
     surface.renderer.set_environment(ctx, p.env, p.env_rotation_deg);
     if scene.radiance_dirty {
         // The figure 6.9 false colours replace the radiance while that view is on.
-        let colours = scene.solution.clusters.as_ref().unwrap_or(&scene.solution.vertex_radiance);
-        surface.renderer.set_radiance(ctx, colours)?;
+        let solution = &scene.solution;
+        match &solution.clusters {
+            Some(colours) => surface.renderer.set_radiance(ctx, colours, &[])?,
+            None => surface.renderer.set_radiance(ctx, &solution.vertex_radiance, &solution.vertex_single)?,
+        }
         scene.radiance_dirty = false;
     }
     Ok(())

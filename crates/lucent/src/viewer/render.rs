@@ -188,15 +188,15 @@ impl ViewRenderer {
         Ok(())
     }
 
-    /// Uploads per-vertex radiance `B/pi`; a result for another topology (a mesh replaced
-    /// while it was solved) is skipped.
-    pub fn set_radiance(&mut self, ctx: &GpuContext, radiance: &[Rgb]) -> anyhow::Result<()> {
+    /// Uploads per-vertex radiance: `B/pi` and single scattering (empty for none); a result
+    /// for another topology (a mesh replaced while it was solved) is skipped.
+    pub fn set_radiance(&mut self, ctx: &GpuContext, radiance: &[Rgb], single: &[Rgb]) -> anyhow::Result<()> {
         if let Some(gpu) = &self.mesh
             && radiance.len() == self.topology.0
         {
             match self.texture.as_ref().and_then(|t| t.split.as_ref()) {
-                Some(s) => gpu.update_radiance(ctx, &s.gather(radiance))?,
-                None => gpu.update_radiance(ctx, radiance)?,
+                Some(s) => gpu.update_radiance(ctx, &s.gather(radiance), &s.gather(single))?,
+                None => gpu.update_radiance(ctx, radiance, single)?,
             }
         }
         Ok(())
