@@ -263,8 +263,6 @@ pub struct FrameSession {
     /// The rays under each face that the gain measures the body with, traced once, followed
     /// through small deformations (`ThicknessRays::fits`).
     thickness_rays: Option<crate::solver::finite_body::ThicknessRays>,
-    /// `B / (c π)` per vertex of the last solve, before single scattering is added.
-    diffuse_vertex: Vec<Rgb>,
     changes: Changes,
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
@@ -305,7 +303,6 @@ impl FrameSession {
             face_gain: None,
             finite_body: None,
             thickness_rays: None,
-            diffuse_vertex: Vec::new(),
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
@@ -458,7 +455,9 @@ impl FrameSession {
             return &self.last;
         }
         let mut timings = Timings::default();
-        if !changes.solve() && self.diffuse_vertex.len() == self.mesh.positions.len() {
+        // Only the eye moved: the last solve's `B / (c π)` stands (HTSM leaves it empty, but
+        // leaving HTSM is a method change, which solves).
+        if !changes.solve() && self.last.vertex_radiance.len() == self.mesh.positions.len() {
             let t = Instant::now();
             self.last.vertex_single = self.single_scattering();
             timings.single_scattering_ms = ms_since(t);
@@ -522,12 +521,11 @@ impl FrameSession {
         }
         timings.bounces_ms = ms_since(t_bounces);
         self.irradiance = e;
-        self.diffuse_vertex = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
+        let vertex_radiance = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
         let vertex_single = self.single_scattering();
         timings.single_scattering_ms = ms_since(t);
-        let vertex_radiance = self.diffuse_vertex.clone();
         self.last = Solved { face_b, vertex_radiance, vertex_single, timings, links, fresh: true };
         &self.last
     }
