@@ -181,6 +181,9 @@ pub struct Solved {
     /// [`FrameSession::set_eye`]). Shading adds it to `vertex_radiance`, blended geometrically
     /// across a face ([`shading::single_scattering`]).
     pub vertex_single: Vec<Rgb>,
+    /// How `vertex_radiance` leaves over exit angles: the mesh pass multiplies it by
+    /// `T(μ_o)` besides `F_t` ([`crate::bssrdf::ExitLobe`]; flat for Mertens' profile and HTSM).
+    pub exit_lobe: crate::bssrdf::ExitLobe,
     /// Per-stage times of the solve that made this (zero when it was reused).
     pub timings: Timings,
     /// Links of the hierarchical solve (`None` for the exact solver and HTSM).
@@ -526,7 +529,8 @@ impl FrameSession {
         let t = Instant::now();
         let vertex_single = self.single_scattering();
         timings.single_scattering_ms = ms_since(t);
-        self.last = Solved { face_b, vertex_radiance, vertex_single, timings, links, fresh: true };
+        let exit_lobe = self.dipole.exit_lobe.clone();
+        self.last = Solved { face_b, vertex_radiance, vertex_single, exit_lobe, timings, links, fresh: true };
         &self.last
     }
 

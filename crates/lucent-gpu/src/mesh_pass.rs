@@ -1,6 +1,8 @@
 //! The mesh pass (Mertens 2003 §5.4): a triangle mesh with per-vertex diffuse radiance `B / pi`
 //! from the solver, Gouraud interpolated, times the exit Fresnel transmittance
-//! `F_t(eta, w_o)` evaluated per pixel (`L = F_t(eta, w_o) B / pi`, eq. 3). Single-scattered
+//! `F_t(eta, w_o)` evaluated per pixel (`L = F_t(eta, w_o) B / pi`, eq. 3), and by the exit
+//! lobe `T(μ_o)` the half-space gives the profiles other than Mertens'
+//! ([`lucent_core::bssrdf::ExitLobe`], a 33-sample table per channel). Single-scattered
 //! radiance, where the session computes it per vertex, is added before that factor and
 //! interpolated geometrically (the exponential of the blended logarithms): it falls off
 //! exponentially past the terminator, by up to a thousand times across one face of a coarse
@@ -23,6 +25,7 @@ pub use crate::surface_maps::{AlbedoMap, EnvironmentMap};
 use crate::surface_maps::{albedo_bind_group, env_bind_group, texture_layout};
 use glam::{Vec2, Vec3};
 use lucent_core::Rgb;
+use lucent_core::bssrdf::ExitLobe;
 use lucent_core::irradiance::Light;
 use wgpu::util::DeviceExt;
 
@@ -216,6 +219,10 @@ pub struct Shading {
     /// Scale of the environment map drawn behind the mesh (radiance multiplier, >= 0); 0
     /// (default) draws none, and the tone map's flat background shows.
     pub background: f32,
+    /// How the diffuse radiance leaves over exit angles (unitless factor `T(μ_o)` per channel,
+    /// which keeps the exitance); default flat, the paper's. A solve gives the profile's
+    /// (`lucent_core::session::Solved::exit_lobe`).
+    pub exit_lobe: ExitLobe,
 }
 
 impl Default for Shading {
@@ -227,6 +234,7 @@ impl Default for Shading {
             shininess: 64.0,
             environment: 0.0,
             background: 0.0,
+            exit_lobe: ExitLobe::flat(),
         }
     }
 }
@@ -244,6 +252,8 @@ struct MeshUniforms {
     // x: environment background scale (0 = none).
     background: [f32; 4],
     lights: [LightUniform; MAX_LIGHTS],
+    // rgb: the exit lobe T at μ_o = k / (COUNT - 1).
+    exit_lobe: [[f32; 4]; ExitLobe::COUNT],
 }
 
 #[repr(C)]
@@ -446,6 +456,7 @@ impl MeshPass {
             counts: [shading.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             background: [shading.background.max(0.0), 0.0, 0.0, 0.0],
             lights,
+            exit_lobe: shading.exit_lobe.samples().map(|[r, g, b]| [r, g, b, 0.0]),
         };
         ctx.queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         self.draw_background.set(shading.background > 0.0);

@@ -116,6 +116,7 @@ fn torus_filmic() {
             shininess: 32.0,
             environment: 0.0,
             background: 0.0,
+            exit_lobe: Default::default(),
         },
         tone: ToneMap { exposure: 1.5, operator: ToneOperator::AcesFilmic, ..Default::default() },
     };

@@ -40,7 +40,7 @@ use crate::Rgb;
 use std::f64::consts::PI;
 
 /// Samples of the entry term over `μ_i = k / SAMPLES`, `k = 0..=SAMPLES`.
-const SAMPLES: usize = 32;
+pub(super) const SAMPLES: usize = 32;
 
 /// The entry term `F_t(η, μ_i) A(μ_t) / A(1)` per channel, over the cosine `μ_i` between the
 /// surface normal and the direction to the light (outside the material), split into the part
@@ -143,7 +143,7 @@ fn albedo_of(hs: &HalfSpace, mu_t: f64, with_single: bool) -> f64 {
 
 /// A table over `μ = k / SAMPLES` at `mu` (clamped to 0..1), linearly.
 #[inline]
-fn interpolate(table: &[[f32; 3]], mu: f32) -> [f32; 3] {
+pub(super) fn interpolate(table: &[[f32; 3]], mu: f32) -> [f32; 3] {
     let x = mu.clamp(0.0, 1.0) * SAMPLES as f32;
     let k = (x as usize).min(SAMPLES - 1);
     let t = x - k as f32;

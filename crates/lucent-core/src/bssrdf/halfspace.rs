@@ -126,6 +126,40 @@ impl HalfSpace {
             .sum()
     }
 
+    /// The intensity the half-space sends up to the boundary from inside, in direction cosines
+    /// `mus` (inside, 0..=1), per unit flux entering with refracted cosine `mu_t`: all orders
+    /// of internal reflection, with or without the light scattered once on its first way up
+    /// (`with_single`). The nodes' solve is interpolated by its own equation (Nyström).
+    pub fn returned_intensity(&self, mu_t: f64, mus: &[f64], with_single: bool) -> Vec<f64> {
+        let mu_t = mu_t.clamp(1e-6, 1.0);
+        let h_t = chandrasekhar_h(self.omega, mu_t);
+        let n = self.nodes.len();
+        let c = self.omega / (4.0 * PI);
+        let first: Vec<f64> = (0..n).map(|i| c * self.h[i] * h_t / (self.nodes[i].0 + mu_t)).collect();
+        // The light internal reflection sends back down at the nodes, `F u`, times `μ w`.
+        let down: Vec<f64> = (0..n)
+            .map(|j| {
+                let u_j: f64 = (0..n).map(|k| self.inverse[j * n + k] * first[k]).sum();
+                let (mu_j, w_j) = self.nodes[j];
+                self.h[j] * mu_j * w_j * self.fresnel[j] * u_j
+            })
+            .collect();
+        mus.iter()
+            .map(|&mu| {
+                let mu = mu.clamp(1e-9, 1.0);
+                let h = chandrasekhar_h(self.omega, mu);
+                let once = if with_single { 0.0 } else { c / (mu + mu_t) };
+                let reflected: f64 = self
+                    .nodes
+                    .iter()
+                    .zip(&down)
+                    .map(|(&(mu_j, _), d)| 0.5 * self.omega * h * d / (mu + mu_j))
+                    .sum();
+                c * h * h_t / (mu + mu_t) - once + reflected
+            })
+            .collect()
+    }
+
     /// Total albedo (single plus multiple scattering, all orders of internal reflection) for
     /// light entering with refracted direction cosine `mu_t` (0..=1).
     pub fn albedo(&self, mu_t: f64) -> f64 {

@@ -8,6 +8,7 @@
 
 pub mod beam_diffusion;
 mod entry;
+mod exit;
 mod fresnel;
 pub mod halfspace;
 mod material;
@@ -15,6 +16,7 @@ pub mod profile;
 pub mod walk;
 
 pub use entry::{Entry, zonal_band_weights};
+pub use exit::ExitLobe;
 pub use fresnel::{
     boundary_a, fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2,
     fresnel_transmittance, refracted_cosine,
@@ -59,6 +61,10 @@ pub struct Dipole {
     /// Fresnel's transmittance for [`ProfileKind::Mertens`] (the paper's), times the exact
     /// half-space albedo ratio `A(μ_t) / A(1)` for the others ([`Entry`]). Shared.
     pub entry: std::sync::Arc<Entry>,
+    /// How the diffuse light leaves over exit angles: flat for [`ProfileKind::Mertens`] (the
+    /// paper's `F_t B / π`), the half-space's lobe for light entering head-on for the others
+    /// ([`ExitLobe`]).
+    pub exit_lobe: ExitLobe,
 }
 
 impl Dipole {
@@ -91,6 +97,7 @@ impl Dipole {
             tables: None,
             energy_bound: kind != ProfileKind::Mertens,
             entry: std::sync::Arc::new(Entry::fresnel(material.eta)),
+            exit_lobe: ExitLobe::flat(),
         };
         for c in 0..3 {
             let sigma_a = material.sigma_a[c] * mm_per_unit;
@@ -114,6 +121,7 @@ impl Dipole {
         }
         if kind != ProfileKind::Mertens {
             d.entry = std::sync::Arc::new(Entry::half_space(&d.alpha_prime, d.eta, d.single_scattering));
+            d.exit_lobe = ExitLobe::half_space(&d.alpha_prime, d.eta, d.single_scattering);
         }
         d
     }

@@ -1,13 +1,16 @@
 // Mesh pass (Mertens 2003 §5.4): Gouraud-interpolated per-vertex diffuse radiance B/pi and
 // single-scattered radiance (interpolated geometrically: it falls off exponentially across a
 // face near the terminator, where a linear blend overstates it many times), times the exit
-// Fresnel transmittance F_t(eta, w_o) per pixel (eq. 3), plus a Fresnel-weighted
+// Fresnel transmittance F_t(eta, w_o) per pixel (eq. 3) and, for the diffuse part, the exit
+// lobe T(mu_o) (lucent_core::bssrdf::ExitLobe; 1 for the paper's), plus a Fresnel-weighted
 // Blinn-Phong highlight for the lights and an optional Fresnel-weighted environment reflection.
 // Output: HDR radiance in rgb, coverage 1 in alpha (the tone-map pass composites the background
 // where alpha is 0).
 
 const PI: f32 = 3.14159265358979;
 const MAX_LIGHTS: u32 = 8u;
+// Samples of the exit lobe (ExitLobe::COUNT), at mu_o = k / (EXIT_SAMPLES - 1).
+const EXIT_SAMPLES: u32 = 33u;
 
 struct Light {
     // xyz: position (mesh units) when w = 1; direction the light travels when w = 0.
@@ -33,6 +36,8 @@ struct Uniforms {
     // x: scale of the environment drawn behind the mesh (0 = none).
     background: vec4<f32>,
     lights: array<Light, MAX_LIGHTS>,
+    // rgb: the exit lobe T(mu_o) per channel.
+    exit_lobe: array<vec4<f32>, EXIT_SAMPLES>,
 };
 
 @group(0) @binding(0) var<uniform> u: Uniforms;
@@ -95,6 +100,13 @@ fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return 0.5 * (r_par * r_par + r_perp * r_perp);
 }
 
+// The exit lobe T at exit cosine cos_o, interpolated linearly as lucent-core's ExitLobe::at.
+fn exit_lobe(cos_o: f32) -> vec3<f32> {
+    let x = clamp(cos_o, 0.0, 1.0) * f32(EXIT_SAMPLES - 1u);
+    let k = min(u32(x), EXIT_SAMPLES - 2u);
+    return mix(u.exit_lobe[k].rgb, u.exit_lobe[k + 1u].rgb, x - f32(k));
+}
+
 // spot_falloff: spot.wgsl, prepended.
 
 fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
@@ -112,9 +124,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     }
     let v = normalize(u.eye.xyz - in.world);
     let cos_o = dot(n, v);
-    // L = F_t(eta, w_o) (B / pi + L_single) (Mertens eq. 3, §5.4), times sqrt(texture) at exit.
+    // L = F_t(eta, w_o) (T(mu_o) B / (c pi) + L_single) (Mertens eq. 3, §5.4, with the exit
+    // lobe), times sqrt(texture) at exit.
     let albedo = sqrt(max(textureSampleLevel(albedo_map, albedo_sampler, in.uv, 0.0).rgb, vec3<f32>(0.0)));
-    let subsurface = max(in.radiance, vec3<f32>(0.0)) + exp(in.log_single);
+    let subsurface = max(in.radiance, vec3<f32>(0.0)) * exit_lobe(cos_o) + exp(in.log_single);
     var l = (1.0 - fresnel_dielectric(cos_o, eta)) * subsurface * albedo;
 
     // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the

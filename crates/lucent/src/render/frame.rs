@@ -119,6 +119,7 @@ impl GpuFrame {
             None => self.mesh.update_radiance(&self.ctx, radiance, single)?,
         }
         self.shading.lights = lights.iter().map(|l| l.light).collect();
+        self.shading.exit_lobe = solved.exit_lobe.clone();
         if format == ImageFormat::Exr {
             // The background would cover alpha and bleed into the object's edge pixels.
             let shading = Shading { background: 0.0, ..self.shading.clone() };

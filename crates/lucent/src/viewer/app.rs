@@ -238,6 +238,10 @@ impl App {
         let ui = EguiFrame::new(surface, output);
         let false_colour = self.scene.solution.clusters.is_some();
         let mut params = draw_params(&self.framing, &self.scene.state, viewport, false_colour);
+        if !false_colour {
+            // The lobe of the profile that made the radiance on screen.
+            params.shading.exit_lobe = self.scene.solution.exit_lobe.clone();
+        }
         if !surface.renderer.reflects() {
             params.shading.environment = 0.0;
         }

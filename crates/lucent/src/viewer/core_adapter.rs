@@ -4,6 +4,7 @@
 use super::state::{Deformations, EnvChoice, SolveParams};
 use glam::Vec3;
 use lucent_core::Rgb;
+use lucent_core::bssrdf::ExitLobe;
 use lucent_core::irradiance::{Environment, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::{self, Deformer as _};
@@ -19,6 +20,8 @@ pub struct Solution {
     pub vertex_radiance: Vec<Rgb>,
     /// Single-scattered radiance per vertex (before the exit Fresnel factor; empty for none).
     pub vertex_single: Vec<Rgb>,
+    /// How `vertex_radiance` leaves over exit angles (the profile's; flat for the paper's).
+    pub exit_lobe: ExitLobe,
     /// Per-phase times.
     pub timings: Timings,
     /// Number of links of the hierarchical solve; `None` for solvers without links.
@@ -155,6 +158,7 @@ impl SolverSession {
         Solution {
             vertex_radiance: solved.vertex_radiance,
             vertex_single: solved.vertex_single,
+            exit_lobe: solved.exit_lobe,
             timings: solved.timings,
             links: solved.links,
             solver: "hierarchical",
