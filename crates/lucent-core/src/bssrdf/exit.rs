@@ -4,7 +4,7 @@
 //! radiance but for Fresnel. A path tracer does not see that: on a 2 cm marble sphere under a
 //! directional light its multiple scattering falls from the middle of the lit side towards the
 //! limb (in the lit band lucent's flat lobe was 14% too bright at exit cosines below 0.4 and 8%
-//! too dark above 0.9). Light leaving obliquely comes from shallower, where less of it was
+//! too dark above 0.9, R + G + B). Light leaving obliquely comes from shallower, where less of it was
 //! scattered back up: limb darkening, as in a stellar atmosphere.
 //!
 //! Every profile is the response of a half-space to light entering head-on (the entry term,
