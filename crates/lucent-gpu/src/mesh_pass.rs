@@ -256,6 +256,9 @@ struct MeshUniforms {
     exit_lobe: [[f32; 4]; ExitLobe::COUNT],
 }
 
+// mesh.wgsl sizes its table by hand.
+const _: () = assert!(ExitLobe::COUNT == 33, "mesh.wgsl's EXIT_SAMPLES must match ExitLobe::COUNT");
+
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct LightUniform {

@@ -3,6 +3,8 @@
 //! and single scattering 0.5 everywhere, seen head-on and obliquely at `eta = 1` (no Fresnel
 //! loss), shows `T(μ_o) + 0.5` per channel, and with the flat lobe `1.5`.
 
+mod common;
+
 use glam::{Vec2, Vec3};
 use lucent_core::bssrdf::ExitLobe;
 use lucent_gpu::camera::OrbitCamera;
@@ -16,14 +18,7 @@ const SINGLE: f32 = 0.5;
 /// `(μ_o, radiance)` at the pixels wholly inside the square, seen from `yaw_deg`.
 fn exit_radiance(lobe: &ExitLobe, yaw_deg: f32) -> Option<Vec<(f32, [f32; 3])>> {
     let ctx = adapter_or_skip()?;
-    let pos = [
-        Vec3::new(-1.0, -1.0, 0.0),
-        Vec3::new(1.0, -1.0, 0.0),
-        Vec3::new(1.0, 1.0, 0.0),
-        Vec3::new(-1.0, 1.0, 0.0),
-    ];
-    let nrm = [Vec3::Z; 4];
-    let tris = [[0, 1, 2], [0, 2, 3]];
+    let (pos, nrm, tris) = common::square();
     let mesh = GpuMesh::new(&ctx, &pos, &nrm, &[Vec3::ONE; 4], &tris).unwrap();
     mesh.update_radiance(&ctx, &[Vec3::ONE; 4], &[Vec3::splat(SINGLE); 4]).unwrap();
     let size = 96u32;

@@ -3,6 +3,8 @@
 //! edge has 1 and right edge 1/100, the middle shows 1/10 of single scattering and about 1/2
 //! of diffuse radiance.
 
+mod common;
+
 use glam::{Vec2, Vec3};
 use lucent_gpu::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::{GpuMesh, Shading};
@@ -16,15 +18,8 @@ const RIGHT_EDGE: f32 = 1e-2;
 /// per-vertex diffuse and single-scattered values.
 fn midline(diffuse: [f32; 2], single: [f32; 2]) -> Option<Vec<(f32, f32)>> {
     let ctx = adapter_or_skip()?;
-    let pos = [
-        Vec3::new(-1.0, -1.0, 0.0),
-        Vec3::new(1.0, -1.0, 0.0),
-        Vec3::new(1.0, 1.0, 0.0),
-        Vec3::new(-1.0, 1.0, 0.0),
-    ];
-    let nrm = [Vec3::Z; 4];
+    let (pos, nrm, tris) = common::square();
     let side = |v: [f32; 2]| [0, 1, 1, 0].map(|k| Vec3::splat(v[k])).to_vec();
-    let tris = [[0, 1, 2], [0, 2, 3]];
     let mesh = GpuMesh::new(&ctx, &pos, &nrm, &side(diffuse), &tris).unwrap();
     mesh.update_radiance(&ctx, &side(diffuse), &side(single)).unwrap();
     let size = 128u32;

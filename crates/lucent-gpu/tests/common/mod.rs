@@ -6,6 +6,18 @@
 
 use glam::Vec3;
 
+/// The square `[-1, 1]²` in the plane `z = 0`, facing `+z` (counter-clockwise from there):
+/// positions, normals and its two triangles. Vertices 0 and 3 make the left edge (`x = -1`).
+pub fn square() -> ([Vec3; 4], [Vec3; 4], [[u32; 3]; 2]) {
+    let pos = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    (pos, [Vec3::Z; 4], [[0, 1, 2], [0, 2, 3]])
+}
+
 /// A unit icosphere subdivided `levels` times (20 * 4^levels faces), counter-clockwise seen
 /// from outside. Returns positions (also the unit normals) and triangles.
 pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
