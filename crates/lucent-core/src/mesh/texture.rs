@@ -20,6 +20,7 @@
 
 use super::{Mesh, MeshError};
 use glam::{Vec2, Vec3};
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::PathBuf;
@@ -206,6 +207,15 @@ impl UvSplit {
             return Vec::new();
         }
         self.source.iter().map(|&v| values[v as usize]).collect()
+    }
+
+    /// Per-vertex `values` as a GPU mesh takes them: gathered through `split` where the mesh
+    /// has one (a textured mesh), else as they are.
+    pub fn through<'a, T: Copy>(split: Option<&UvSplit>, values: &'a [T]) -> Cow<'a, [T]> {
+        match split {
+            Some(s) => Cow::Owned(s.gather(values)),
+            None => Cow::Borrowed(values),
+        }
     }
 }
 

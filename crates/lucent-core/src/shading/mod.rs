@@ -6,9 +6,11 @@
 //! Mertens (and Jensen et al. 2001) write `F_t B / pi`, which loses `1 - c` (6% at eta = 1.3);
 //! the `mertens` profile keeps that form to reproduce the paper ([`Dipole::exit_normalization`]).
 //!
-//! The view-dependent `F_t(eta, w_o)` is applied per pixel on the GPU; this module gives the
-//! per-vertex diffuse part `B / (c pi)`, and [`single_scattering`] the per-vertex radiance
-//! scattered once along the refracted view ray, to which the GPU applies the same factor.
+//! The view-dependent `F_t(eta, w_o)` is applied per pixel on the GPU, and to the diffuse part
+//! also the exit lobe `T(mu_o)` of the profile (`bssrdf::ExitLobe`, flat for `mertens`), which
+//! keeps the lobe's integral at 1; this module gives the per-vertex diffuse part `B / (c pi)`,
+//! and [`single_scattering`] the per-vertex radiance scattered once along the refracted view
+//! ray, to which the GPU applies `F_t` alone.
 
 use crate::Rgb;
 use crate::bssrdf::Dipole;

@@ -105,19 +105,14 @@ impl GpuFrame {
         lights: &[SceneLight],
         format: ImageFormat,
     ) -> Result<Frame> {
-        match (mesh, &self.split) {
-            (Some(m), Some(s)) => {
-                let (p, n) = (s.gather(&m.positions), s.gather(&m.vertex_normals()));
-                self.mesh.update_geometry(&self.ctx, &p, &n)?
-            }
-            (Some(m), None) => self.mesh.update_geometry(&self.ctx, &m.positions, &m.vertex_normals())?,
-            (None, _) => {}
+        let split = self.split.as_ref();
+        if let Some(m) = mesh {
+            let normals = m.vertex_normals();
+            let (p, n) = (UvSplit::through(split, &m.positions), UvSplit::through(split, &normals));
+            self.mesh.update_geometry(&self.ctx, &p, &n)?;
         }
-        let (radiance, single) = (&solved.vertex_radiance, &solved.vertex_single);
-        match &self.split {
-            Some(s) => self.mesh.update_radiance(&self.ctx, &s.gather(radiance), &s.gather(single))?,
-            None => self.mesh.update_radiance(&self.ctx, radiance, single)?,
-        }
+        let radiance = UvSplit::through(split, &solved.vertex_radiance);
+        self.mesh.update_radiance(&self.ctx, &radiance, &UvSplit::through(split, &solved.vertex_single))?;
         self.shading.lights = lights.iter().map(|l| l.light).collect();
         self.shading.exit_lobe = solved.exit_lobe.clone();
         if format == ImageFormat::Exr {

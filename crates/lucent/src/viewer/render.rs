@@ -156,12 +156,10 @@ impl ViewRenderer {
         let normals = mesh.vertex_normals();
         let topology = (mesh.positions.len(), mesh.triangles.len());
         let split = self.texture.as_ref().and_then(|t| t.split.as_ref());
-        match (&self.mesh, split) {
-            (Some(gpu), Some(s)) if self.topology == topology => {
-                gpu.update_geometry(ctx, &s.gather(&mesh.positions), &s.gather(&normals))?;
-            }
-            (Some(gpu), None) if self.topology == topology => {
-                gpu.update_geometry(ctx, &mesh.positions, &normals)?;
+        match &self.mesh {
+            Some(gpu) if self.topology == topology => {
+                let (p, n) = (UvSplit::through(split, &mesh.positions), UvSplit::through(split, &normals));
+                gpu.update_geometry(ctx, &p, &n)?;
             }
             _ => {
                 let fits = |t: &&mut Textured| t.corner_uvs.len() == mesh.triangles.len();
@@ -194,10 +192,8 @@ impl ViewRenderer {
         if let Some(gpu) = &self.mesh
             && radiance.len() == self.topology.0
         {
-            match self.texture.as_ref().and_then(|t| t.split.as_ref()) {
-                Some(s) => gpu.update_radiance(ctx, &s.gather(radiance), &s.gather(single))?,
-                None => gpu.update_radiance(ctx, radiance, single)?,
-            }
+            let split = self.texture.as_ref().and_then(|t| t.split.as_ref());
+            gpu.update_radiance(ctx, &UvSplit::through(split, radiance), &UvSplit::through(split, single))?;
         }
         Ok(())
     }
