@@ -5,7 +5,7 @@
 //!
 //! | change                         | work on the next [`FrameSession::solve`]                     |
 //! |--------------------------------|--------------------------------------------------------------|
-//! | camera only                    | view-ray single scattering only (`shading::single_scattering`) |
+//! | camera only                    | view-ray single scattering and chord (`shading::single_scattering`, `exit_chord`) |
 //! | lights or environment          | irradiance, then pull/gather/push on the stored links        |
 //! | material, scale or profile     | profile tables; render mode relinks, incremental re-evaluates |
 //! | deformation (positions)        | BVH refit, irradiance; render relinks, incremental updates   |
@@ -147,7 +147,8 @@ pub struct Timings {
     pub pull_ms: f64,
     /// Gathering along the links (the whole O(N²) sum for the exact solver).
     pub gather_ms: f64,
-    /// Single scattering along the view ray (`shading::single_scattering`).
+    /// What depends on the eye: single scattering along the view ray
+    /// (`shading::single_scattering`) and the body's chord factor (`shading::exit_chord`).
     pub single_scattering_ms: f64,
     /// Pushing `B` down to the leaves and the per-vertex average.
     pub push_ms: f64,
@@ -174,7 +175,9 @@ pub struct Solved {
     /// Radiosity `B` per face (empty for [`Method::Htsm`]).
     pub face_b: Vec<Rgb>,
     /// Diffuse exitant radiance `B / (c π)` per vertex, area-weighted (§3.2), before the exit
-    /// Fresnel factor (empty for [`Method::Htsm`]).
+    /// Fresnel factor and lobe, times the body's chord factor along the view ray where an eye is
+    /// set and the profile's lobe is not flat ([`shading::exit_chord`]; empty for
+    /// [`Method::Htsm`]).
     pub vertex_radiance: Vec<Rgb>,
     /// Single-scattered radiance along the view ray per vertex, before the exit Fresnel factor
     /// (empty without it: see [`Transport::single_scattering_along_view`] and
@@ -263,6 +266,12 @@ pub struct FrameSession {
     /// that bound energy; remade when the mesh moves or the transport changes.
     face_gain: Option<Arc<Vec<Rgb>>>,
     finite_body: Option<FiniteBody>,
+    /// The mean chord factor `N` per vertex (`shading::exit_chord`), made with the gain from the
+    /// same rays; `None` for a flat exit lobe.
+    exit_means: Option<Vec<Rgb>>,
+    /// The last solve's diffuse radiance `B / (c π)` per vertex, before the chord factor (an
+    /// eye-only change reuses it).
+    diffuse: Vec<Rgb>,
     /// The rays under each face that the gain measures the body with, traced once, followed
     /// through small deformations (`ThicknessRays::fits`).
     thickness_rays: Option<crate::solver::finite_body::ThicknessRays>,
@@ -305,6 +314,8 @@ impl FrameSession {
             eye: None,
             face_gain: None,
             finite_body: None,
+            exit_means: None,
+            diffuse: Vec::new(),
             thickness_rays: None,
             changes: Changes::all(),
             unsolved: Changes::default(),
@@ -458,10 +469,11 @@ impl FrameSession {
             return &self.last;
         }
         let mut timings = Timings::default();
-        // Only the eye moved: the last solve's `B / (c π)` stands (HTSM leaves it empty, but
-        // leaving HTSM is a method change, which solves).
-        if !changes.solve() && self.last.vertex_radiance.len() == self.mesh.positions.len() {
+        // Only the eye moved: the last solve's `B / (c π)` stands, seen along new view rays
+        // (HTSM leaves it empty, but leaving HTSM is a method change, which solves).
+        if !changes.solve() && self.diffuse.len() == self.mesh.positions.len() {
             let t = Instant::now();
+            self.last.vertex_radiance = self.seen_diffuse();
             self.last.vertex_single = self.single_scattering();
             timings.single_scattering_ms = ms_since(t);
             self.last.timings = timings;
@@ -473,7 +485,7 @@ impl FrameSession {
             self.irradiance = self.face_irradiance(changes.geometry);
         }
         if changes.geometry || changes.transport || self.face_gain.is_none() {
-            self.face_gain = self.face_gains();
+            self.measure_body();
         }
         timings.irradiance_ms = ms_since(t);
 
@@ -524,9 +536,10 @@ impl FrameSession {
         }
         timings.bounces_ms = ms_since(t_bounces);
         self.irradiance = e;
-        let vertex_radiance = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
+        self.diffuse = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
+        let vertex_radiance = self.seen_diffuse();
         let vertex_single = self.single_scattering();
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = self.dipole.exit_lobe.clone();

@@ -5,6 +5,8 @@ use super::FrameSession;
 use crate::Rgb;
 use crate::irradiance::Entering;
 use crate::shading;
+use crate::shading::exit_chord::ExitChord;
+use crate::shading::single_scattering::ViewRayScene;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use std::sync::Arc;
 
@@ -31,10 +33,14 @@ impl FrameSession {
         }
     }
 
-    /// The finite-body gain of every face for the current pose and profile (the shadow BVH is
-    /// current), or `None` where the profile does not bound energy (Mertens').
-    pub(super) fn face_gains(&mut self) -> Option<Arc<Vec<Rgb>>> {
-        let caster = self.caster.as_ref().filter(|_| self.dipole.bounds_energy())?;
+    /// Measures the body under the faces for the current pose and profile (the shadow BVH is
+    /// current), with one set of rays: the finite-body gain of every face, and the mean chord
+    /// factor `N` of every vertex (`shading::exit_chord`). Both `None` where the profile does not
+    /// bound energy (Mertens'); no `N` where its exit lobe is flat.
+    pub(super) fn measure_body(&mut self) {
+        self.face_gain = None;
+        self.exit_means = None;
+        let Some(caster) = self.caster.as_ref().filter(|_| self.dipole.bounds_energy()) else { return };
         let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
         // Traced once; a small deformation moves the hits with the mesh.
         let rays = match self.thickness_rays.take() {
@@ -44,20 +50,20 @@ impl FrameSession {
             }
             _ => ThicknessRays::trace(&self.mesh, caster.bvh(), caster.offset()),
         };
-        let gains = fb.gains_along(&self.mesh, &rays, caster.offset());
+        self.face_gain = Some(Arc::new(fb.gains_along(&self.mesh, &rays, caster.offset())));
+        if let Some(chord) = ExitChord::new(&self.dipole) {
+            let means = chord.face_means(&self.mesh, &rays, caster.offset());
+            self.exit_means = Some(self.mesh.face_to_vertex(&means));
+        }
         self.thickness_rays = Some(rays);
-        Some(Arc::new(gains))
     }
 
-    /// View-ray single scattering per vertex where the transport asks for it and an eye is set,
-    /// else nothing (the shadow BVH is current: the solve refits it first).
-    pub(super) fn single_scattering(&self) -> Vec<Rgb> {
-        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return Vec::new() };
-        if !self.transport.single_scattering_along_view() {
-            return Vec::new();
-        }
+    /// Runs `f` on the view-ray scene of the current pose and the eye, if an eye is set (the
+    /// shadow BVH is current: the solve refits it first).
+    fn with_view<R>(&self, f: impl FnOnce(&ViewRayScene, glam::Vec3) -> R) -> Option<R> {
+        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return None };
         let normals = self.mesh.vertex_normals();
-        let scene = shading::single_scattering::ViewRayScene {
+        let scene = ViewRayScene {
             mesh: &self.mesh,
             normals: &normals,
             bvh: caster.bvh(),
@@ -66,6 +72,28 @@ impl FrameSession {
             lights: &self.lights,
             environment: self.environment.as_ref(),
         };
-        shading::single_scattering::view_ray_radiance(&scene, eye)
+        Some(f(&scene, eye))
+    }
+
+    /// The diffuse radiance `B / (c π)` per vertex as it leaves towards the eye: times the
+    /// body's chord factor along the view ray where the profile has one and an eye is set
+    /// (`shading::exit_chord`), else as solved.
+    pub(super) fn seen_diffuse(&self) -> Vec<Rgb> {
+        let (Some(means), Some(chord)) = (&self.exit_means, ExitChord::new(&self.dipole)) else {
+            return self.diffuse.clone();
+        };
+        match self.with_view(|scene, eye| chord.vertex_factors(scene, eye, means)) {
+            Some(factors) => self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect(),
+            None => self.diffuse.clone(),
+        }
+    }
+
+    /// View-ray single scattering per vertex where the transport asks for it and an eye is set,
+    /// else nothing (the shadow BVH is current: the solve refits it first).
+    pub(super) fn single_scattering(&self) -> Vec<Rgb> {
+        if !self.transport.single_scattering_along_view() {
+            return Vec::new();
+        }
+        self.with_view(shading::single_scattering::view_ray_radiance).unwrap_or_default()
     }
 }

@@ -164,7 +164,8 @@ fn names_parse_and_bad_ones_list_the_choices() {
     assert_eq!(e, "unknown mode \"fast\"; expected one of render, incremental, on-the-fly");
 }
 
-/// Moving the eye redoes view-ray single scattering and nothing else.
+/// Moving the eye redoes what depends on it (view-ray single scattering and the body's chord
+/// along the view ray) and nothing else.
 #[test]
 fn moving_the_eye_redoes_only_single_scattering() {
     let mut s = session(SolveMode::Render);
@@ -176,16 +177,61 @@ fn moving_the_eye_redoes_only_single_scattering() {
     assert_eq!((b.timings.link_ms, b.timings.gather_ms, b.timings.irradiance_ms), (0.0, 0.0, 0.0));
     assert!(b.timings.single_scattering_ms > 0.0);
     assert_eq!(a.face_b, b.face_b);
-    assert_eq!(a.vertex_radiance, b.vertex_radiance);
     assert_eq!(a.vertex_single.len(), a.vertex_radiance.len());
     assert_ne!(a.vertex_single, b.vertex_single);
     assert!(a.vertex_single.iter().all(|s| s.min_element() >= 0.0));
     assert!(a.vertex_single.iter().any(|s| s.max_element() > 0.0));
-    // Without an eye: `B / (c π)` alone, the same diffuse part.
+    // Without an eye: `B / (c π)` alone, as solved.
     s.set_eye(None);
     let c = s.solve().clone();
     assert!(c.vertex_single.is_empty());
-    assert_eq!(c.vertex_radiance, a.vertex_radiance);
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&c.face_b), &s.dipole);
+    assert_eq!(c.vertex_radiance, diffuse);
+    // A 5 cm marble sphere is a half-space to the chord but where it is seen edge-on.
+    for seen in [&a, &b] {
+        let ratio: Vec<f32> =
+            seen.vertex_radiance.iter().zip(&diffuse).map(|(r, d)| (*r / *d).max_element()).collect();
+        let near_one = ratio.iter().filter(|r| (**r - 1.0).abs() < 0.01).count();
+        assert!(near_one * 10 > ratio.len() * 9, "{near_one} of {}", ratio.len());
+    }
+}
+
+/// On a small ketchup sphere (red: a 4 mm mean free path on a 10 mm radius) the diffuse
+/// radiance each vertex sends towards the eye is `B / (c π)` times the sphere's chord factor
+/// (`shading::exit_chord`): `1 - e^{-σ_t 2 R μ_t}` over its mean. Faceting moves it by a few
+/// per cent.
+#[test]
+fn a_small_sphere_sends_its_diffuse_light_along_its_chords() {
+    let mesh = generate::icosphere(4);
+    let mut ketchup = Material::by_name("ketchup").unwrap();
+    ketchup.eta = 1.0;
+    let transport = Transport::new(ketchup, 0.02);
+    let mut s = FrameSession::new(mesh, None, transport, FrameSettings::default());
+    s.set_lights(key_light());
+    let eye = Vec3::new(0.0, 0.0, 6.0);
+    s.set_eye(Some(eye));
+    let solved = s.solve().clone();
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&solved.face_b), &s.dipole);
+    let chord = shading::exit_chord::ExitChord::new(&s.dipole).unwrap();
+    // Unit sphere: thickness 2 along the normal, slabness 0.
+    let mean = chord.mean(2.0, 0.0);
+    let sigma_t = s.dipole.sigma_t.map(|v| v as f32);
+    let mut checked = 0;
+    for (v, p) in s.mesh().positions.iter().enumerate() {
+        let mu_o = p.normalize().dot((eye - *p).normalize());
+        if mu_o < 0.2 {
+            continue;
+        }
+        // eta = 1: the view ray goes straight on; its chord in a unit sphere is 2 μ.
+        let expected = Rgb::from_array(std::array::from_fn(|c| -(-sigma_t[c] * 2.0 * mu_o).exp_m1())) / mean;
+        let got = solved.vertex_radiance[v] / diffuse[v];
+        assert!(
+            ((got - expected).abs() / expected).max_element() < 0.05,
+            "μ_o {mu_o}: {got} against {expected}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked}");
 }
 
 /// The validation's directional key light.

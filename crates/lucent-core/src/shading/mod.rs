@@ -22,5 +22,6 @@ pub fn diffuse_radiance(b: &[Rgb], dipole: &Dipole) -> Vec<Rgb> {
     b.iter().map(|v| *v * k).collect()
 }
 
+pub mod exit_chord;
 pub mod single_scattering;
 pub use single_scattering::{SingleScattering, UnknownSingleScattering};

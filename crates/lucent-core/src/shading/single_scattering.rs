@@ -133,30 +133,15 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
-    let seen = front_facing_vertices(scene.mesh, eye);
-    let mut radiance: Vec<Rgb> = (0..scene.mesh.positions.len())
+    let mut radiance: Vec<Rgb> = view_rays(scene, eye)
         .into_par_iter()
-        .map(|v| {
-            let x = scene.mesh.positions[v];
-            let n = scene.normals[v];
-            if n == Vec3::ZERO || !seen[v] {
-                return Rgb::ZERO;
-            }
-            // A vertex turned slightly away still colours the pixels of its front-facing
-            // triangles: mirror the view direction to the front.
-            let mut w_o = (eye - x).normalize_or_zero();
-            let mut mu_o = n.dot(w_o);
-            if mu_o < 0.0 {
-                w_o -= 2.0 * mu_o * n;
-                mu_o = -mu_o;
-            }
-            let mu_o = mu_o.clamp(1e-3, 1.0);
+        .map(|ray| {
+            let Some(ViewRay { vertex, w_t, mu_o }) = ray else { return Rgb::ZERO };
             let mut l = Rgb::ZERO;
             if !scene.lights.is_empty() {
-                let w_t = refract_inward(w_o, n, mu_o, eta);
                 // Only the ray to where the view ray leaves the body starts on the surface (and
                 // skips its own faces); the points along it are inside.
-                let origin = x;
+                let origin = scene.mesh.positions[vertex];
                 let t_max = scene
                     .bvh
                     .closest_hit(origin, w_t, scene.offset, f32::INFINITY)
@@ -175,13 +160,51 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
                 }
             }
             if let Some((e, kernel)) = &env {
-                l += kernel.radiance(e, n, mu_o);
+                l += kernel.radiance(e, scene.normals[vertex], mu_o);
             }
             l / (eta * eta)
         })
         .collect();
     floor_at_neighbours(scene.mesh, &mut radiance);
     radiance
+}
+
+/// Where the eye looks into the body at one vertex.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ViewRay {
+    /// The vertex.
+    pub vertex: usize,
+    /// The refracted view direction into the material (unit).
+    pub w_t: Vec3,
+    /// The exit cosine outside, `n·w_o` (1e-3..=1).
+    pub mu_o: f32,
+}
+
+/// The view ray at every vertex of `scene.mesh` seen from `eye`; `None` where no face the vertex
+/// belongs to faces the eye, or it has no normal.
+pub(crate) fn view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
+    let eta = scene.dipole.eta as f32;
+    let seen = front_facing_vertices(scene.mesh, eye);
+    (0..scene.mesh.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let x = scene.mesh.positions[v];
+            let n = scene.normals[v];
+            if n == Vec3::ZERO || !seen[v] {
+                return None;
+            }
+            // A vertex turned slightly away still colours the pixels of its front-facing
+            // triangles: mirror the view direction to the front.
+            let mut w_o = (eye - x).normalize_or_zero();
+            let mut mu_o = n.dot(w_o);
+            if mu_o < 0.0 {
+                w_o -= 2.0 * mu_o * n;
+                mu_o = -mu_o;
+            }
+            let mu_o = mu_o.clamp(1e-3, 1.0);
+            Some(ViewRay { vertex: v, w_t: refract_inward(w_o, n, mu_o, eta), mu_o })
+        })
+        .collect()
 }
 
 /// Raises each vertex to [`NEIGHBOUR_FLOOR`] times the brightest vertex it shares a face with.

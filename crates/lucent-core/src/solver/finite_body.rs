@@ -159,7 +159,7 @@ impl FiniteBody {
 /// along the inward normal, from the `chords` of the four rays tilted 45° from it (`offset`
 /// inside the face): the mean of where each falls between a sphere's `t cos 45°` and a slab's
 /// `t / cos 45°`. A ray that left the mesh (`None`) counts as a slab.
-fn slabness(chords: [Option<f32>; 4], t: f32, offset: f32) -> f64 {
+pub(crate) fn slabness(chords: [Option<f32>; 4], t: f32, offset: f32) -> f64 {
     let cos = std::f32::consts::FRAC_1_SQRT_2;
     let s: f32 = chords
         .iter()
@@ -245,7 +245,7 @@ impl ThicknessRays {
     /// the mesh or the face has no normal. A thin part's thickness along the normal changes
     /// faster than the distance to a point on its far side as its faces tilt (the bunny's ear
     /// under a growing bump: 0.11 -> 0.20 along the normal, 0.14 to the point).
-    fn chords(&self, mesh: &Mesh, f: usize, offset: f32) -> [Option<f32>; 5] {
+    pub(crate) fn chords(&self, mesh: &Mesh, f: usize, offset: f32) -> [Option<f32>; 5] {
         let n = mesh.face_normal(f);
         if n == glam::Vec3::ZERO {
             return [None; 5];
