@@ -53,18 +53,24 @@ pub struct Entry {
     samples: Vec<[f32; 3]>,
     /// The local part at the same cosines, per channel (unitless, 0..~1).
     local: Vec<[f32; 3]>,
+    /// The light scattered once that leaves directly at the entry face, at the same cosines, per
+    /// channel (unitless, 0..~0.5): none where the profile carries it; where it does not, the
+    /// eye sees it along the view ray, and a bounce between parts sends it on.
+    single: Vec<[f32; 3]>,
     /// Zonal band weights (l = 0, 1, 2, in sr) of `K(μ) = carried(μ) max(0, μ)` per channel,
     /// for the environment.
     bands: [[f32; 3]; 3],
     /// The same for the local part.
     local_bands: [[f32; 3]; 3],
+    /// The same for the single-scattered part.
+    single_bands: [[f32; 3]; 3],
 }
 
 impl Entry {
     /// Fresnel's transmittance alone (Mertens §5.3, Jensen et al. 2001): no dependence on
     /// direction beyond the boundary's.
     pub fn fresnel(eta: f64) -> Self {
-        Self::from_fn(eta, |mu_i| ([fresnel_transmittance(mu_i, eta); 3], [0.0; 3]))
+        Self::from_fn(eta, |mu_i| [[fresnel_transmittance(mu_i, eta); 3], [0.0; 3], [0.0; 3]])
     }
 
     /// Fresnel's transmittance times the half-space albedo ratio for reduced albedos `rho` per
@@ -72,7 +78,8 @@ impl Entry {
     /// the local rest (module docs). About a millisecond per channel. `with_single`: whether
     /// the albedo counts single scattering; without it (the profile has none, or it is computed
     /// along the view ray, which has its own dependence on the angle) the ratio is of the
-    /// albedos less their direct single scattering, most of what rises at grazing incidence.
+    /// albedos less their direct single scattering, most of what rises at grazing incidence,
+    /// and that single scattering is the third part (Hanrahan & Krueger's, through the boundary).
     pub fn half_space(rho: &[f64; 3], eta: f64, with_single: bool) -> Self {
         let spaces: [(HalfSpace, f64, BeyondOneMfp); 3] = std::array::from_fn(|c| {
             let hs = HalfSpace::new(rho[c], eta);
@@ -85,24 +92,36 @@ impl Entry {
             let f_t = fresnel_transmittance(mu_i, eta);
             let mut carried = [0.0; 3];
             let mut local = [0.0; 3];
+            let mut single = [0.0; 3];
             for (c, (hs, normal, far)) in spaces.iter().enumerate() {
                 let ratio = if *normal > 1e-12 { albedo_of(hs, mu_t, with_single) / normal } else { 1.0 };
                 let g = far.share(mu_t).min(ratio);
                 carried[c] = f_t * g;
                 local[c] = f_t * (ratio - g);
+                if !with_single {
+                    single[c] = f_t * hs.single_albedo(mu_t);
+                }
             }
-            (carried, local)
+            [carried, local, single]
         })
     }
 
-    fn from_fn(eta: f64, f: impl Fn(f64) -> ([f64; 3], [f64; 3])) -> Self {
-        let both: Vec<_> = (0..=SAMPLES).map(|k| f(k as f64 / SAMPLES as f64)).collect();
-        let samples: Vec<[f32; 3]> = both.iter().map(|(a, _)| a.map(|v| v as f32)).collect();
-        let local: Vec<[f32; 3]> = both.iter().map(|(_, b)| b.map(|v| v as f32)).collect();
+    fn from_fn(eta: f64, f: impl Fn(f64) -> [[f64; 3]; 3]) -> Self {
+        let parts: Vec<_> = (0..=SAMPLES).map(|k| f(k as f64 / SAMPLES as f64)).collect();
+        let table = |i: usize| -> Vec<[f32; 3]> { parts.iter().map(|p| p[i].map(|v| v as f32)).collect() };
+        let (samples, local, single) = (table(0), table(1), table(2));
         let bands = |table: &[[f32; 3]]| -> [[f32; 3]; 3] {
             std::array::from_fn(|c| zonal_band_weights(|mu| interpolate(table, mu as f32)[c] as f64 * mu))
         };
-        Entry { eta, bands: bands(&samples), local_bands: bands(&local), samples, local }
+        Entry {
+            eta,
+            bands: bands(&samples),
+            local_bands: bands(&local),
+            single_bands: bands(&single),
+            samples,
+            local,
+            single,
+        }
     }
 
     /// The carried part at cosine `cos_i` (clamped to 0..1) per channel: what the profile
@@ -116,6 +135,13 @@ impl Entry {
     #[inline]
     pub fn local_at(&self, cos_i: f32) -> Rgb {
         Rgb::from_array(interpolate(&self.local, cos_i))
+    }
+
+    /// The single-scattered part at cosine `cos_i` per channel: what leaves the entry face after
+    /// one scattering, when the profile does not carry it.
+    #[inline]
+    pub fn single_at(&self, cos_i: f32) -> Rgb {
+        Rgb::from_array(interpolate(&self.single, cos_i))
     }
 
     /// Whether any light is returned locally (not for Fresnel's entry).
@@ -132,6 +158,11 @@ impl Entry {
     /// The same for the local part.
     pub fn local_band_weights(&self, c: usize) -> [f32; 3] {
         self.local_bands[c]
+    }
+
+    /// The same for the single-scattered part.
+    pub fn single_band_weights(&self, c: usize) -> [f32; 3] {
+        self.single_bands[c]
     }
 }
 
@@ -322,5 +353,30 @@ mod tests {
         let total = zonal_band_weights(|mu| (e.at(mu as f32).x + e.local_at(mu as f32).x) as f64 * mu);
         assert!((band(0) - total[0]).abs() < 2e-3 * total[0]);
         assert!(!Entry::fresnel(1.3).has_local() && e.has_local());
+    }
+
+    /// The third part is Hanrahan & Krueger's single scattering leaving a half-space, per unit
+    /// irradiance: at eta = 1, `α'/2 (1 - μ_i ln(1 + 1/μ_i))`; none where the profile carries it,
+    /// and none for Fresnel's entry.
+    #[test]
+    fn the_single_part_is_hanrahan_and_krueger_s_exitance() {
+        let rho = [0.999, 0.75, 0.2];
+        let e = Entry::half_space(&rho, 1.0, false);
+        for mu in [1.0f64, 0.5, 0.25] {
+            let got = e.single_at(mu as f32);
+            for c in 0..3 {
+                let want = rho[c] / 2.0 * (1.0 - mu * (1.0 + 1.0 / mu).ln());
+                assert!(
+                    (got[c] as f64 / want - 1.0).abs() < 0.01,
+                    "μ {mu} channel {c}: {} against {want}",
+                    got[c]
+                );
+            }
+        }
+        assert_eq!(Entry::half_space(&rho, 1.0, true).single_at(0.5), Rgb::ZERO);
+        assert_eq!(Entry::fresnel(1.3).single_at(0.5), Rgb::ZERO);
+        // Its band weights integrate the same table.
+        let want = zonal_band_weights(|mu| e.single_at(mu as f32).y as f64 * mu);
+        assert!((e.single_band_weights(1)[0] - want[0]).abs() < 1e-3 * want[0]);
     }
 }

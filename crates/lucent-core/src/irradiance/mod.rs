@@ -65,7 +65,7 @@ impl Environment {
         self.transmitted(n, entry).carried
     }
 
-    /// [`Environment::transmitted_irradiance`] in both parts of the entry term.
+    /// [`Environment::transmitted_irradiance`] in every part of the entry term.
     pub fn transmitted(&self, n: Vec3, entry: &Entry) -> Entering {
         let d = self.to_map_frame(n);
         let part = |bands: &dyn Fn(usize) -> [f32; 3]| {
@@ -76,19 +76,29 @@ impl Environment {
             );
             (e * self.intensity).max(Rgb::ZERO)
         };
-        Entering { carried: part(&|c| entry.band_weights(c)), local: part(&|c| entry.local_band_weights(c)) }
+        Entering {
+            carried: part(&|c| entry.band_weights(c)),
+            local: part(&|c| entry.local_band_weights(c)),
+            single: part(&|c| entry.single_band_weights(c)),
+        }
     }
 }
 
 /// Transmitted irradiance at a face in the two parts of the [`Entry`] term: what the profile
 /// carries away, and what an oblique beam returns at the face itself (per channel, irradiance
-/// units; see `bssrdf::entry`).
+/// units; see `bssrdf::entry`); and the exitance of the light scattered once there where the
+/// profile does not carry it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Entering {
     /// Irradiance the diffusion profile spreads.
     pub carried: Rgb,
     /// Irradiance returned at the entry face (times the profile's total reflectance).
     pub local: Rgb,
+    /// Exitance of the light scattered once that leaves directly at the face (radiant exitance,
+    /// per channel; zero where the profile carries single scattering). The eye sees the direct
+    /// light's along the view ray (`shading::single_scattering`); a bounce between parts sends
+    /// it on.
+    pub single: Rgb,
 }
 
 impl Entering {
@@ -97,6 +107,7 @@ impl Entering {
     pub fn add(&mut self, e: Rgb, entry: &Entry, cos: f32) {
         self.carried += e * entry.at(cos);
         self.local += e * entry.local_at(cos);
+        self.single += e * entry.single_at(cos);
     }
 }
 
@@ -107,6 +118,7 @@ impl std::ops::Sub for Entering {
         Entering {
             carried: (self.carried - o.carried).max(Rgb::ZERO),
             local: (self.local - o.local).max(Rgb::ZERO),
+            single: (self.single - o.single).max(Rgb::ZERO),
         }
     }
 }
@@ -114,7 +126,7 @@ impl std::ops::Sub for Entering {
 impl std::ops::Mul<f32> for Entering {
     type Output = Entering;
     fn mul(self, k: f32) -> Entering {
-        Entering { carried: self.carried * k, local: self.local * k }
+        Entering { carried: self.carried * k, local: self.local * k, single: self.single * k }
     }
 }
 
@@ -122,6 +134,7 @@ impl std::ops::AddAssign for Entering {
     fn add_assign(&mut self, o: Entering) {
         self.carried += o.carried;
         self.local += o.local;
+        self.single += o.single;
     }
 }
 

@@ -33,6 +33,19 @@ impl FrameSession {
         }
     }
 
+    /// Adds to `b` the exitance of the light of `e` scattered once at each face, past the
+    /// texture's entry factors, where single scattering is not in the profile but along the
+    /// view ray (else it is in `B` already, or left out). For bounced light, which no view ray
+    /// follows: without it a bounce lost the quarter of its light a half-space scatters once.
+    pub(super) fn add_single(&self, b: &mut [Rgb], e: &[Entering]) {
+        if !self.transport.single_scattering_along_view() {
+            return;
+        }
+        for (f, (b, e)) in b.iter_mut().zip(e).enumerate() {
+            *b += e.single * self.entry.as_ref().map_or(Rgb::ONE, |t| t[f]);
+        }
+    }
+
     /// Measures the body under the faces for the current pose and profile (the shadow BVH is
     /// current), with one set of rays: the finite-body gain of every face, and the mean chord
     /// factor `N` of every vertex (`shading::exit_chord`). Both `None` where the profile does not
