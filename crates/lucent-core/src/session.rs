@@ -473,8 +473,7 @@ impl FrameSession {
         // (HTSM leaves it empty, but leaving HTSM is a method change, which solves).
         if !changes.solve() && self.diffuse.len() == self.mesh.positions.len() {
             let t = Instant::now();
-            self.last.vertex_radiance = self.seen_diffuse();
-            self.last.vertex_single = self.single_scattering();
+            (self.last.vertex_radiance, self.last.vertex_single) = self.seen_from_eye();
             timings.single_scattering_ms = ms_since(t);
             self.last.timings = timings;
             self.last.fresh = true;
@@ -544,8 +543,7 @@ impl FrameSession {
         self.diffuse = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
-        let vertex_radiance = self.seen_diffuse();
-        let vertex_single = self.single_scattering();
+        let (vertex_radiance, vertex_single) = self.seen_from_eye();
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = self.dipole.exit_lobe.clone();
         self.last = Solved { face_b, vertex_radiance, vertex_single, exit_lobe, timings, links, fresh: true };

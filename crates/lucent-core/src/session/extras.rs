@@ -4,9 +4,8 @@
 use super::FrameSession;
 use crate::Rgb;
 use crate::irradiance::Entering;
-use crate::shading;
 use crate::shading::exit_chord::ExitChord;
-use crate::shading::single_scattering::ViewRayScene;
+use crate::shading::single_scattering::{ViewRayScene, radiance_along, view_rays};
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use std::sync::Arc;
 
@@ -71,10 +70,20 @@ impl FrameSession {
         self.thickness_rays = Some(rays);
     }
 
-    /// Runs `f` on the view-ray scene of the current pose and the eye, if an eye is set (the
-    /// shadow BVH is current: the solve refits it first).
-    fn with_view<R>(&self, f: impl FnOnce(&ViewRayScene, glam::Vec3) -> R) -> Option<R> {
-        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else { return None };
+    /// What depends on the eye, from one set of view rays (the shadow BVH is current: the solve
+    /// refits it first): the diffuse radiance `B / (c π)` per vertex as it leaves towards the
+    /// eye, times the body's chord factor where the profile has one (`shading::exit_chord`),
+    /// and view-ray single scattering where the transport asks for it (else empty). Without an
+    /// eye: `B / (c π)` as solved, and no single scattering.
+    pub(super) fn seen_from_eye(&self) -> (Vec<Rgb>, Vec<Rgb>) {
+        let (Some(eye), Some(caster)) = (self.eye, &self.caster) else {
+            return (self.diffuse.clone(), Vec::new());
+        };
+        let chord = self.exit_means.as_ref().zip(ExitChord::new(&self.dipole));
+        let single = self.transport.single_scattering_along_view();
+        if chord.is_none() && !single {
+            return (self.diffuse.clone(), Vec::new());
+        }
         let normals = self.mesh.vertex_normals();
         let scene = ViewRayScene {
             mesh: &self.mesh,
@@ -85,28 +94,15 @@ impl FrameSession {
             lights: &self.lights,
             environment: self.environment.as_ref(),
         };
-        Some(f(&scene, eye))
-    }
-
-    /// The diffuse radiance `B / (c π)` per vertex as it leaves towards the eye: times the
-    /// body's chord factor along the view ray where the profile has one and an eye is set
-    /// (`shading::exit_chord`), else as solved.
-    pub(super) fn seen_diffuse(&self) -> Vec<Rgb> {
-        let (Some(means), Some(chord)) = (&self.exit_means, ExitChord::new(&self.dipole)) else {
-            return self.diffuse.clone();
-        };
-        match self.with_view(|scene, eye| chord.vertex_factors(scene, eye, means)) {
-            Some(factors) => self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect(),
+        let rays = view_rays(&scene, eye);
+        let diffuse = match chord {
+            Some((means, chord)) => {
+                let factors = chord.vertex_factors(&rays, means);
+                self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
+            }
             None => self.diffuse.clone(),
-        }
-    }
-
-    /// View-ray single scattering per vertex where the transport asks for it and an eye is set,
-    /// else nothing (the shadow BVH is current: the solve refits it first).
-    pub(super) fn single_scattering(&self) -> Vec<Rgb> {
-        if !self.transport.single_scattering_along_view() {
-            return Vec::new();
-        }
-        self.with_view(shading::single_scattering::view_ray_radiance).unwrap_or_default()
+        };
+        let single = if single { radiance_along(&scene, &rays) } else { Vec::new() };
+        (diffuse, single)
     }
 }

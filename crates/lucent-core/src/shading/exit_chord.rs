@@ -30,10 +30,9 @@ use crate::bssrdf::halfspace::gauss_legendre;
 use crate::bssrdf::{Dipole, fresnel_transmittance, refracted_cosine};
 use crate::mesh::Mesh;
 use crate::solver::finite_body::{ThicknessRays, slabness};
-use glam::Vec3;
 use rayon::prelude::*;
 
-use super::single_scattering::{ViewRayScene, view_rays};
+use super::single_scattering::ViewRay;
 
 /// Exit cosines over which `N` is integrated (Gauss-Legendre on `μ_o` in `0..1`).
 const NODES: usize = 16;
@@ -102,20 +101,16 @@ impl ExitChord {
             .collect()
     }
 
-    /// The factor `C` per vertex of `scene.mesh` seen from `eye` (1 where no face the vertex
-    /// belongs to faces the eye), given each vertex's `N` (`vertex_means`, area-weighted over
-    /// its faces). The diffuse radiance `B / (c π)` is multiplied by it.
-    pub fn vertex_factors(&self, scene: &ViewRayScene, eye: Vec3, vertex_means: &[Rgb]) -> Vec<Rgb> {
-        view_rays(scene, eye)
-            .into_par_iter()
+    /// The factor `C` per vertex along its view ray (`rays`, from
+    /// `single_scattering::view_rays`; 1 where the vertex is not seen), given each vertex's `N`
+    /// (`vertex_means`, area-weighted over its faces). The diffuse radiance `B / (c π)` is
+    /// multiplied by it.
+    pub(crate) fn vertex_factors(&self, rays: &[Option<ViewRay>], vertex_means: &[Rgb]) -> Vec<Rgb> {
+        rays.par_iter()
             .zip(vertex_means)
             .map(|(ray, n)| {
                 let Some(ray) = ray else { return Rgb::ONE };
-                let chord = scene
-                    .bvh
-                    .closest_hit(scene.mesh.positions[ray.vertex], ray.w_t, scene.offset, f32::INFINITY)
-                    .map_or(f32::INFINITY, |h| h.0);
-                let c = Rgb::from_array(std::array::from_fn(|k| kept(self.sigma_t[k] * chord)));
+                let c = Rgb::from_array(std::array::from_fn(|k| kept(self.sigma_t[k] * ray.exit)));
                 (c / *n).min(Rgb::splat(MAX_FACTOR))
             })
             .collect()

@@ -128,26 +128,25 @@ pub struct ViewRayScene<'a> {
 /// Per-vertex single-scattered radiance towards `eye` (mesh units), before the exit Fresnel
 /// factor `F_t(η, μ_o)` (see the module docs); radiance units of the lights' irradiance per sr.
 pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
+    radiance_along(scene, &view_rays(scene, eye))
+}
+
+/// [`view_ray_radiance`] along view rays already traced ([`view_rays`] of `scene`).
+pub(crate) fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
     let d = scene.dipole;
     let eta = d.eta as f32;
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
-    let mut radiance: Vec<Rgb> = view_rays(scene, eye)
-        .into_par_iter()
+    let mut radiance: Vec<Rgb> = rays
+        .par_iter()
         .map(|ray| {
-            let Some(ViewRay { vertex, w_t, mu_o }) = ray else { return Rgb::ZERO };
+            let Some(ViewRay { vertex, w_t, mu_o, exit }) = *ray else { return Rgb::ZERO };
             let mut l = Rgb::ZERO;
             if !scene.lights.is_empty() {
-                // Only the ray to where the view ray leaves the body starts on the surface (and
-                // skips its own faces); the points along it are inside.
                 let origin = scene.mesh.positions[vertex];
-                let t_max = scene
-                    .bvh
-                    .closest_hit(origin, w_t, scene.offset, f32::INFINITY)
-                    .map_or(f32::INFINITY, |h| h.0);
                 for c in 0..3 {
-                    let u_max = 1.0 - (-sigma_t[c] * t_max).exp();
+                    let u_max = 1.0 - (-sigma_t[c] * exit).exp();
                     let mut sum = 0.0;
                     for (node, weight) in GAUSS_4 {
                         let t = -(-u_max * node).ln_1p() / sigma_t[c];
@@ -178,10 +177,14 @@ pub(crate) struct ViewRay {
     pub w_t: Vec3,
     /// The exit cosine outside, `n·w_o` (1e-3..=1).
     pub mu_o: f32,
+    /// How far the refracted view ray runs inside the body before it leaves it (mesh units;
+    /// infinite where it leaves an open mesh).
+    pub exit: f32,
 }
 
-/// The view ray at every vertex of `scene.mesh` seen from `eye`; `None` where no face the vertex
-/// belongs to faces the eye, or it has no normal.
+/// The view ray at every vertex of `scene.mesh` seen from `eye`, traced to where it leaves the
+/// body; `None` where no face the vertex belongs to faces the eye, or it has no normal. Both
+/// view-dependent terms (this module's and `exit_chord`'s) read the same rays.
 pub(crate) fn view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
     let eta = scene.dipole.eta as f32;
     let seen = front_facing_vertices(scene.mesh, eye);
@@ -202,7 +205,12 @@ pub(crate) fn view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>>
                 mu_o = -mu_o;
             }
             let mu_o = mu_o.clamp(1e-3, 1.0);
-            Some(ViewRay { vertex: v, w_t: refract_inward(w_o, n, mu_o, eta), mu_o })
+            let w_t = refract_inward(w_o, n, mu_o, eta);
+            // Only this ray starts on the surface (and skips its own faces); the points along
+            // it are inside.
+            let exit =
+                scene.bvh.closest_hit(x, w_t, scene.offset, f32::INFINITY).map_or(f32::INFINITY, |h| h.0);
+            Some(ViewRay { vertex: v, w_t, mu_o, exit })
         })
         .collect()
 }
