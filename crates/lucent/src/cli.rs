@@ -2,6 +2,7 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lucent_core::bssrdf::ProfileKind;
+use lucent_core::mesh::refine::Refine;
 pub use lucent_core::session::{Method, SolveMode};
 use lucent_core::shading::SingleScattering;
 use lucent_core::solver::Oracle;
@@ -124,6 +125,11 @@ fn rgb_within(flag: &str, s: &str, range: &std::ops::RangeInclusive<f64>) -> Res
     Ok(rgb)
 }
 
+/// `auto` or 0..=3 (`--refine`).
+pub fn parse_refine(s: &str) -> Result<Refine, String> {
+    s.parse()
+}
+
 /// `view`/`on`, `profile` or `off` (`--single-scattering`).
 pub fn parse_single_scattering(s: &str) -> Result<SingleScattering, String> {
     s.parse().map_err(|e: lucent_core::shading::UnknownSingleScattering| e.to_string())
@@ -229,6 +235,13 @@ pub struct RenderArgs {
     /// on the fly). Default: the scene's `bounces`, else 3.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::BOUNCES), allow_negative_numbers = true)]
     pub bounces: Option<u32>,
+    /// Splits of every face into four before the solve (the surface stays where it is): `auto`
+    /// splits until the mean edge is at most 6 reduced mean free paths of the most opaque
+    /// channel, at most twice and not past 1M faces, so B and single scattering resolve a
+    /// shadow edge; a count 0..=3 forces it. Not for `--method htsm`. Default: the scene's
+    /// `refine`, else auto.
+    #[arg(long, value_parser = parse_refine)]
+    pub refine: Option<Refine>,
     /// Environment light and reflection map: `courtyard`, `forest` (the maps in assets/) or an
     /// equirectangular .hdr/.exr path. Replaces the scene's environment.
     #[arg(long)]
@@ -361,6 +374,7 @@ impl RenderArgs {
             lights: self.light.clone(),
             no_shadows: self.no_shadows,
             bounces: self.bounces,
+            refine: self.refine,
             env: self.env.clone(),
             env_rotation: self.env_rotation,
             deform: self.deform.clone(),

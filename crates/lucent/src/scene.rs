@@ -103,6 +103,11 @@ pub struct SceneFile {
     /// `"off"`, or `true` (view) / `false` (off). `mertens` has none.
     #[serde(default)]
     pub single_scattering: Option<SingleScatteringKey>,
+    /// Splits of every face into four before the solve, as `lucent render --refine`: `"auto"`
+    /// (default: until the mean edge is at most 6 reduced mean free paths, at most twice) or a
+    /// count 0..=3 (`lucent_core::mesh::refine`).
+    #[serde(default)]
+    pub refine: Option<RefineKey>,
     /// Lights (`[[light]]` tables). Default: none, and the renderer adds its default light when
     /// there is neither a light nor an environment.
     #[serde(default, rename = "light")]
@@ -121,6 +126,26 @@ pub struct SceneFile {
     /// The folder of the scene file; relative paths inside the file are resolved against it.
     #[serde(skip)]
     pub dir: PathBuf,
+}
+
+/// The scene key `refine`: `"auto"` or a number of splits.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum RefineKey {
+    /// A number of splits.
+    Levels(i64),
+    /// `"auto"` (or a number as a string).
+    Word(String),
+}
+
+impl RefineKey {
+    /// What it asks for; an error names the value and the accepted range.
+    pub fn refine(&self) -> Result<lucent_core::mesh::refine::Refine, String> {
+        match self {
+            RefineKey::Levels(n) => n.to_string().parse(),
+            RefineKey::Word(w) => w.parse(),
+        }
+    }
 }
 
 fn default_mesh() -> String {

@@ -100,8 +100,13 @@ fn checker_texture_shows_its_colours_and_white_changes_nothing() {
     let red = count(|r, g| r > g + 30);
     let green = count(|r, g| g > r + 30);
     assert!(red > 200 && green > 200, "red {red}, green {green} pixels");
-    let plain_coloured = images[0].pixels().filter(|p| (p[0] as i32 - p[1] as i32).abs() > 20).count();
-    assert_eq!(plain_coloured, 0, "the untextured cube has no red or green pixels");
+    // Untextured skim milk is never green; it reddens a little where its light travelled far
+    // (red's mean free path is 2.7 times blue's): on the top face, seen at grazing, once the
+    // 6 mm faces are split for the solve (`--refine auto`), about 40 pixels, not squares.
+    let plain = |f: fn(i32, i32) -> bool| images[0].pixels().filter(|p| f(p[0] as i32, p[1] as i32)).count();
+    assert_eq!(plain(|r, g| g > r + 20), 0, "the untextured cube has green pixels");
+    let plain_red = plain(|r, g| r > g + 20);
+    assert!(plain_red * 5 < red, "the untextured cube has {plain_red} red pixels, the checker {red}");
 }
 
 #[test]

@@ -62,21 +62,7 @@ pub fn icosahedron() -> Mesh {
 pub fn icosphere(subdivisions: u32) -> Mesh {
     let mut mesh = icosahedron();
     for _ in 0..subdivisions {
-        let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut triangles = Vec::with_capacity(mesh.triangles.len() * 4);
-        let positions = &mut mesh.positions;
-        let mut mid = |a: u32, b: u32| -> u32 {
-            *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let p = (positions[a as usize] + positions[b as usize]).normalize();
-                positions.push(p);
-                positions.len() as u32 - 1
-            })
-        };
-        for &[a, b, c] in &mesh.triangles {
-            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-            triangles.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        mesh.triangles = triangles;
+        mesh = super::refine::split(&mesh, |a, b| (a + b).normalize());
     }
     mesh
 }

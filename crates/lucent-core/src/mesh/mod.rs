@@ -11,6 +11,7 @@ pub mod generate;
 pub mod gltf_material;
 pub mod io;
 mod io_gltf;
+pub mod refine;
 pub mod texture;
 pub mod validate;
 

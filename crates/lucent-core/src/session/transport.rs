@@ -28,6 +28,13 @@ impl Transport {
         }
     }
 
+    /// The shortest reduced mean free path `1 / (sigma_s' + sigma_a)` over the channels, metres.
+    pub fn shortest_mean_free_path_m(&self) -> f64 {
+        let m = &self.material;
+        let sigma_t = (0..3).map(|c| m.sigma_s_prime[c] + m.sigma_a[c]).fold(0.0, f64::max);
+        1e-3 / sigma_t
+    }
+
     /// The profile in the units of a mesh whose largest bounding-box side is `extent` mesh
     /// units (tabulated profiles cost tens of milliseconds: made only when this changes).
     pub fn dipole(&self, extent: f32) -> Dipole {

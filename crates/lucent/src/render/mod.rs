@@ -44,9 +44,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     image.write(&out)?;
     println!(
-        "lucent: {}: {} triangles, {} at {} m, {} solve {:.0} ms{}, render {:.0} ms on {}, total {:.0} ms -> {}",
+        "lucent: {}: {} triangles{}, {} at {} m, {} solve {:.0} ms{}, render {:.0} ms on {}, total {:.0} ms -> {}",
         scene.source,
         scene.mesh.triangles.len(),
+        match scene.refine_levels {
+            0 => String::new(),
+            n => format!(
+                " (each face split in four {})",
+                if n == 1 { "once".into() } else { format!("{n} times") }
+            ),
+        },
         scene.material().name,
         scene.scale(),
         args.method.name(),
@@ -86,6 +93,7 @@ fn shrink_wrap_scene(mut scene: Scene, args: &RenderArgs) -> Result<Scene> {
     );
     scene.mesh = w.subdivided.mesh;
     scene.hierarchy = Some(w.subdivided.hierarchy);
+    scene.refine_levels = 0;
     Ok(scene)
 }
 

@@ -11,6 +11,7 @@ use lucent_core::hierarchy::Hierarchy;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
+use lucent_core::mesh::refine::{self, Refine};
 use lucent_core::mesh::texture::Texture;
 use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Transport};
 use lucent_core::solver::Oracle;
@@ -54,6 +55,8 @@ pub struct Overrides {
     pub no_shadows: bool,
     /// Bounces of subsurface light between facing parts (0..=4).
     pub bounces: Option<u32>,
+    /// Splits of the mesh before the solve (`auto` or 0..=3).
+    pub refine: Option<lucent_core::mesh::refine::Refine>,
     /// Environment: `courtyard`, `forest` or an `.hdr`/`.exr` path.
     pub env: Option<String>,
     /// Environment rotation about +Y, degrees.
@@ -109,6 +112,9 @@ pub struct Scene {
     pub surface: bool,
     /// A hierarchy built with `mesh` (shrink-wrap); `None`: the face-cluster hierarchy.
     pub hierarchy: Option<Hierarchy>,
+    /// Times every face of the loaded mesh was split into four (`refine`); `mesh` and
+    /// `texture` are the split ones.
+    pub refine_levels: u32,
 }
 
 impl Scene {
@@ -122,6 +128,24 @@ impl Scene {
         };
         let (source, (mesh, texture), mesh_path) = load_mesh(o, file.as_ref()).map_err(in_file)?;
         let transport = transport(o, file.as_ref(), &mesh, mesh_path.as_deref())?;
+        let method = o.method.unwrap_or_default();
+        let refine = match (o.refine, file.as_ref().and_then(|f| f.refine.as_ref())) {
+            (Some(r), _) => r,
+            (None, Some(key)) => key.refine().map_err(|e| in_file(anyhow::anyhow!(e)))?,
+            (None, None) => Refine::default(),
+        };
+        // HTSM shades per pixel from the light's view: nothing to resolve between vertices.
+        let refine_levels = match method {
+            Method::Htsm => 0,
+            _ => refine.levels(
+                &mesh,
+                transport.scale_m / mesh.extent() as f64,
+                transport.shortest_mean_free_path_m(),
+            ),
+        };
+        let mesh = refine::split_midpoints(&mesh, refine_levels);
+        let texture = texture
+            .map(|t| Texture { corner_uvs: refine::split_corner_uvs(&t.corner_uvs, refine_levels), ..t });
         let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
         let environment = environment(o, file.as_ref()).map_err(in_file)?;
         let mut lights: Vec<SceneLight> = if !o.lights.is_empty() {
@@ -143,7 +167,7 @@ impl Scene {
             (None, None) => Vec::new(),
         };
         let settings = FrameSettings {
-            method: o.method.unwrap_or_default(),
+            method,
             mode: o.mode.unwrap_or_default(),
             oracle: o.oracle,
             environment_shadows: !o.no_shadows,
@@ -167,6 +191,7 @@ impl Scene {
             exposure: o.exposure.or(file.as_ref().map(|f| f.exposure)).unwrap_or(1.0),
             surface: !o.no_surface && file.as_ref().is_none_or(|f| f.surface),
             hierarchy: None,
+            refine_levels,
         })
     }
 

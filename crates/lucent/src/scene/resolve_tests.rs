@@ -101,3 +101,37 @@ fn bounces_default_by_profile() {
     assert_eq!(bounces(Overrides { bounces: Some(2), ..mertens() }), 2);
     assert_eq!(bounces(Overrides { scene: candle(), ..Default::default() }), crate::ranges::DEFAULT_BOUNCES);
 }
+
+/// `refine`: auto splits the embedded bunny in marble at 10 cm (3.9 mm edges, 12 mean free
+/// paths) once and leaves it in skim milk at 5 cm (3.7); a count forces it; HTSM is never
+/// split; a bad scene value is one error naming the file, the value and the range.
+#[test]
+fn refine_splits_coarse_meshes_of_opaque_materials() {
+    let bunny = lucent_core::mesh::embedded::bunny().triangles.len();
+    let faces = |o: Overrides| {
+        let s = Scene::resolve(&o).unwrap();
+        (s.refine_levels, s.mesh.triangles.len())
+    };
+    let marble = || Overrides { material: Some("marble".into()), scale: Some(0.1), ..Default::default() };
+    assert_eq!(faces(marble()), (1, 4 * bunny));
+    let skim = Overrides { material: Some("skimmilk".into()), scale: Some(0.05), ..Default::default() };
+    assert_eq!(faces(skim), (0, bunny));
+    assert_eq!(faces(Overrides { refine: Some(Refine::Levels(0)), ..marble() }), (0, bunny));
+    assert_eq!(faces(Overrides { refine: Some(Refine::Levels(2)), ..marble() }), (2, 16 * bunny));
+    assert_eq!(faces(Overrides { method: Some(Method::Htsm), ..marble() }), (0, bunny));
+
+    let dir = std::env::temp_dir().join(format!("lucent-refine-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("split.toml");
+    let file = || Overrides { scene: Some(path.clone()), ..Default::default() };
+    std::fs::write(&path, "material = \"marble\"\nscale = 0.1\nrefine = 0\n").unwrap();
+    assert_eq!(faces(file()), (0, bunny));
+    std::fs::write(&path, "material = \"marble\"\nscale = 0.1\nrefine = \"auto\"\n").unwrap();
+    assert_eq!(faces(file()), (1, 4 * bunny));
+    for bad in ["7", "-1", "\"often\""] {
+        std::fs::write(&path, format!("refine = {bad}\n")).unwrap();
+        let e = format!("{:#}", Scene::resolve(&file()).err().unwrap());
+        assert!(e.contains("split.toml") && e.contains("0..=3") && e.contains(bad.trim_matches('"')), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
