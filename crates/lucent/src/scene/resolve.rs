@@ -143,9 +143,14 @@ impl Scene {
                 transport.shortest_mean_free_path_m(),
             ),
         };
-        let mesh = refine::split_midpoints(&mesh, refine_levels);
-        let texture = texture
-            .map(|t| Texture { corner_uvs: refine::split_corner_uvs(&t.corner_uvs, refine_levels), ..t });
+        // Split only when asked: a copy of an 871K-face scan is not free.
+        let (mesh, texture) = match refine_levels {
+            0 => (mesh, texture),
+            n => (
+                refine::split_midpoints(&mesh, n),
+                texture.map(|t| Texture { corner_uvs: refine::split_corner_uvs(&t.corner_uvs, n), ..t }),
+            ),
+        };
         let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
         let environment = environment(o, file.as_ref()).map_err(in_file)?;
         let mut lights: Vec<SceneLight> = if !o.lights.is_empty() {
