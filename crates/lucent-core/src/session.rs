@@ -266,9 +266,9 @@ pub struct FrameSession {
     /// that bound energy; remade when the mesh moves or the transport changes.
     face_gain: Option<Arc<Vec<Rgb>>>,
     finite_body: Option<FiniteBody>,
-    /// The mean chord factor `N` per vertex (`shading::exit_chord`), made with the gain from the
-    /// same rays; `None` for a flat exit lobe.
-    exit_means: Option<Vec<Rgb>>,
+    /// The exit lobe's weights and the mean chord factor `N` per vertex (`shading::exit_chord`),
+    /// made with the gain from the same rays; `None` for a flat exit lobe.
+    exit_chord: Option<(crate::shading::exit_chord::ExitChord, Vec<Rgb>)>,
     /// The last solve's diffuse radiance `B / (c π)` per vertex, before the chord factor (an
     /// eye-only change reuses it).
     diffuse: Vec<Rgb>,
@@ -314,7 +314,7 @@ impl FrameSession {
             eye: None,
             face_gain: None,
             finite_body: None,
-            exit_means: None,
+            exit_chord: None,
             diffuse: Vec::new(),
             thickness_rays: None,
             changes: Changes::all(),

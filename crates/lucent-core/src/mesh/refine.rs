@@ -78,10 +78,15 @@ pub fn split(mesh: &Mesh, place: impl Fn(Vec3, Vec3) -> Vec3) -> Mesh {
     };
     let mut triangles = Vec::with_capacity(mesh.triangles.len() * 4);
     for &[a, b, c] in &mesh.triangles {
-        let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-        triangles.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        triangles.extend(quarters([a, b, c], [mid(a, b), mid(b, c), mid(c, a)]));
     }
     Mesh::new(positions, triangles)
+}
+
+/// The four children of corners `[a, b, c]` with edge points `[ab, bc, ca]`, in [`split`]'s
+/// order: positions and per-corner values split alike.
+fn quarters<T: Copy>([a, b, c]: [T; 3], [ab, bc, ca]: [T; 3]) -> [[T; 3]; 4] {
+    [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
 }
 
 /// [`split`] at the edge midpoints, `levels` times: the same surface with `4^levels` times the
@@ -101,10 +106,7 @@ pub fn split_corner_uvs(corner_uvs: &[[Vec2; 3]], levels: u32) -> Vec<[Vec2; 3]>
     for _ in 0..levels {
         out = out
             .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a));
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
+            .flat_map(|&[a, b, c]| quarters([a, b, c], [0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)]))
             .collect();
     }
     out

@@ -51,7 +51,7 @@ impl FrameSession {
     /// bound energy (Mertens'); no `N` where its exit lobe is flat.
     pub(super) fn measure_body(&mut self) {
         self.face_gain = None;
-        self.exit_means = None;
+        self.exit_chord = None;
         let Some(caster) = self.caster.as_ref().filter(|_| self.dipole.bounds_energy()) else { return };
         let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
         // Traced once; a small deformation moves the hits with the mesh.
@@ -63,10 +63,10 @@ impl FrameSession {
             _ => ThicknessRays::trace(&self.mesh, caster.bvh(), caster.offset()),
         };
         self.face_gain = Some(Arc::new(fb.gains_along(&self.mesh, &rays, caster.offset())));
-        if let Some(chord) = ExitChord::new(&self.dipole) {
-            let means = chord.face_means(&self.mesh, &rays, caster.offset());
-            self.exit_means = Some(self.mesh.face_to_vertex(&means));
-        }
+        self.exit_chord = ExitChord::new(&self.dipole).map(|chord| {
+            let means = self.mesh.face_to_vertex(&chord.face_means(&self.mesh, &rays, caster.offset()));
+            (chord, means)
+        });
         self.thickness_rays = Some(rays);
     }
 
@@ -79,7 +79,7 @@ impl FrameSession {
         let (Some(eye), Some(caster)) = (self.eye, &self.caster) else {
             return (self.diffuse.clone(), Vec::new());
         };
-        let chord = self.exit_means.as_ref().zip(ExitChord::new(&self.dipole));
+        let chord = self.exit_chord.as_ref();
         let single = self.transport.single_scattering_along_view();
         if chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
@@ -96,7 +96,7 @@ impl FrameSession {
         };
         let rays = view_rays(&scene, eye);
         let diffuse = match chord {
-            Some((means, chord)) => {
+            Some((chord, means)) => {
                 let factors = chord.vertex_factors(&rays, means);
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

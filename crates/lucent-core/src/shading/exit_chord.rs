@@ -29,7 +29,7 @@ use crate::Rgb;
 use crate::bssrdf::halfspace::gauss_legendre;
 use crate::bssrdf::{Dipole, fresnel_transmittance, refracted_cosine};
 use crate::mesh::Mesh;
-use crate::solver::finite_body::{ThicknessRays, slabness};
+use crate::solver::finite_body::ThicknessRays;
 use rayon::prelude::*;
 
 use super::single_scattering::ViewRay;
@@ -92,12 +92,7 @@ impl ExitChord {
     pub fn face_means(&self, mesh: &Mesh, rays: &ThicknessRays, offset: f32) -> Vec<Rgb> {
         (0..mesh.triangles.len())
             .into_par_iter()
-            .map(|f| {
-                let [inward, tilted @ ..] = rays.chords(mesh, f, offset);
-                let Some(hit) = inward else { return Rgb::ONE };
-                let t = hit + offset;
-                self.mean(t, slabness(tilted, t, offset) as f32)
-            })
+            .map(|f| rays.body(mesh, f, offset).map_or(Rgb::ONE, |(t, s)| self.mean(t, s as f32)))
             .collect()
     }
 

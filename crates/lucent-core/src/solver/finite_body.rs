@@ -139,17 +139,9 @@ impl FiniteBody {
         (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let [inward, tilted @ ..] = rays.chords(mesh, f, offset);
-                let Some(hit) = inward else {
-                    return Rgb::ONE;
-                };
-                let t = hit + offset;
-                let gain = self.gain(0.5 * t);
-                let share = self.slab_share(t);
-                if share < 1e-4 {
-                    return gain;
-                }
-                gain / (1.0 + slabness(tilted, t, offset) * share) as f32
+                let Some((t, s)) = rays.body(mesh, f, offset) else { return Rgb::ONE };
+                let (gain, share) = (self.gain(0.5 * t), self.slab_share(t));
+                if share < 1e-4 { gain } else { gain / (1.0 + s * share) as f32 }
             })
             .collect()
     }
@@ -159,7 +151,7 @@ impl FiniteBody {
 /// along the inward normal, from the `chords` of the four rays tilted 45° from it (`offset`
 /// inside the face): the mean of where each falls between a sphere's `t cos 45°` and a slab's
 /// `t / cos 45°`. A ray that left the mesh (`None`) counts as a slab.
-pub(crate) fn slabness(chords: [Option<f32>; 4], t: f32, offset: f32) -> f64 {
+fn slabness(chords: [Option<f32>; 4], t: f32, offset: f32) -> f64 {
     let cos = std::f32::consts::FRAC_1_SQRT_2;
     let s: f32 = chords
         .iter()
@@ -238,6 +230,15 @@ impl ThicknessRays {
         });
     }
 
+    /// The body under face `f` of `mesh` as it is now: its thickness along the inward normal
+    /// (mesh units, from the face) and its [`slabness`] (0..=1); `None` where the inward ray
+    /// left the mesh or the face has no normal. What the gain and the exit chord read.
+    pub(crate) fn body(&self, mesh: &Mesh, f: usize, offset: f32) -> Option<(f32, f64)> {
+        let [inward, tilted @ ..] = self.chords(mesh, f, offset);
+        let t = inward? + offset;
+        Some((t, slabness(tilted, t, offset)))
+    }
+
     /// Face `f`'s five chords on `mesh` as it is now (mesh units): from the rays' origin,
     /// `offset` inside the face's centroid, along the rays as [`Self::trace`] casts them from
     /// the face's normal now, to the plane of the face each hit (to the place it hit on that
@@ -245,7 +246,7 @@ impl ThicknessRays {
     /// the mesh or the face has no normal. A thin part's thickness along the normal changes
     /// faster than the distance to a point on its far side as its faces tilt (the bunny's ear
     /// under a growing bump: 0.11 -> 0.20 along the normal, 0.14 to the point).
-    pub(crate) fn chords(&self, mesh: &Mesh, f: usize, offset: f32) -> [Option<f32>; 5] {
+    fn chords(&self, mesh: &Mesh, f: usize, offset: f32) -> [Option<f32>; 5] {
         let n = mesh.face_normal(f);
         if n == glam::Vec3::ZERO {
             return [None; 5];
