@@ -42,12 +42,14 @@ fn options(args: &ViewArgs) -> anyhow::Result<Options> {
         scale: args.scale,
         ..Overrides::default()
     };
-    let start = scene_file::start(&Scene::resolve(&overrides)?)?;
+    let scene = Scene::resolve(&overrides)?;
+    let start = scene_file::start(&scene)?;
     // A scene file's `[camera]` as it is; without one, the viewer's home view.
     let camera = args.scene.is_some().then_some(start.camera);
     let entry = start.texture.as_ref().map(|t| t.entry_factors());
     let (mesh, mut state) = (MeshOrigin::Loaded(Box::new(start.mesh), entry), start.state);
     state.save = scene_file::save_target(args.scene.as_deref(), args.mesh.as_deref());
+    state.save.refine = scene.refine_levels;
     let actions = match &args.script {
         Some(s) => script::parse(s)?,
         None => Vec::new(),

@@ -149,6 +149,10 @@ fn saved_material_reads_back_as_a_scene() {
         lucent_core::bssrdf::Material::from_albedo_mfp("colour", albedo, [2.0, 1.0, 0.5], 1.3).unwrap();
     assert_eq!(scene.material(), &want);
     assert_eq!(scene.scale(), 0.08);
+    // The splits and bounces the viewer had are written too (the default bunny is not split).
+    let text = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
+    assert!(text.contains("refine = 0") && text.contains("bounces = 3"), "{text}");
+    assert_eq!((scene.refine_levels, scene.settings.bounces), (0, 3));
 }
 
 /// A textured glTF (Khronos' BoxTextured, in `assets/`) is drawn with its texture: the Cesium

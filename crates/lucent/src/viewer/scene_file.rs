@@ -55,7 +55,8 @@ pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
     Ok(SceneStart { mesh: core_adapter::normalise(rest), texture, state, camera: scene.camera })
 }
 
-/// Writes the state's material (with scale, profile, single scattering and exposure) to a new
+/// Writes the state's material (with scale, profile, single scattering, exposure, bounces and
+/// the mesh's splits) to a new
 /// scene file: `to` exactly (a scripted `save:PATH`; an existing file is an error), else the
 /// next free name at [`super::state::SaveTarget::path`]. Returns the path written.
 pub fn save_material(state: &ViewState, to: Option<&Path>) -> anyhow::Result<std::path::PathBuf> {
@@ -72,6 +73,8 @@ pub fn save_material(state: &ViewState, to: Option<&Path>) -> anyhow::Result<std
         single_scattering: p.single_scattering,
         exposure: state.exposure,
         mesh: state.save.mesh.clone(),
+        refine: state.save.refine,
+        bounces: p.bounces,
     });
     write_new(&path, &text)?;
     Ok(path)
@@ -102,7 +105,7 @@ pub fn save_target(scene: Option<&Path>, mesh: Option<&Path>) -> super::state::S
         (None, Some(m)) => ("lucent_material.toml".into(), inside(m).then(|| m.display().to_string())),
         (None, None) => ("lucent_material.toml".into(), Some("bunny".to_string())),
     };
-    super::state::SaveTarget { path, mesh, message: None }
+    super::state::SaveTarget { path, mesh, refine: 0, message: None }
 }
 
 /// A light given in the scene's mesh units, in the viewer's normalised frame: positions mapped,

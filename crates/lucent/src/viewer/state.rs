@@ -160,13 +160,17 @@ pub struct SaveTarget {
     pub path: std::path::PathBuf,
     /// The `mesh` key written (valid relative to `path`'s folder), if known.
     pub mesh: Option<String>,
+    /// Times every face of the viewer's mesh was split into four at start (the `refine` key
+    /// written, 0..=3), so that the file reads back to the mesh on screen rather than to
+    /// whatever `auto` decides for the saved material and scale. Default 0.
+    pub refine: u32,
     /// The last save: the path written, or why it failed.
     pub message: Option<Result<String, String>>,
 }
 
 impl Default for SaveTarget {
     fn default() -> Self {
-        SaveTarget { path: "lucent_material.toml".into(), mesh: None, message: None }
+        SaveTarget { path: "lucent_material.toml".into(), mesh: None, refine: 0, message: None }
     }
 }
 
