@@ -36,8 +36,7 @@
 //! hue alone leaves every case's brightness within 0.2% of the gain without it
 //! (`validation/README.md`, "Reach: the hue a small part cuts").
 //!
-//! On a part
-//! shaped like a slab it is not: the profile also gathers the far side's share, `X(t)`, the
+//! On a part shaped like a slab it is not: the profile also gathers the far side's share, `X(t)`, the
 //! profile integrated over a plane the thickness `t` away ([`Dipole::plane_reflectance`]), and
 //! the gain would multiply that too (the skim-milk bunny's ears 20% too bright, the ketchup
 //! bunny's 54% block). So the gain is divided by `1 + s X(t) / R_d` (channel sums), where the
@@ -112,19 +111,7 @@ impl FiniteBody {
     /// documentation), interpolated in `ln t`.
     pub fn slab_reach(&self, thickness: f32) -> [f64; 3] {
         let t_mm = thickness as f64 * self.mm_per_unit;
-        let ts = &self.slab_t_mm;
-        std::array::from_fn(|c| {
-            let reach = &self.slab_reach[c];
-            if t_mm.is_nan() || t_mm >= ts[SLAB_STEPS - 1] {
-                return 0.0;
-            }
-            if t_mm <= ts[0] {
-                return reach[0];
-            }
-            let k = ts.partition_point(|&t| t <= t_mm) - 1;
-            let f = (t_mm / ts[k]).ln() / (ts[k + 1] / ts[k]).ln();
-            reach[k] + (reach[k + 1] - reach[k]) * f
-        })
+        std::array::from_fn(|c| ln_interpolate(&self.slab_t_mm, &self.slab_reach[c], t_mm, 0.0))
     }
 
     /// `Σ_c X_c(t) / Σ_c R_d,c` for a slab `thickness` mesh units thick: the share of the
@@ -164,16 +151,7 @@ impl FiniteBody {
     pub fn gain(&self, radius: f32) -> Rgb {
         let r_mm = radius as f64 * self.mm_per_unit;
         Rgb::from_array(std::array::from_fn(|c| {
-            let (radii, gain) = (&self.radius_mm[c], &self.gain[c]);
-            if r_mm.is_nan() || r_mm >= radii[RADII - 1] {
-                return 1.0;
-            }
-            if r_mm <= radii[0] {
-                return gain[0] as f32;
-            }
-            let k = radii.partition_point(|&r| r <= r_mm) - 1;
-            let t = (r_mm / radii[k]).ln() / (radii[k + 1] / radii[k]).ln();
-            (gain[k] + (gain[k + 1] - gain[k]) * t) as f32
+            ln_interpolate(&self.radius_mm[c], &self.gain[c], r_mm, 1.0) as f32
         }))
     }
 
@@ -197,6 +175,20 @@ impl FiniteBody {
             })
             .collect()
     }
+}
+
+/// `ys` over the increasing `xs`, linear in `ln x` between them, at `x`: the first value below
+/// `xs`, `beyond` at or past its end or for NaN.
+fn ln_interpolate(xs: &[f64], ys: &[f64], x: f64, beyond: f64) -> f64 {
+    if x.is_nan() || x >= xs[xs.len() - 1] {
+        return beyond;
+    }
+    if x <= xs[0] {
+        return ys[0];
+    }
+    let k = xs.partition_point(|&v| v <= x) - 1;
+    let f = (x / xs[k]).ln() / (xs[k + 1] / xs[k]).ln();
+    ys[k] + (ys[k + 1] - ys[k]) * f
 }
 
 /// How far the part under a face is a slab (1) rather than a sphere (0) of its thickness `t`
