@@ -67,7 +67,7 @@ pub fn stratified_cosine_rays(n: Vec3, face: usize, strata: usize) -> impl Itera
 
 /// Two numbers in `[0, 1)` from a face and a stratum (a 32-bit integer hash, PCG's output
 /// permutation on a combined seed).
-fn jitter(face: u32, k: u32) -> (f32, f32) {
+pub(crate) fn jitter(face: u32, k: u32) -> (f32, f32) {
     let hash = |x: u32| {
         let s = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
         let w = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277_803_737);

@@ -5,7 +5,7 @@ use super::FrameSession;
 use crate::Rgb;
 use crate::irradiance::Entering;
 use crate::shading::exit_chord::ExitChord;
-use crate::shading::single_scattering::{ViewRayScene, radiance_along, view_rays};
+use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use std::sync::Arc;
 
@@ -70,10 +70,9 @@ impl FrameSession {
         self.thickness_rays = Some(rays);
     }
 
-    /// What depends on the eye, from one set of view rays (the shadow BVH is current: the solve
-    /// refits it first): the diffuse radiance `B / (c π)` per vertex as it leaves towards the
-    /// eye, times the body's chord factor where the profile has one (`shading::exit_chord`),
-    /// and view-ray single scattering where the transport asks for it (else empty). Without an
+    /// What depends on the eye (the shadow BVH is current: the solve refits it first): the
+    /// diffuse radiance `B / (c π)` per vertex as it leaves towards the eye, times the body's
+    /// chord factor where the profile has one (`shading::exit_chord`), and view-ray single scattering where the transport asks for it (else empty). Without an
     /// eye: `B / (c π)` as solved, and no single scattering.
     pub(super) fn seen_from_eye(&self) -> (Vec<Rgb>, Vec<Rgb>) {
         let (Some(eye), Some(caster)) = (self.eye, &self.caster) else {
@@ -94,15 +93,14 @@ impl FrameSession {
             lights: &self.lights,
             environment: self.environment.as_ref(),
         };
-        let rays = view_rays(&scene, eye);
         let diffuse = match chord {
             Some((chord, means)) => {
-                let factors = chord.vertex_factors(&rays, means);
+                let factors = chord.vertex_factors(&view_rays(&scene, eye), means);
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }
             None => self.diffuse.clone(),
         };
-        let single = if single { radiance_along(&scene, &rays) } else { Vec::new() };
+        let single = if single { view_ray_radiance(&scene, eye) } else { Vec::new() };
         (diffuse, single)
     }
 }

@@ -23,9 +23,16 @@
 //! against 17% for the midpoint rule), each point one ray to the surface and one shadow ray. On a flat half-space this is exactly Hanrahan & Krueger's
 //! `α' E F_t F_t μ_i / (4π η² (μ_i' + μ_o'))`.
 //!
-//! An environment (nine SH coefficients) is treated as a half-space with no self-occlusion, in
-//! closed form: for a fixed exit cosine the kernel above is zonal in the incident direction, so
-//! its band weights (tabulated over `μ_o`) convolve the environment as the irradiance's do.
+//! An environment (nine SH coefficients) is first taken as lighting a half-space, in closed
+//! form: for a fixed exit cosine the kernel above is zonal in the incident direction, so its
+//! band weights (tabulated over `μ_o`) convolve the environment as the irradiance's do. What
+//! the real body changes is added by tracing: light from behind the tangent plane (on a part a
+//! few mean free paths across, the more the farther a channel reaches: the skim-milk bunny's
+//! head is 10% redder in single scattering than its body, in Mitsuba and now in lucent), light
+//! through thin parts, and sky hidden by other parts; see [`ENVIRONMENT_BODY_RAYS`].
+//!
+//! Both are evaluated at the centroids of the faces that face the eye and averaged to the
+//! vertices ([`view_ray_radiance`]).
 //!
 //! The result is a per-vertex radiance *before* the exit Fresnel factor, which the mesh pass
 //! applies per pixel to it and to `B / (c π)` alike ([`super`]). The mesh pass blends it across
@@ -127,30 +134,52 @@ pub struct ViewRayScene<'a> {
 
 /// Per-vertex single-scattered radiance towards `eye` (mesh units), before the exit Fresnel
 /// factor `F_t(η, μ_o)` (see the module docs); radiance units of the lights' irradiance per sr.
+///
+/// It is integrated along the view ray at the centroid of every face that faces the eye, and
+/// each vertex takes the area-weighted mean of its faces': the pixels a vertex colours lie on
+/// its faces, and under a convex vertex itself light reaches the ray from more sides than under
+/// the faces' interiors (on the 5 cm skim-milk bunny's head, 8-17% more, the most in the
+/// channels with short mean free paths).
 pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
-    radiance_along(scene, &view_rays(scene, eye))
+    let rays = face_view_rays(scene, eye);
+    let faces = radiance_along(scene, &rays);
+    let mut sums = vec![(Rgb::ZERO, 0.0f32); scene.mesh.positions.len()];
+    for (f, (tri, l)) in scene.mesh.triangles.iter().zip(&faces).enumerate() {
+        if rays[f].is_none() {
+            continue;
+        }
+        let area = scene.mesh.face_area(f);
+        for &v in tri {
+            let (sum, weight) = &mut sums[v as usize];
+            *sum += *l * area;
+            *weight += area;
+        }
+    }
+    let mut radiance: Vec<Rgb> =
+        sums.into_iter().map(|(sum, weight)| if weight > 0.0 { sum / weight } else { Rgb::ZERO }).collect();
+    floor_at_neighbours(scene.mesh, &mut radiance);
+    radiance
 }
 
-/// [`view_ray_radiance`] along view rays already traced ([`view_rays`] of `scene`).
-pub(crate) fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
+/// Single-scattered radiance along each view ray (`Rgb::ZERO` where there is none), before
+/// the exit Fresnel factor.
+fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
     let d = scene.dipole;
     let eta = d.eta as f32;
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
-    let mut radiance: Vec<Rgb> = rays
-        .par_iter()
+    rays.par_iter()
         .map(|ray| {
-            let Some(ViewRay { vertex, w_t, mu_o, exit }) = *ray else { return Rgb::ZERO };
+            let Some(ray) = ray else { return Rgb::ZERO };
             let mut l = Rgb::ZERO;
             if !scene.lights.is_empty() {
-                let origin = scene.mesh.positions[vertex];
                 for c in 0..3 {
-                    let u_max = 1.0 - (-sigma_t[c] * exit).exp();
+                    let u_max = 1.0 - (-sigma_t[c] * ray.exit).exp();
                     let mut sum = 0.0;
                     for (node, weight) in GAUSS_4 {
                         let t = -(-u_max * node).ln_1p() / sigma_t[c];
-                        let p = origin + w_t * t;
+                        let p = ray.origin + ray.w_t * t;
                         for light in scene.lights {
                             sum += weight * light_flux_at(scene, light, p, eta, c, sigma_t[c]);
                         }
@@ -159,20 +188,23 @@ pub(crate) fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> 
                 }
             }
             if let Some((e, kernel)) = &env {
-                l += kernel.radiance(e, scene.normals[vertex], mu_o);
+                l += kernel.radiance(e, ray.normal, ray.mu_o);
+                l += environment_through_body(scene, e, ray);
             }
-            l / (eta * eta)
+            (l / (eta * eta)).max(Rgb::ZERO)
         })
-        .collect();
-    floor_at_neighbours(scene.mesh, &mut radiance);
-    radiance
+        .collect()
 }
 
-/// Where the eye looks into the body at one vertex.
+/// Where the eye looks into the body at one point of the surface.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ViewRay {
-    /// The vertex.
-    pub vertex: usize,
+    /// The vertex or face it stands for (seeds the environment's jitter).
+    pub site: usize,
+    /// Where it enters the body (mesh units).
+    pub origin: Vec3,
+    /// The unit normal there.
+    pub normal: Vec3,
     /// The refracted view direction into the material (unit).
     pub w_t: Vec3,
     /// The exit cosine outside, `n·w_o` (1e-3..=1).
@@ -182,35 +214,57 @@ pub(crate) struct ViewRay {
     pub exit: f32,
 }
 
-/// The view ray at every vertex of `scene.mesh` seen from `eye`, traced to where it leaves the
-/// body; `None` where no face the vertex belongs to faces the eye, or it has no normal. Both
-/// view-dependent terms (this module's and `exit_chord`'s) read the same rays.
+impl ViewRay {
+    /// The view ray from `eye` into the surface point `origin` of unit normal `n`, traced to
+    /// where it leaves the body. A point turned slightly away still colours the pixels of its
+    /// front-facing triangles: the view direction is mirrored to the front.
+    fn trace(scene: &ViewRayScene, eye: Vec3, site: usize, origin: Vec3, n: Vec3) -> ViewRay {
+        let mut w_o = (eye - origin).normalize_or_zero();
+        let mut mu_o = n.dot(w_o);
+        if mu_o < 0.0 {
+            w_o -= 2.0 * mu_o * n;
+            mu_o = -mu_o;
+        }
+        let mu_o = mu_o.clamp(1e-3, 1.0);
+        let w_t = refract_inward(w_o, n, mu_o, scene.dipole.eta as f32);
+        // Only this ray starts on the surface (and skips its own faces); the points along it
+        // are inside.
+        let exit =
+            scene.bvh.closest_hit(origin, w_t, scene.offset, f32::INFINITY).map_or(f32::INFINITY, |h| h.0);
+        ViewRay { site, origin, normal: n, w_t, mu_o, exit }
+    }
+}
+
+/// The view ray at every vertex of `scene.mesh` seen from `eye`; `None` where no face the
+/// vertex belongs to faces the eye, or it has no normal (`exit_chord` reads them).
 pub(crate) fn view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
-    let eta = scene.dipole.eta as f32;
     let seen = front_facing_vertices(scene.mesh, eye);
     (0..scene.mesh.positions.len())
         .into_par_iter()
         .map(|v| {
-            let x = scene.mesh.positions[v];
             let n = scene.normals[v];
-            if n == Vec3::ZERO || !seen[v] {
+            (n != Vec3::ZERO && seen[v]).then(|| ViewRay::trace(scene, eye, v, scene.mesh.positions[v], n))
+        })
+        .collect()
+}
+
+/// The view ray at the centroid of every face that faces `eye`, with the mean of its
+/// vertices' normals there; `None` for the rest.
+fn face_view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
+    let mesh = scene.mesh;
+    (0..mesh.triangles.len())
+        .into_par_iter()
+        .map(|f| {
+            let centroid = mesh.face_centroid(f);
+            if mesh.face_normal(f).dot(eye - centroid) <= 0.0 {
                 return None;
             }
-            // A vertex turned slightly away still colours the pixels of its front-facing
-            // triangles: mirror the view direction to the front.
-            let mut w_o = (eye - x).normalize_or_zero();
-            let mut mu_o = n.dot(w_o);
-            if mu_o < 0.0 {
-                w_o -= 2.0 * mu_o * n;
-                mu_o = -mu_o;
-            }
-            let mu_o = mu_o.clamp(1e-3, 1.0);
-            let w_t = refract_inward(w_o, n, mu_o, eta);
-            // Only this ray starts on the surface (and skips its own faces); the points along
-            // it are inside.
-            let exit =
-                scene.bvh.closest_hit(x, w_t, scene.offset, f32::INFINITY).map_or(f32::INFINITY, |h| h.0);
-            Some(ViewRay { vertex: v, w_t, mu_o, exit })
+            let n = mesh.triangles[f]
+                .iter()
+                .map(|&v| scene.normals[v as usize])
+                .sum::<Vec3>()
+                .normalize_or_zero();
+            (n != Vec3::ZERO).then(|| ViewRay::trace(scene, eye, f, centroid, n))
         })
         .collect()
 }
@@ -274,6 +328,104 @@ fn light_flux_at(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, c:
     let f_t = fresnel_transmittance(mu_i as f64, eta as f64) as f32;
     let s_refracted = s * mu_i / mu_t;
     inc.irradiance[c] * f_t * mu_i / mu_t * (-sigma_t * s_refracted).exp()
+}
+
+/// Directions per vertex for the environment's single scattering through the body (a 4 × 8
+/// stratification of the sphere about the vertex normal).
+pub const ENVIRONMENT_BODY_RAYS: usize = 16;
+const BODY_STRATA: (usize, usize) = (4, 4);
+
+/// What the body changes in the environment's single scattering at one view ray, against the
+/// half-space [`EnvironmentKernel`] gives in closed form (add the two): the light that reaches
+/// the view ray through the real body (from behind the tangent plane, through a thin part,
+/// shadowed by another part) minus the half-space's, both estimated with the same
+/// [`ENVIRONMENT_BODY_RAYS`] directions inside the material, so that where the body is a
+/// half-space the two cancel and the closed form stands; less the half-space's light beyond
+/// where the view ray leaves.
+///
+/// Inside, light travels straight from where it refracted in: a direction `w'` from a point on
+/// the view ray meets the surface at distance `s` and cosine `μ'`, and brings `η² F_t L(ω)
+/// e^{-σ_t s}` from the direction `ω` it refracted from (none past the critical angle: light
+/// reflected inside is multiple scattering's). The four points along the view ray are shared
+/// by the channels (Gauss-Legendre in the attenuation of the channel that reaches farthest,
+/// the others weighted by their extra attenuation), so each direction costs four rays to the
+/// surface and one shadow ray.
+fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewRay) -> Rgb {
+    let n = ray.normal;
+    let d = scene.dipole;
+    let eta = d.eta as f32;
+    let sigma_t = d.sigma_t.map(|s| s as f32);
+    let albedo = d.alpha_prime.map(|a| a as f32);
+    let sigma_far = sigma_t[0].min(sigma_t[1]).min(sigma_t[2]);
+    let origin = ray.origin;
+    // The light inside along `w'` (unit) where it meets a surface of unit normal `n_h` facing
+    // it: `(η² F_t L(ω), ω)`, or `None` past the critical angle.
+    let entering = |w: Vec3, n_h: Vec3| {
+        let mu_in = n_h.dot(w);
+        let sin2_out = eta * eta * (1.0 - mu_in * mu_in);
+        if mu_in <= 0.0 || sin2_out >= 1.0 {
+            return None;
+        }
+        let mu_out = (1.0 - sin2_out).sqrt();
+        let out = (w * eta + n_h * (mu_out - eta * mu_in)).normalize_or_zero();
+        let l = env.sh.radiance(env.to_map_frame(out)).max(Rgb::ZERO) * env.intensity;
+        Some((l * (eta * eta * fresnel_transmittance(mu_out as f64, d.eta) as f32), out))
+    };
+    // The exit cosine inside, which sets the half-space's depth along the view ray.
+    let mu_o_t = (-n.dot(ray.w_t)).clamp(1e-3, 1.0);
+    let u_max = 1.0 - (-sigma_far * ray.exit).exp();
+    let points = GAUSS_4.map(|(node, weight)| {
+        let t = -(-u_max * node).ln_1p() / sigma_far;
+        (t, weight * u_max, origin + ray.w_t * t)
+    });
+    let (t_axis, b_axis) = n.any_orthonormal_pair();
+    let (rows, cols) = BODY_STRATA;
+    let mut sum = Rgb::ZERO;
+    for k in 0..ENVIRONMENT_BODY_RAYS {
+        let (ju, jv) = crate::irradiance::occlusion::jitter(ray.site as u32, k as u32);
+        let z = 1.0 - 2.0 * ((k / cols) as f32 + ju) / rows as f32;
+        let phi = std::f32::consts::TAU * ((k % cols) as f32 + jv) / cols as f32;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let w = t_axis * (r * phi.cos()) + b_axis * (r * phi.sin()) + n * z;
+        // The half-space's surface, the tangent plane at the vertex.
+        let half_space = entering(w, n);
+        let mut visible = None;
+        for &(t, weight, p) in &points {
+            let attenuated = |l: Rgb, s: f32| l * Rgb::from_array(sigma_t.map(|sigma| (-sigma * s).exp()));
+            let hs = half_space.map_or(Rgb::ZERO, |(l, _)| attenuated(l, t * mu_o_t / z));
+            let real = match scene.bvh.closest_hit(p, w, 0.0, f32::INFINITY) {
+                // Outside the body (an open mesh): keep the half-space's.
+                None => hs,
+                Some((s, face)) => {
+                    let mut n_h = scene.mesh.face_normal(face as usize);
+                    if n_h.dot(w) < 0.0 {
+                        n_h = -n_h;
+                    }
+                    match entering(w, n_h) {
+                        Some((l, out)) => {
+                            let open = *visible.get_or_insert_with(|| {
+                                let entry = p + w * s + n_h * scene.offset;
+                                !scene.bvh.occluded(entry, out, 0.0, f32::INFINITY)
+                            });
+                            if open { attenuated(l, s) } else { Rgb::ZERO }
+                        }
+                        None => Rgb::ZERO,
+                    }
+                }
+            };
+            let extra = Rgb::from_array(sigma_t.map(|sigma| (-(sigma - sigma_far) * t).exp()));
+            sum += (real - hs) * extra * weight;
+        }
+        // The half-space's light along the view ray beyond where it leaves the body.
+        if let Some((l, _)) = half_space.filter(|_| ray.exit.is_finite()) {
+            let k = 1.0 + mu_o_t / z;
+            let tail =
+                Rgb::from_array(sigma_t.map(|sigma| (-sigma * ray.exit * k).exp() * sigma_far / (sigma * k)));
+            sum -= l * tail;
+        }
+    }
+    let solid = 4.0 * PI / ENVIRONMENT_BODY_RAYS as f32;
+    Rgb::from_array(std::array::from_fn(|c| albedo[c] * sigma_t[c] / sigma_far / (4.0 * PI) * solid * sum[c]))
 }
 
 /// Band weights of the half-space single-scattering kernel for the environment, per channel,
