@@ -38,19 +38,42 @@ fn closed_form(d: &Dipole, mu_i: f64, mu_o: f64) -> [f64; 3] {
     })
 }
 
-fn radiance_at(mesh: &Mesh, d: &Dipole, lights: &[SceneLight], env: Option<&Environment>, eye: Vec3) -> Rgb {
+/// `f` of the view-ray scene of `mesh` (its vertex normals, a BVH over it).
+fn with_scene<R>(
+    mesh: &Mesh,
+    d: &Dipole,
+    lights: &[SceneLight],
+    env: Option<&Environment>,
+    f: impl FnOnce(&ViewRayScene) -> R,
+) -> R {
     let normals = mesh.vertex_normals();
     let bvh = Bvh::build(mesh);
-    let scene = ViewRayScene {
-        mesh,
-        normals: &normals,
-        bvh: &bvh,
-        offset: 1e-5,
-        dipole: d,
-        lights,
-        environment: env,
-    };
-    view_ray_radiance(&scene, eye)[top_centre(mesh)]
+    f(&ViewRayScene { mesh, normals: &normals, bvh: &bvh, offset: 1e-5, dipole: d, lights, environment: env })
+}
+
+fn radiance_at(mesh: &Mesh, d: &Dipole, lights: &[SceneLight], env: Option<&Environment>, eye: Vec3) -> Rgb {
+    with_scene(mesh, d, lights, env, |scene| view_ray_radiance(scene, eye)[top_centre(mesh)])
+}
+
+/// A sky of radiance 1 from every direction: `L_00 = sqrt(4π)`.
+fn constant_sky() -> Environment {
+    let mut sh = Sh9::ZERO;
+    sh.coeffs[0] = Rgb::splat((4.0 * std::f32::consts::PI).sqrt());
+    Environment { sh, rotation_deg: 0.0, intensity: 1.0 }
+}
+
+/// The half-space's single scattering under [`constant_sky`] seen at outside cosine `mu_o`:
+/// [`closed_form`] integrated over the upper hemisphere by the midpoint rule.
+fn half_space_under_sky(d: &Dipole, mu_o: f64) -> [f64; 3] {
+    let n = 4000;
+    let mut sum = [0.0f64; 3];
+    for k in 0..n {
+        let f = closed_form(d, (k as f64 + 0.5) / n as f64, mu_o);
+        for c in 0..3 {
+            sum[c] += 2.0 * std::f64::consts::PI * f[c] / n as f64;
+        }
+    }
+    sum
 }
 
 /// Unit direction in the x-y plane at cosine `mu` to +Y, on side `sign` of the normal.
@@ -107,23 +130,11 @@ fn a_shadowed_entry_point_sends_nothing() {
 fn a_constant_sky_gives_the_closed_form_integrated_over_the_hemisphere() {
     for eta in [1.0, 1.3] {
         let (mesh, d) = half_space(eta);
-        let mut sh = Sh9::ZERO;
-        // Constant radiance 1: L_00 = sqrt(4π).
-        sh.coeffs[0] = Rgb::splat((4.0 * std::f32::consts::PI).sqrt());
-        let env = Environment { sh, rotation_deg: 0.0, intensity: 1.0 };
+        let env = constant_sky();
         for mu_o in [1.0f32, 0.5] {
             let eye = Vec3::Y + at_cosine(mu_o, 1.0) * 1e4;
             let got = radiance_at(&mesh, &d, &[], Some(&env), eye);
-            // ∫ f dω over the upper hemisphere (radiance 1 from every direction), by the midpoint rule.
-            let n = 4000;
-            let mut want = [0.0f64; 3];
-            for k in 0..n {
-                let mu_i = (k as f64 + 0.5) / n as f64;
-                let f = closed_form(&d, mu_i, mu_o as f64);
-                for c in 0..3 {
-                    want[c] += 2.0 * std::f64::consts::PI * f[c] / n as f64;
-                }
-            }
+            let want = half_space_under_sky(&d, mu_o as f64);
             for c in 0..3 {
                 let rel = (got[c] as f64 - want[c]) / want[c];
                 // Nine SH coefficients of a zonal kernel: the truncation is the error.
@@ -187,34 +198,15 @@ fn a_small_sphere_under_a_constant_sky_gets_the_light_from_behind() {
             Material::custom("test", sigma_t.map(|s| s * 0.999), sigma_t.map(|s| s * 0.001), eta).unwrap();
         let d = Dipole::with_profile(&m, 100.0, ProfileKind::Pbd, false);
         let mesh = generate::icosphere(5);
-        let mut sh = Sh9::ZERO;
-        sh.coeffs[0] = Rgb::splat((4.0 * std::f32::consts::PI).sqrt());
-        let env = Environment { sh, rotation_deg: 0.0, intensity: 1.0 };
-        let normals = mesh.vertex_normals();
-        let bvh = Bvh::build(&mesh);
-        let scene = ViewRayScene {
-            mesh: &mesh,
-            normals: &normals,
-            bvh: &bvh,
-            offset: 1e-5,
-            dipole: &d,
-            lights: &[],
-            environment: Some(&env),
-        };
         // Every point of a sphere seen head-on is the same point: the mean over a few of them
         // takes out the directions' jitter (each vertex's own estimate is within a few per cent).
         let seen: Vec<usize> = (0..8).map(|k| k * mesh.positions.len() / 8).collect();
-        let got = seen.iter().map(|&v| view_ray_radiance(&scene, mesh.positions[v] * 1e4)[v]).sum::<Rgb>()
-            / seen.len() as f32;
+        let got = with_scene(&mesh, &d, &[], Some(&constant_sky()), |scene| {
+            seen.iter().map(|&v| view_ray_radiance(scene, mesh.positions[v] * 1e4)[v]).sum::<Rgb>()
+        }) / seen.len() as f32;
         let want = sphere_under_sky(&d);
         // The half-space under the same sky, seen head-on (the closed form's value).
-        let half_space: [f64; 3] = std::array::from_fn(|c| {
-            let n = 4000;
-            (0..n).map(|k| closed_form(&d, (k as f64 + 0.5) / n as f64, 1.0)[c]).sum::<f64>()
-                * 2.0
-                * std::f64::consts::PI
-                / n as f64
-        });
+        let half_space = half_space_under_sky(&d, 1.0);
         for c in 0..3 {
             let rel = (got[c] as f64 - want[c]) / want[c];
             assert!(rel.abs() < 0.03, "eta {eta}, channel {c}: {} vs exact {}", got[c], want[c]);
@@ -256,18 +248,7 @@ fn vertices_of_back_faces_only_cast_no_rays() {
         light: Light::Directional { direction: -Vec3::X, irradiance: Rgb::ONE },
         shadows: true,
     }];
-    let normals = mesh.vertex_normals();
-    let bvh = Bvh::build(&mesh);
-    let scene = ViewRayScene {
-        mesh: &mesh,
-        normals: &normals,
-        bvh: &bvh,
-        offset: 1e-5,
-        dipole: &d,
-        lights: &side,
-        environment: None,
-    };
-    let ss = view_ray_radiance(&scene, Vec3::new(1e4, 0.5, 0.0));
+    let ss = with_scene(&mesh, &d, &side, None, |scene| view_ray_radiance(scene, Vec3::new(1e4, 0.5, 0.0)));
     let side_centre = mesh.positions.iter().position(|p| p.distance(Vec3::X) < 1e-6).unwrap();
     assert_eq!(ss[top_centre(&mesh)], Rgb::ZERO);
     assert!(ss[side_centre].min_element() > 0.0, "{}", ss[side_centre]);

@@ -129,10 +129,16 @@ impl Mesh {
     /// Averages per-face values to vertices, weighting each face by its area (Mertens §3.2:
     /// "the accumulated results at the leaf nodes are averaged at the vertices").
     pub fn face_to_vertex(&self, face_values: &[Vec3]) -> Vec<Vec3> {
+        self.face_to_vertex_over(face_values, |_| true)
+    }
+
+    /// [`Mesh::face_to_vertex`] over the faces `counts` picks only (a vertex on none gets 0):
+    /// e.g. only the faces a view ray was traced at.
+    pub fn face_to_vertex_over(&self, face_values: &[Vec3], counts: impl Fn(usize) -> bool) -> Vec<Vec3> {
         assert_eq!(face_values.len(), self.triangles.len());
         let mut sum = vec![Vec3::ZERO; self.positions.len()];
         let mut weight = vec![0.0f32; self.positions.len()];
-        for (f, tri) in self.triangles.iter().enumerate() {
+        for (f, tri) in self.triangles.iter().enumerate().filter(|&(f, _)| counts(f)) {
             let a = self.face_area(f);
             for &v in tri {
                 sum[v as usize] += a * face_values[f];

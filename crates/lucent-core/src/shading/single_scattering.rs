@@ -143,20 +143,7 @@ pub struct ViewRayScene<'a> {
 pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
     let rays = face_view_rays(scene, eye);
     let faces = radiance_along(scene, &rays);
-    let mut sums = vec![(Rgb::ZERO, 0.0f32); scene.mesh.positions.len()];
-    for (f, (tri, l)) in scene.mesh.triangles.iter().zip(&faces).enumerate() {
-        if rays[f].is_none() {
-            continue;
-        }
-        let area = scene.mesh.face_area(f);
-        for &v in tri {
-            let (sum, weight) = &mut sums[v as usize];
-            *sum += *l * area;
-            *weight += area;
-        }
-    }
-    let mut radiance: Vec<Rgb> =
-        sums.into_iter().map(|(sum, weight)| if weight > 0.0 { sum / weight } else { Rgb::ZERO }).collect();
+    let mut radiance = scene.mesh.face_to_vertex_over(&faces, |f| rays[f].is_some());
     floor_at_neighbours(scene.mesh, &mut radiance);
     radiance
 }
@@ -375,10 +362,14 @@ fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewR
     // The exit cosine inside, which sets the half-space's depth along the view ray.
     let mu_o_t = (-n.dot(ray.w_t)).clamp(1e-3, 1.0);
     let u_max = 1.0 - (-sigma_far * ray.exit).exp();
+    // Each point: its depth along the view ray, its weight per channel (the node's, times the
+    // channel's attenuation beyond the farthest-reaching channel's), and where it is.
     let points = GAUSS_4.map(|(node, weight)| {
         let t = -(-u_max * node).ln_1p() / sigma_far;
-        (t, weight * u_max, origin + ray.w_t * t)
+        let extra = Rgb::from_array(sigma_t.map(|sigma| (-(sigma - sigma_far) * t).exp()));
+        (t, extra * (weight * u_max), origin + ray.w_t * t)
     });
+    let attenuated = |l: Rgb, s: f32| l * Rgb::from_array(sigma_t.map(|sigma| (-sigma * s).exp()));
     let (t_axis, b_axis) = n.any_orthonormal_pair();
     let (rows, cols) = BODY_STRATA;
     let mut sum = Rgb::ZERO;
@@ -388,11 +379,10 @@ fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewR
         let phi = std::f32::consts::TAU * ((k % cols) as f32 + jv) / cols as f32;
         let r = (1.0 - z * z).max(0.0).sqrt();
         let w = t_axis * (r * phi.cos()) + b_axis * (r * phi.sin()) + n * z;
-        // The half-space's surface, the tangent plane at the vertex.
+        // The half-space's surface, the tangent plane at the view ray's origin.
         let half_space = entering(w, n);
         let mut visible = None;
         for &(t, weight, p) in &points {
-            let attenuated = |l: Rgb, s: f32| l * Rgb::from_array(sigma_t.map(|sigma| (-sigma * s).exp()));
             let hs = half_space.map_or(Rgb::ZERO, |(l, _)| attenuated(l, t * mu_o_t / z));
             let real = match scene.bvh.closest_hit(p, w, 0.0, f32::INFINITY) {
                 // Outside the body (an open mesh): keep the half-space's.
@@ -414,8 +404,7 @@ fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewR
                     }
                 }
             };
-            let extra = Rgb::from_array(sigma_t.map(|sigma| (-(sigma - sigma_far) * t).exp()));
-            sum += (real - hs) * extra * weight;
+            sum += (real - hs) * weight;
         }
         // The half-space's light along the view ray beyond where it leaves the body.
         if let Some((l, _)) = half_space.filter(|_| ray.exit.is_finite()) {
