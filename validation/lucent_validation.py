@@ -100,6 +100,68 @@ def clean_triangles(v, t):
     return t[keep]
 
 
+def unfold(v, t, max_passes=8):
+    """What lucent's mesh::unfold does (in f64): the vertices of faces folded over their
+    neighbours move to the mean of their neighbours, first each face's corner farthest from
+    it, else all three, pass by pass while the count of folded faces falls. Returns the moved
+    positions and the counts (found, left)."""
+    v = v.copy()
+    edge_faces = {}
+    for f, tri in enumerate(t):
+        for k in range(3):
+            a, b = tri[k], tri[(k + 1) % 3]
+            edge_faces.setdefault((min(a, b), max(a, b)), []).append(f)
+    nbrs = [[] for _ in t]
+    ring = {}
+    for (a, b), fs in edge_faces.items():
+        ring.setdefault(a, []).append(b)
+        ring.setdefault(b, []).append(a)
+        for f in fs:
+            nbrs[f].extend(g for g in fs if g != f)
+
+    def normals():
+        c = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+        length = np.linalg.norm(c, axis=1, keepdims=True)
+        return np.where(length > 0, c / np.where(length > 0, length, 1), 0)
+
+    def folded():
+        n = normals()
+        out = []
+        for f, tri in enumerate(t):
+            if not n[f].any() or not nbrs[f]:
+                continue
+            total = n[nbrs[f]].sum(0)
+            if not total.any() or n[f] @ total >= -0.5 * np.linalg.norm(total):
+                continue
+            if any(n[f] @ n[g] < 0 and any(n[f] @ (v[w] - v[tri[0]]) > 0 for w in t[g] if w not in tri) for g in nbrs[f]):
+                out.append(f)
+        return out
+
+    def mean(w):
+        return v[ring[w]].mean(0)
+
+    now = folded()
+    found = len(now)
+    for _ in range(max_passes):
+        if not now:
+            break
+        for every in (False, True):
+            if every:
+                verts = sorted({w for f in now for w in t[f]})
+            else:
+                verts = sorted({max(t[f], key=lambda w: ((v[w] - mean(w)) ** 2).sum()) for f in now})
+            before, to = v[verts].copy(), np.array([mean(w) for w in verts])
+            v[verts] = to
+            after = folded()
+            if len(after) < len(now):
+                break
+            v[verts] = before
+        else:
+            break
+        now = after
+    return v, found, len(now)
+
+
 def write_obj(path, v, t):
     used = np.unique(t)
     index = np.full(len(v), -1)
@@ -184,8 +246,9 @@ def cmd_scenes(cfg):
         if os.path.exists(src):
             v, t = read_ascii_ply(src)
             kept = clean_triangles(v, t)
+            v, found, left = unfold(v, kept)
             write_obj(MESH_FILES[mesh], v, kept)
-            print(f"{mesh}: {len(kept)} of {len(t)} triangles kept -> {MESH_FILES[mesh]}")
+            print(f"{mesh}: {len(kept)} of {len(t)} triangles kept, {found - left} of {found} folded faces undone -> {MESH_FILES[mesh]}")
         else:
             print(f"{mesh}: {src} missing (scripts/fetch_dragon.sh fetches it)")
     for case in cfg["cases"]:

@@ -13,6 +13,7 @@ pub mod io;
 mod io_gltf;
 pub mod refine;
 pub mod texture;
+pub mod unfold;
 pub mod validate;
 
 pub use bvh::Bvh;

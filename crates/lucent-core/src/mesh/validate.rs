@@ -10,6 +10,9 @@
 //! - removed and reported: degenerate faces (a repeated index or zero area), and repeated
 //!   faces (the same three vertices as another face: scanned reconstructions such as the vrip
 //!   Stanford dragon hold hundreds, mostly back to back, which drew as black specks);
+//! - repaired and reported: faces folded over their neighbours, whose vertices move to the
+//!   mean of their neighbours ([`super::unfold`]: decimation fold-overs, dark dots on the
+//!   decimated dragons);
 //! - reported only: boundary edges (one face), non-manifold edges (more than two faces),
 //!   inconsistently oriented edges, unreferenced vertices, connected components.
 
@@ -36,6 +39,13 @@ pub struct MeshReport {
     /// face stays, the one whose winding agrees best with its neighbours' (so a face stored
     /// back to back with its reverse keeps the outward side).
     pub repeated_faces: usize,
+    /// Faces folded over their neighbours found ([`super::unfold`]); their vertices were
+    /// moved, see `unfolded_vertices` and `folded_faces`.
+    pub folded_before: usize,
+    /// Vertices moved to the mean of their neighbours to undo folded faces.
+    pub unfolded_vertices: usize,
+    /// Faces still folded over their neighbours after the moves.
+    pub folded_faces: usize,
     /// Undirected edges used by exactly one face (holes, open borders).
     pub boundary_edges: usize,
     /// Undirected edges used by more than two faces.
@@ -67,6 +77,7 @@ impl MeshReport {
     pub fn is_clean(&self) -> bool {
         self.degenerate_faces == 0
             && self.repeated_faces == 0
+            && self.folded_before == 0
             && self.is_closed_manifold()
             && self.components == 1
     }
@@ -78,7 +89,14 @@ impl MeshReport {
         if self.unterminated_last_line {
             w.push("the last line has no line end: the file may be cut short".to_string());
         }
+        if self.unfolded_vertices > 0 {
+            w.push(format!(
+                "moved {} vertices to undo faces folded over their neighbours ({} found)",
+                self.unfolded_vertices, self.folded_before
+            ));
+        }
         for (n, what) in [
+            (self.folded_faces, "{} faces stay folded over their neighbours"),
             (self.degenerate_faces, "removed {} degenerate faces (a repeated vertex or zero area)"),
             (self.repeated_faces, "removed {} repeated faces (the same three vertices as another face)"),
             (self.welded_vertices, "welded {} duplicate vertices"),
@@ -115,6 +133,9 @@ impl fmt::Display for MeshReport {
         if self.repeated_faces > 0 {
             write!(f, ", removed {} repeated faces", self.repeated_faces)?;
         }
+        if self.unfolded_vertices > 0 {
+            write!(f, ", moved {} vertices of folded faces", self.unfolded_vertices)?;
+        }
         if self.is_closed_manifold() {
             write!(f, ", closed manifold")?;
         }
@@ -122,6 +143,7 @@ impl fmt::Display for MeshReport {
             (self.boundary_edges, "boundary edges"),
             (self.nonmanifold_edges, "non-manifold edges"),
             (self.inconsistent_edges, "inconsistently oriented edges"),
+            (self.folded_faces, "folded faces"),
             (self.unreferenced_vertices, "unreferenced vertices"),
         ] {
             if n > 0 {
@@ -178,9 +200,13 @@ pub fn validate_keeping<T>(
     let mut k = keep.iter();
     mesh.triangles.retain(|_| *k.next().unwrap_or(&false));
 
+    let unfolded = super::unfold::unfold(&mut mesh);
     let mut report = analyze(&mesh);
     report.degenerate_faces = degenerate_faces;
     report.repeated_faces = repeated_faces;
+    report.folded_before = unfolded.folded_before;
+    report.unfolded_vertices = unfolded.moved_vertices;
+    report.folded_faces = unfolded.folded_after;
     Ok((mesh, report))
 }
 
@@ -288,6 +314,9 @@ pub fn analyze(mesh: &Mesh) -> MeshReport {
         welded_vertices: 0,
         degenerate_faces: 0,
         repeated_faces: 0,
+        folded_before: 0,
+        unfolded_vertices: 0,
+        folded_faces: 0,
         boundary_edges: boundary,
         nonmanifold_edges: nonmanifold,
         inconsistent_edges: inconsistent,

@@ -118,11 +118,15 @@ fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let eta = u.params.x;
+    let v = normalize(u.eye.xyz - in.world);
+    // The side seen: flipped only where the winding and the shading normal both say it is the
+    // back (the inside of a far wall through a hole). Decimated scans hold faces folded over,
+    // whose winding opposes their vertices' normals; by the winding alone they showed their
+    // inside (black specks on the 11K-203K dragons).
     var n = normalize(in.normal);
-    if (!front) {
+    if (!front && dot(n, v) < 0.0) {
         n = -n;
     }
-    let v = normalize(u.eye.xyz - in.world);
     let cos_o = dot(n, v);
     // L = F_t(eta, w_o) (T(mu_o) B / (c pi) + L_single) (Mertens eq. 3, §5.4, with the exit
     // lobe), times sqrt(texture) at exit.
