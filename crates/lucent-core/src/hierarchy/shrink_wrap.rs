@@ -387,15 +387,7 @@ fn neighbours(vertices: usize, faces: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     // direction so every vertex sees each neighbour once.
     pairs.par_sort_unstable();
     pairs.dedup();
-    let mut start = vec![0u32; vertices + 1];
-    for &(a, _) in &pairs {
-        start[a as usize + 1] += 1;
-    }
-    for v in 0..vertices {
-        start[v + 1] += start[v];
-    }
-    let ring = pairs.iter().map(|&(_, b)| b).collect();
-    (start, ring)
+    crate::mesh::compressed_rows(pairs, vertices)
 }
 
 /// Fit statistics of the finished wrap (see [`ShrinkWrapped`]).

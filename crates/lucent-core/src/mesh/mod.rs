@@ -149,3 +149,17 @@ impl Mesh {
         sum.iter().zip(&weight).map(|(s, w)| if *w > 0.0 { *s / *w } else { Vec3::ZERO }).collect()
     }
 }
+
+/// `(from, to)` pairs, sorted, as compressed rows over `n` sources: the `to`s of source `i`
+/// are `targets[start[i]..start[i + 1]]`. Returns `(start, targets)`.
+pub(crate) fn compressed_rows(sorted_pairs: Vec<(u32, u32)>, n: usize) -> (Vec<u32>, Vec<u32>) {
+    debug_assert!(sorted_pairs.is_sorted_by_key(|p| p.0));
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &sorted_pairs {
+        start[a as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    (start, sorted_pairs.into_iter().map(|(_, b)| b).collect())
+}

@@ -89,24 +89,18 @@ impl Adjacency {
 /// `(from, to)` pairs as compressed rows over `n` sources.
 fn rows(mut pairs: Vec<(u32, u32)>, n: usize) -> (Vec<u32>, Vec<u32>) {
     pairs.par_sort_unstable();
-    let mut start = vec![0u32; n + 1];
-    for &(a, _) in &pairs {
-        start[a as usize + 1] += 1;
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    (start, pairs.into_iter().map(|(_, b)| b).collect())
+    super::compressed_rows(pairs, n)
 }
 
-/// Whether face `f` of `mesh` is folded over its neighbours (see the module doc).
-fn is_folded(mesh: &Mesh, adj: &Adjacency, f: usize) -> bool {
-    let n = mesh.face_normal(f);
+/// Whether face `f` of `mesh` (unit face `normals`) is folded over its neighbours (see the
+/// module doc).
+fn is_folded(mesh: &Mesh, normals: &[Vec3], adj: &Adjacency, f: usize) -> bool {
+    let n = normals[f];
     if n == Vec3::ZERO {
         return false;
     }
     let nbrs = adj.faces_of(f);
-    let sum: Vec3 = nbrs.iter().map(|&g| mesh.face_normal(g as usize)).sum();
+    let sum: Vec3 = nbrs.iter().map(|&g| normals[g as usize]).sum();
     if n.dot(sum) >= -0.5 * sum.length() || sum == Vec3::ZERO {
         return false;
     }
@@ -115,7 +109,7 @@ fn is_folded(mesh: &Mesh, adj: &Adjacency, f: usize) -> bool {
     nbrs.iter().any(|&g| {
         let g = g as usize;
         // The neighbour's corner off the shared edge, on this face's outer side.
-        n.dot(mesh.face_normal(g)) < 0.0
+        n.dot(normals[g]) < 0.0
             && mesh.triangles[g]
                 .iter()
                 .filter(|v| !tri.contains(v))
@@ -124,7 +118,12 @@ fn is_folded(mesh: &Mesh, adj: &Adjacency, f: usize) -> bool {
 }
 
 fn folded_faces(mesh: &Mesh, adj: &Adjacency) -> Vec<u32> {
-    (0..mesh.triangles.len()).into_par_iter().filter(|&f| is_folded(mesh, adj, f)).map(|f| f as u32).collect()
+    let normals: Vec<Vec3> = (0..mesh.triangles.len()).into_par_iter().map(|f| mesh.face_normal(f)).collect();
+    (0..mesh.triangles.len())
+        .into_par_iter()
+        .filter(|&f| is_folded(mesh, &normals, adj, f))
+        .map(|f| f as u32)
+        .collect()
 }
 
 /// Finds the faces of `mesh` folded over their neighbours and moves their vertices to the
