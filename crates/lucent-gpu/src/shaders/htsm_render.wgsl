@@ -61,8 +61,14 @@ fn light_uv(p: vec3<f32>) -> vec2<f32> {
 }
 
 @fragment
-fn fs_camera(in: CameraVarying) -> @location(0) vec4<f32> {
-    let n = normalize(in.normal);
+fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    // The side seen, chosen as mesh.wgsl does: flipped only where the winding and the shading
+    // normal both say it is the back (the inside of a far wall through a hole), so faces a
+    // decimation folded over keep their vertices' side.
+    var n = normalize(in.normal);
+    if (!front && dot(n, g.eye.xyz - in.world) < 0.0) {
+        n = -n;
+    }
     let tc = texcoord_of(in.rest);
     let moved = deformation_of(in.world, in.rest);
     let uv = light_uv(in.world);
