@@ -459,7 +459,9 @@ fn bounces_add_light_between_parts() {
     };
     let (none, one) = (render("0"), render("1"));
     let brighter = none.pixels().zip(one.pixels()).filter(|(a, b)| luminance(b) > luminance(a) + 0.5).count();
-    let darker = none.pixels().zip(one.pixels()).filter(|(a, b)| luminance(b) + 0.5 < luminance(a)).count();
+    // Darker by more than one 8-bit step of any channel (green's is 0.72 in luminance): the
+    // solve's own error (far below 1%) can tip a channel across a rounding boundary.
+    let darker = none.pixels().zip(one.pixels()).filter(|(a, b)| luminance(b) + 1.0 < luminance(a)).count();
     assert!(brighter > 500 && darker == 0, "brighter {brighter}, darker {darker}");
     assert!(object_luminance(&one) > object_luminance(&none));
     let never = dir.join("never.png");
