@@ -117,10 +117,10 @@ impl Oracle {
     /// exact solve on the bunny at 1 cm (measured with
     /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`):
     /// `dipole` ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 (worst 0.80%, ketchup at 1 cm); `pbd`, the
-    /// default, 0.2, 0.05, 6e-4 (worst 0.67% at 97-128 links per face; at `dipole`'s
-    /// thresholds 0.34% at 147-166). The far faces' midpoint-rule gain
-    /// ([`midpoint_rule_gain`]) is what leaves that room: without it `pbd` at `dipole`'s
-    /// thresholds erred by 0.87%. Neither has room for `eps_share` or `irradiance_contrast`.
+    /// default, 0.2, 0.05, 6e-4 (worst 0.71%, ketchup at 1 cm, at 97-128 links per face in the
+    /// six cases at 1 and 10 cm). The far faces' midpoint-rule gain ([`midpoint_rule_gain`])
+    /// is what leaves that room: without it `pbd` at `dipole`'s thresholds erred by 0.87% at
+    /// 117-166 links per face. Neither has room for `eps_share` or `irradiance_contrast`.
     pub fn for_profile(kind: ProfileKind) -> Oracle {
         match kind {
             ProfileKind::Mertens => Oracle::default(),
@@ -576,7 +576,7 @@ impl Oracle {
         // gain, derived for a profile of distance alone, took the blob's ketchup at 1 cm from
         // within 1% of the exact solve to 2.2%.
         samples.estimate = Some(if d.normal_weight == 0.0 {
-            std::array::from_fn(|c| f[c] * midpoint_rule_gain(d.sigma_tr[c], dist[c], r2))
+            std::array::from_fn(|c| f[c] * midpoint_rule_gain(d.sigma_tr[c], dist[c], r2, self.eps2))
         } else {
             f
         });
@@ -641,17 +641,15 @@ const FALLOFF_POWER: f32 = 2.5;
 /// moment (`tr M = r² / 4`), the average exceeds the midpoint's value by
 /// `r² (s² - s + a) / (16 d²)` relative (the radial curvature along the line, the distance's
 /// sideways growth across it). A convex profile's one-point estimates otherwise fall short
-/// systematically: −0.35% median on the 48K dragon, the larger part of its error.
+/// systematically: −0.35% median on the 48K dragon, the larger part of its error. The gain
+/// is at most `max_gain` (the emitter test's `ε2`): a face farther from being a point passed
+/// that test only by the absolute floor, and there the expansion overshoots (capped at 0.25,
+/// the bunny's marble erred by +0.77% median, at `ε2`, +0.09%).
 #[inline]
-fn midpoint_rule_gain(sigma_tr: f32, dist: f32, r2: f32) -> f32 {
+fn midpoint_rule_gain(sigma_tr: f32, dist: f32, r2: f32, max_gain: f32) -> f32 {
     let s = FALLOFF_POWER + sigma_tr * dist;
-    1.0 + (r2 * (s * s - s + FALLOFF_POWER) / (16.0 * dist * dist)).min(MAX_MIDPOINT_GAIN)
+    1.0 + (r2 * (s * s - s + FALLOFF_POWER) / (16.0 * dist * dist)).min(max_gain)
 }
-
-/// Largest correction [`midpoint_rule_gain`] adds (relative): beyond it the second-order
-/// expansion is no guide. Faces that far from being points pass the emitter test only by
-/// the absolute floor `eps_abs`.
-const MAX_MIDPOINT_GAIN: f32 = 0.25;
 
 /// The steepness `s` of [`Samples::slope`] that best fits the estimates `fk` at receiver
 /// `rn`'s children to the line `f (1 - s t_k)` through the midpoint's estimate `f`, with
