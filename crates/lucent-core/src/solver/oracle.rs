@@ -695,3 +695,64 @@ fn linear_slope(
     // Stored as a half float (`LinkCoef`): test with the value the gather will use.
     (super::link_coef::round_slope(s), t)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The gain brings a face's one-point estimate to its average over the face: for
+    /// `R ~ d^-a e^(-σ d)` (`a` = [`FALLOFF_POWER`]) over an equilateral triangle in the plane
+    /// of the line to the receiver, at 4 to 16 circumradii, near and far in `σ d`, against a
+    /// dense midpoint rule (64² sub-triangles): the relative error falls at least fourfold at 4
+    /// circumradii and tenfold from 8 (measured: 2.0-15% -> 0.3-2.5% at 4, 0.14-0.95% ->
+    /// 0.004-0.045% at 16).
+    #[test]
+    fn midpoint_rule_gain_matches_the_face_average() {
+        let a = FALLOFF_POWER as f64;
+        for sigma in [0.0f64, 1.0, 4.0] {
+            for ratio in [4.0f64, 8.0, 16.0] {
+                for turn in [0.0f64, 0.7, 1.9] {
+                    let (dist, r) = (1.0f64, 1.0 / ratio);
+                    let k = |p: [f64; 2]| {
+                        let d = (p[0] * p[0] + p[1] * p[1]).sqrt();
+                        d.powf(-a) * (-sigma * d).exp()
+                    };
+                    // The receiver's pole at the origin, the face's centroid at (dist, 0).
+                    let v: Vec<[f64; 2]> = (0..3)
+                        .map(|i| {
+                            let t = turn + i as f64 * 2.0 * std::f64::consts::PI / 3.0;
+                            [dist + r * t.cos(), r * t.sin()]
+                        })
+                        .collect();
+                    let n = 64;
+                    let mut sum = 0.0;
+                    for i in 0..n {
+                        for j in 0..n - i {
+                            // Upward and downward sub-triangles' centroids in barycentric steps.
+                            let mut add = |u: f64, w: f64| {
+                                let p = [0, 1]
+                                    .map(|c| v[0][c] + u * (v[1][c] - v[0][c]) + w * (v[2][c] - v[0][c]));
+                                sum += k(p);
+                            };
+                            let (fi, fj, fnn) = (i as f64, j as f64, n as f64);
+                            add((fi + 1.0 / 3.0) / fnn, (fj + 1.0 / 3.0) / fnn);
+                            if i + j + 1 < n {
+                                add((fi + 2.0 / 3.0) / fnn, (fj + 2.0 / 3.0) / fnn);
+                            }
+                        }
+                    }
+                    let avg = sum / (n * n) as f64;
+                    let mid = k([dist, 0.0]);
+                    let gain = midpoint_rule_gain(sigma as f32, dist as f32, (r * r) as f32, 1.0) as f64;
+                    let (before, after) = ((mid / avg - 1.0).abs(), (mid * gain / avg - 1.0).abs());
+                    // What is left is of higher order: it shrinks faster than the error as r/d falls.
+                    let want = if ratio >= 8.0 { 0.1 } else { 0.25 };
+                    assert!(
+                        after <= want * before,
+                        "σ d {sigma}, d/r {ratio}, turn {turn}: {before:.2e} -> {after:.2e}"
+                    );
+                }
+            }
+        }
+    }
+}
