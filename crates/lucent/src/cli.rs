@@ -139,16 +139,19 @@ pub fn parse_single_scattering(s: &str) -> Result<SingleScattering, String> {
 /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]` (`CONTRAST`, the oracle's
 /// `irradiance_contrast`, is capped at 1), `transport-constant:EPS1,EPS2[,...]` (the same
 /// thresholds, given, with one value per receiver cluster as in the paper instead of linear
-/// receivers: [`Oracle::linear_receivers`] off, to compare) or `solid-angle:EPS1,EPS2` (the paper's
+/// receivers: [`Oracle::linear_receivers`] off, to compare), `transport-linear:EPS1,EPS2[,...]`
+/// (linear receivers without their curvature: [`Oracle::curved_receivers`] off) or
+/// `solid-angle:EPS1,EPS2` (the paper's
 /// criteria, `ε` in steradians). Every threshold must be a positive, finite number; the rest
 /// stay at their defaults ([`Oracle::default`]).
 pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
-    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`, `transport-constant:EPS1,EPS2[,...]` or `solid-angle:EPS1,EPS2`";
+    let usage = "expected `transport`, `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`, `transport-constant:EPS1,EPS2[,...]`, `transport-linear:EPS1,EPS2[,...]` or `solid-angle:EPS1,EPS2`";
     let (mode, values) = s.split_once(':').unwrap_or((s, ""));
     let linear_receivers = mode != "transport-constant";
+    let curved_receivers = mode == "transport";
     let (mode, counts) = match mode {
         "transport" => (OracleMode::Transport, [0, 2, 3, 4, 5].as_slice()),
-        "transport-constant" => (OracleMode::Transport, [2, 3, 4, 5].as_slice()),
+        "transport-constant" | "transport-linear" => (OracleMode::Transport, [2, 3, 4, 5].as_slice()),
         "solid-angle" => (OracleMode::SolidAngle, [2].as_slice()),
         _ => return Err(format!("{usage}, got `{s}`")),
     };
@@ -169,7 +172,7 @@ pub fn parse_oracle(s: &str) -> Result<Oracle, String> {
     if !counts.contains(&eps.len()) {
         return Err(format!("{usage}, got {} threshold(s) in `{s}`", eps.len()));
     }
-    let mut oracle = Oracle { mode, linear_receivers, ..Oracle::default() };
+    let mut oracle = Oracle { mode, linear_receivers, curved_receivers, ..Oracle::default() };
     if let [e1, e2, ref rest @ ..] = eps[..] {
         (oracle.eps1, oracle.eps2) = (e1, e2);
         let mut rest = rest.iter().copied();
@@ -303,7 +306,8 @@ pub struct RenderArgs {
     /// dipole, 0.3, 0.1, 1e-3 for mertens, ε_share = 0, contrast 1, within 1% of exact on the bunny),
     /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`,
     /// `transport-constant:EPS1,EPS2[,...]` (one value per receiver cluster, as the paper,
-    /// instead of a value and its gradient: to compare), or the paper's solid angles `solid-angle:EPS1,EPS2` (steradians). Larger
+    /// instead of a value and its gradient: to compare), `transport-linear:EPS1,EPS2[,...]` (a
+    /// value and its gradient, without the curvature), or the paper's solid angles `solid-angle:EPS1,EPS2` (steradians). Larger
     /// thresholds: fewer links, faster, less accurate (`lucent bench solver --sweep` measures
     /// the trade).
     #[arg(long, default_value = "transport", value_parser = parse_oracle)]
@@ -612,6 +616,9 @@ mod tests {
         let constant = parse_oracle("transport-constant:0.5,0.2").unwrap();
         assert!(!constant.linear_receivers && constant.mode == OracleMode::Transport && constant.eps1 == 0.5);
         assert!(parse_oracle("transport-constant").is_err());
+        let linear = parse_oracle("transport-linear:0.5,0.2").unwrap();
+        assert!(linear.linear_receivers && !linear.curved_receivers && linear.eps1 == 0.5);
+        assert!(parse_oracle("transport").unwrap().curved_receivers);
         let o = parse_oracle("transport:0.5,0.2,1e-3,0.01,0.5").unwrap();
         assert_eq!((o.eps_abs, o.eps_share, o.irradiance_contrast), (1e-3, 0.01, 0.5));
         let o = parse_oracle("solid-angle:0.02,0.05").unwrap();

@@ -15,6 +15,7 @@
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef::{self, LinkCoef};
 use super::link_set::LinkSet;
+use super::oracle::FALLOFF_POWER;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
@@ -66,28 +67,32 @@ impl HierarchicalSolver {
     fn render_stored(&mut self, face_irradiance: &[Rgb]) -> Solution {
         let t0 = Instant::now();
         let [mut e_node, mut b_node] = std::mem::take(&mut self.frame);
-        let mut g_node = std::mem::take(&mut self.frame_grad);
+        let mut x_node = std::mem::take(&mut self.frame_expansion);
         e_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         self.pull_into(face_irradiance, &mut e_node);
         let t1 = Instant::now();
         let links = self.links.as_ref().expect("links stored");
         let linear = self.linear_receivers();
+        let face_b;
+        let t2;
         if linear {
-            g_node.resize(self.hierarchy.len(), [Vec3A::ZERO; 3]);
+            x_node.resize(self.hierarchy.len(), Linear::default());
             let mid = self
                 .midpoints
                 .get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect());
-            gather_links_linear(&self.hierarchy, links, &e_node, mid, &mut b_node, &mut g_node);
+            gather_links_linear(&self.hierarchy, links, &e_node, mid, self.curved_receivers(), &mut x_node);
+            t2 = Instant::now();
+            face_b = self.push_linear(&mut x_node);
         } else {
             gather_links(links, &e_node, &mut b_node);
+            t2 = Instant::now();
+            face_b = self.push(&mut b_node);
         }
-        let t2 = Instant::now();
-        let face_b = self.push(&mut b_node, linear.then_some(&mut g_node[..]));
         let t3 = Instant::now();
         let links = links.len();
         self.frame = [e_node, b_node];
-        self.frame_grad = g_node;
+        self.frame_expansion = x_node;
         Solution {
             face_b,
             stats: SolveStats {
@@ -101,18 +106,24 @@ impl HierarchicalSolver {
         }
     }
 
-    /// Push: accumulates every cluster's gathered `B` (and, with linear receivers, its
-    /// gradient `g_node`) down to its leaves, in parallel over subtrees, and returns `B` per
-    /// original face.
-    fn push(&self, b_node: &mut [Vec3A], g_node: Option<&mut [Grad]>) -> Vec<Rgb> {
+    /// Push: accumulates every cluster's gathered `B` down to its leaves, in parallel over
+    /// subtrees, and returns `B` per original face.
+    fn push(&self, b_node: &mut [Vec3A]) -> Vec<Rgb> {
         let h = &self.hierarchy;
         if !h.is_empty() {
-            match g_node {
-                Some(g) => push_linear(h, 0, Linear::default(), b_node, g),
-                None => push_subtree(h, 0, Vec3A::ZERO, b_node),
-            }
+            push_subtree(h, 0, Vec3A::ZERO, b_node);
         }
         h.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
+    }
+
+    /// [`HierarchicalSolver::push`] with linear receivers: every cluster's expansion moved
+    /// down to its leaves' midpoints.
+    fn push_linear(&self, x_node: &mut [Linear]) -> Vec<Rgb> {
+        let h = &self.hierarchy;
+        if !h.is_empty() {
+            push_linear(h, 0, Linear::default(), x_node);
+        }
+        h.face_node.par_iter().with_min_len(4096).map(|&n| x_node[n as usize].value.into()).collect()
     }
 
     /// On-the-fly mode: refine from the root's self-link and gather in one parallel traversal,
@@ -167,6 +178,7 @@ impl HierarchicalSolver {
         // `B` and, for the energy bound, `B` under uniform irradiance 1.
         let [mut b, mut u] = acc;
         let m_r = Vec3A::from(h.geom[r].midpoint);
+        let curved = self.curved_receivers();
         ctx.receive(
             &self.oracle,
             r,
@@ -178,9 +190,9 @@ impl HierarchicalSolver {
                 b.value += t;
                 u.value += f;
                 if slope > 0.0 {
-                    let (k, dv) = steepness(m_r, h.geom[e].midpoint.into(), slope);
-                    b.add_gradient(t * k, dv);
-                    u.add_gradient(f * k, dv);
+                    let dv = m_r - Vec3A::from(h.geom[e].midpoint);
+                    b.add_link(t, slope, dv, curved);
+                    u.add_link(f, slope, dv, curved);
                 }
             }),
         );
@@ -228,27 +240,110 @@ fn gather_links(links: &LinkSet, e_node: &[Vec3A], b_node: &mut [Vec3A]) {
 /// Per channel, the gradient of `B` (per mesh unit of length) at a receiver's midpoint.
 pub(crate) type Grad = [Vec3A; 3];
 
-/// A receiver's gathered `B` as a linear function: its value at the receiver's midpoint and
-/// its gradient there.
+/// Per channel, the Hessian of `B` (per mesh unit of length squared) at a receiver's
+/// midpoint, symmetric: its diagonal (xx, yy, zz) and its off-diagonal (yz, xz, xy).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Hess {
+    diag: Grad,
+    off: Grad,
+}
+
+impl Hess {
+    /// `self += o`, channel by channel.
+    #[inline]
+    fn add(&mut self, o: &Hess) {
+        add_grad(&mut self.diag, &o.diag);
+        add_grad(&mut self.off, &o.off);
+    }
+
+    /// Adds `w[c] dv dvᵀ + iso[c] I` to channel `c`.
+    #[inline]
+    fn add_link(&mut self, w: Vec3A, iso: Vec3A, dv: Vec3A) {
+        let (dd, dx) = (dv * dv, Vec3A::new(dv.y * dv.z, dv.x * dv.z, dv.x * dv.y));
+        for c in 0..3 {
+            self.diag[c] += dd * w[c] + Vec3A::splat(iso[c]);
+            self.off[c] += dx * w[c];
+        }
+    }
+
+    /// Per channel `½ oᵀ H o`.
+    #[inline]
+    fn half_quad(&self, o: Vec3A) -> Vec3A {
+        let (oo, ox) = (o * o, Vec3A::new(o.y * o.z, o.x * o.z, o.x * o.y));
+        Vec3A::new(
+            0.5 * self.diag[0].dot(oo) + self.off[0].dot(ox),
+            0.5 * self.diag[1].dot(oo) + self.off[1].dot(ox),
+            0.5 * self.diag[2].dot(oo) + self.off[2].dot(ox),
+        )
+    }
+
+    /// Per channel `H o`.
+    #[inline]
+    fn apply(&self, o: Vec3A) -> Grad {
+        std::array::from_fn(|c| {
+            let (d, f) = (self.diag[c], self.off[c]);
+            Vec3A::new(
+                d.x * o.x + f.z * o.y + f.y * o.z,
+                f.z * o.x + d.y * o.y + f.x * o.z,
+                f.y * o.x + f.x * o.y + d.z * o.z,
+            )
+        })
+    }
+}
+
+/// A receiver's gathered `B` as a local expansion about its midpoint: its value, its
+/// gradient and (with curved receivers) its Hessian there.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Linear {
     value: Vec3A,
     grad: Grad,
+    hess: Hess,
 }
 
 impl Linear {
-    /// Adds `w[c] dv` to channel `c`'s gradient.
+    /// Adds one link's `t = E F` with steepness `slope` from an emitter at `-dv` from the
+    /// receiver's midpoint (`dv = m_R - m_E`): its gradient and, if `curved`, its Hessian.
     #[inline]
-    fn add_gradient(&mut self, w: Vec3A, dv: Vec3A) {
-        self.grad[0] += dv * w.x;
-        self.grad[1] += dv * w.y;
-        self.grad[2] += dv * w.z;
+    fn add_link(&mut self, t: Vec3A, slope: f32, dv: Vec3A, curved: bool) {
+        let (k, w) = steepness(dv, slope, curved);
+        let tk = t * k;
+        self.grad[0] += dv * tk.x;
+        self.grad[1] += dv * tk.y;
+        self.grad[2] += dv * tk.z;
+        if curved {
+            self.hess.add_link(t * w, tk, dv);
+        }
+    }
+
+    /// Every term times `s`.
+    #[inline]
+    fn scaled(self, s: f32) -> Self {
+        let g = |g: Grad| g.map(|v| v * s);
+        Linear {
+            value: self.value * s,
+            grad: g(self.grad),
+            hess: Hess { diag: g(self.hess.diag), off: g(self.hess.off) },
+        }
+    }
+
+    /// `self += o`.
+    #[inline]
+    fn add(&mut self, o: &Linear) {
+        self.value += o.value;
+        add_grad(&mut self.grad, &o.grad);
+        self.hess.add(&o.hess);
     }
 
     /// The same function about a point `offset` from the midpoint.
     #[inline]
     fn moved(self, offset: Vec3A) -> Self {
-        Linear { value: self.value + along(&self.grad, offset), grad: self.grad }
+        let mut grad = self.grad;
+        add_grad(&mut grad, &self.hess.apply(offset));
+        Linear {
+            value: self.value + along(&self.grad, offset) + self.hess.half_quad(offset),
+            grad,
+            hess: self.hess,
+        }
     }
 }
 
@@ -264,36 +359,43 @@ fn along(g: &Grad, offset: Vec3A) -> Vec3A {
     Vec3A::new(g[0].dot(offset), g[1].dot(offset), g[2].dot(offset))
 }
 
-/// For a link from an emitter at `m_e` to a receiver at `m_r` with steepness `slope`: the
-/// factor `k` and the line `D = m_r - m_e` such that the link's `E F` contributes `k E F D`
-/// to the receiver's gradient (`F (1 - s (x - m_r).D / |D|^2)`, `oracle::Samples::slope`).
-/// A link without steepness gives `k = 0`, whatever `D`.
+/// For a link of steepness `s = slope` along `D = dv = m_R - m_E`, `|D| = ρ`: the factors
+/// `k` and `w` such that the link's `E F` contributes `k E F D` to the receiver's gradient
+/// and, with a curved receiver, `E F (w D Dᵀ + k I)` to its Hessian: `F (1 - s t + ½ ((q +
+/// s) t² - s |δ|² / ρ²))` with `t = δ.D / ρ²` at an offset `δ`, for a profile of distance
+/// alone whose log-curvature `q = ρ² F'' / F` is `s² + a` ([`FALLOFF_POWER`]:
+/// `F ~ ρ^-a e^(-σ ρ)`). A link without steepness gives `k = w = 0`, whatever `D`.
 #[inline]
-fn steepness(m_r: Vec3A, m_e: Vec3A, slope: f32) -> (f32, Vec3A) {
-    let dv = m_r - m_e;
-    (-slope / dv.length_squared().max(f32::MIN_POSITIVE), dv)
+fn steepness(dv: Vec3A, slope: f32, curved: bool) -> (f32, f32) {
+    let inv_d2 = 1.0 / dv.length_squared().max(f32::MIN_POSITIVE);
+    let k = -slope * inv_d2;
+    let w = if curved && slope > 0.0 {
+        (slope * slope + slope + FALLOFF_POWER) * inv_d2 * inv_d2
+    } else {
+        0.0
+    };
+    (k, w)
 }
 
 /// [`gather_links`] with linear receivers: a leaf's `B` as there, an inner receiver's `B`
-/// and its gradient `g_node` in one pass over its links (`mid`: every cluster's midpoint).
+/// and its expansion `x_node` in one pass over its links (`mid`: every cluster's midpoint).
 fn gather_links_linear(
     h: &Hierarchy,
     links: &LinkSet,
     e_node: &[Vec3A],
     mid: &[Vec3A],
-    b_node: &mut [Vec3A],
-    g_node: &mut [Grad],
+    curved: bool,
+    x_node: &mut [Linear],
 ) {
     const CHUNK: usize = 1024;
     let stored = links.view();
-    b_node.par_chunks_mut(CHUNK).zip(g_node.par_chunks_mut(CHUNK)).enumerate().for_each(|(ci, (b, g))| {
+    x_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, x)| {
         let isa = crate::simd::Isa::best();
-        for (i, (b, g)) in b.iter_mut().zip(g.iter_mut()).enumerate() {
+        for (i, x) in x.iter_mut().enumerate() {
             let r = ci * CHUNK + i;
             let (emitter, coef, scale) = stored.of(r);
             if h.nodes[r].is_leaf() {
-                *b = link_coef::gather_sum(isa, e_node, emitter, coef) * scale;
-                *g = [Vec3A::ZERO; 3];
+                *x = Linear { value: link_coef::gather_sum(isa, e_node, emitter, coef) * scale, ..Linear::default() };
                 continue;
             }
             let m_r = mid[r];
@@ -304,8 +406,7 @@ fn gather_links_linear(
                 let t = e_node[e] * link_coef::decode(c);
                 acc.value += t;
                 // Links without steepness add nothing (no branch: most links have one).
-                let (k, dv) = steepness(m_r, mid[e], c.slope());
-                acc.add_gradient(t * k, dv);
+                acc.add_link(t, c.slope(), m_r - mid[e], curved);
             };
             let n4 = emitter.len() / 4 * 4;
             for (w, c) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)) {
@@ -316,37 +417,35 @@ fn gather_links_linear(
             for (k, (&w, &c)) in emitter[n4..].iter().zip(&coef[n4..]).enumerate() {
                 term(&mut acc[k], w, c);
             }
-            *b = acc.iter().map(|a| a.value).sum::<Vec3A>() * scale;
-            *g = std::array::from_fn(|c| acc.iter().map(|a| a.grad[c]).sum::<Vec3A>() * scale);
+            let [mut sum, a1, a2, a3] = acc;
+            sum.add(&a1);
+            sum.add(&a2);
+            sum.add(&a3);
+            *x = sum.scaled(scale);
         }
     });
 }
 
-/// [`push_subtree`] with gradients: every cluster's `B` and gradient `g`, gathered at its
-/// midpoint, plus its ancestors' `above` (moved to its midpoint), parents before children.
-fn push_linear(h: &Hierarchy, r: usize, above: Linear, b: &mut [Vec3A], g: &mut [Grad]) {
+/// [`push_subtree`] with expansions: every cluster's `x`, gathered at its midpoint, plus its
+/// ancestors' `above` (moved to its midpoint), parents before children; leaves end with
+/// their `B` in `x`'s value.
+fn push_linear(h: &Hierarchy, r: usize, above: Linear, x: &mut [Linear]) {
     let n = h.nodes[r];
-    b[0] += above.value;
-    add_grad(&mut g[0], &above.grad);
+    x[0].add(&above);
     if n.leaf_count() > PAR_LEAVES {
-        let own = Linear { value: b[0], grad: g[0] };
+        let own = x[0];
         let m_r = h.geom[r].midpoint;
-        let (_, b_rest) = b.split_at_mut(1);
-        let (_, g_rest) = g.split_at_mut(1);
-        split_subtrees(&h.nodes, r, b_rest)
-            .into_par_iter()
-            .zip(split_subtrees(&h.nodes, r, g_rest))
-            .for_each(|((c, bs), (_, gs))| {
-                push_linear(h, c, own.moved(Vec3A::from(h.geom[c].midpoint - m_r)), bs, gs);
-            });
+        let (_, rest) = x.split_at_mut(1);
+        split_subtrees(&h.nodes, r, rest).into_par_iter().for_each(|(c, xs)| {
+            push_linear(h, c, own.moved(Vec3A::from(h.geom[c].midpoint - m_r)), xs);
+        });
         return;
     }
     for i in r + 1..n.subtree_end as usize {
         let p = h.nodes[i].parent as usize;
         let offset = Vec3A::from(h.geom[i].midpoint - h.geom[p].midpoint);
-        let gp = g[p - r];
-        b[i - r] += b[p - r] + along(&gp, offset);
-        add_grad(&mut g[i - r], &gp);
+        let moved = x[p - r].moved(offset);
+        x[i - r].add(&moved);
     }
 }
 

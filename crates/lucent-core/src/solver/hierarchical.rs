@@ -110,8 +110,8 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     pub(super) frame: [Vec<Vec3A>; 2],
-    /// Render mode's per-cluster gradient of the gathered `B` (linear receivers), likewise.
-    pub(super) frame_grad: Vec<super::gather::Grad>,
+    /// Render mode's per-cluster expansion of the gathered `B` (linear receivers), likewise.
+    pub(super) frame_expansion: Vec<super::gather::Linear>,
     /// Every cluster's midpoint, packed for render mode's gather with linear receivers; made
     /// on first use, dropped wherever the hierarchy is refitted.
     pub(super) midpoints: std::sync::OnceLock<Vec<Vec3A>>,
@@ -147,7 +147,7 @@ impl HierarchicalSolver {
             spare: None,
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
-            frame_grad: Vec::new(),
+            frame_expansion: Vec::new(),
             midpoints: Default::default(),
             bound: None,
             face_gain: None,
@@ -162,6 +162,12 @@ impl HierarchicalSolver {
         self.oracle.linear_receivers
             && self.oracle.mode == super::oracle::OracleMode::Transport
             && !self.dipole.profile.uses_normals()
+    }
+
+    /// Whether linear receivers also carry their links' curvature
+    /// ([`Oracle::curved_receivers`]).
+    pub(super) fn curved_receivers(&self) -> bool {
+        self.linear_receivers() && self.oracle.curved_receivers
     }
 
     /// The stored links, if [`HierarchicalSolver::link`] has run.

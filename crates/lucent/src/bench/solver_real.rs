@@ -365,10 +365,11 @@ fn measure(
         threads: rayon::current_num_threads(),
         oracle: format!(
             "{}:{},{},{},{},{}",
-            match (oracle.mode, oracle.linear_receivers) {
-                (OracleMode::Transport, false) => "transport-constant",
-                (OracleMode::Transport, true) => "transport",
-                (OracleMode::SolidAngle, _) => "solid-angle",
+            match (oracle.mode, oracle.linear_receivers, oracle.curved_receivers) {
+                (OracleMode::Transport, false, _) => "transport-constant",
+                (OracleMode::Transport, true, false) => "transport-linear",
+                (OracleMode::Transport, true, true) => "transport",
+                (OracleMode::SolidAngle, ..) => "solid-angle",
             },
             oracle.eps1,
             oracle.eps2,
