@@ -120,14 +120,16 @@ pub struct Oracle {
 
 impl Oracle {
     /// The default oracle for profile `kind`: [`Oracle::default`] for Mertens' dipole; for the
-    /// distance-form profiles tighter thresholds, which they need to stay within 1% of the
-    /// exact solve on the bunny at 1 cm (measured with
+    /// distance-form profiles the thresholds that keep them within 1% of the exact solve on
+    /// the bunny at 1 cm (measured with
     /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`):
-    /// `dipole` ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 (worst 0.80%, ketchup at 1 cm); `pbd`, the
-    /// default, 0.2, 0.05, 6e-4 (worst 0.71%, ketchup at 1 cm, at 97-128 links per face in the
-    /// six cases at 1 and 10 cm). The far faces' midpoint-rule gain ([`midpoint_rule_gain`])
-    /// is what leaves that room: without it `pbd` at `dipole`'s thresholds erred by 0.87% at
-    /// 117-166 links per face. Neither has room for `eps_share` or `irradiance_contrast`.
+    /// `dipole` ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 (worst 0.71%, ketchup at 1 cm); `pbd`, the
+    /// default, 0.25, 0.1, 6e-4 (worst 0.73%, skim milk at 1 cm, at 53-97 links per face in
+    /// the six cases at 1 and 10 cm). Curved receivers ([`Oracle::curved_receivers`]) and the
+    /// far faces' midpoint-rule gain ([`midpoint_rule_gain`]) are what leave that room:
+    /// with linear receivers `pbd` needed 0.2, 0.05, 6e-4 for 0.71% at 97-128 links per face,
+    /// and without the gain it erred by 0.87% at 117-166. Neither has room for `eps_share` or
+    /// `irradiance_contrast`.
     pub fn for_profile(kind: ProfileKind) -> Oracle {
         match kind {
             ProfileKind::Mertens => Oracle::default(),
@@ -490,7 +492,13 @@ impl Oracle {
             let dist = view.src.nearest(d, eg.midpoint);
             let err: [f32; 3] = std::array::from_fn(|c| {
                 let x = (d.sigma_tr[c] + 3.0 / dist[c]) * rg.radius;
-                let order = if curved { x * x * x / 6.0 } else if linear { 0.5 * x * x } else { 0.5 * x };
+                let order = if curved {
+                    x * x * x / 6.0
+                } else if linear {
+                    0.5 * x * x
+                } else {
+                    0.5 * x
+                };
                 order * f_mid[c]
             });
             if !self.within(err, f_mid, self.eps1, view.inv_rtot) {
@@ -507,11 +515,8 @@ impl Oracle {
         // With a linear receiver, the children are measured against the line through the
         // midpoint's estimate along `D` (its steepness fitted to theirs), not against the
         // midpoint's estimate itself.
-        let (slope, line) = if linear {
-            linear_slope(h, d, rn, rg, eg, f, &f_children, curved)
-        } else {
-            (0.0, [1.0; 4])
-        };
+        let (slope, line) =
+            if linear { linear_slope(h, d, rn, rg, eg, f, &f_children, curved) } else { (0.0, [1.0; 4]) };
         for (k, &c) in rn.children().iter().enumerate() {
             let cg = &h.geom[c as usize];
             if solid_angle(cg.midpoint, eg) == INSIDE {
