@@ -302,7 +302,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "face-cluster", value_parser = parse_hierarchy)]
     pub hierarchy: HierarchyChoice,
     /// Refinement oracle of the hierarchical solve (Mertens §5.2): `transport` (default: the
-    /// profile's thresholds, ε1 = 0.25, ε2 = 0.1, ε_abs = 6e-4 for pbd, 0.1, 0.03, 3e-4 for
+    /// profile's thresholds, ε1 = 0.3, ε2 = 0.1, ε_abs = 5e-4 for pbd, 0.1, 0.03, 3e-4 for
     /// dipole, 0.3, 0.1, 1e-3 for mertens, ε_share = 0, contrast 1, within 1% of exact on the bunny),
     /// `transport:EPS1,EPS2[,EPS_ABS[,EPS_SHARE[,CONTRAST]]]`,
     /// `transport-constant:EPS1,EPS2[,...]` (one value per receiver cluster, as the paper,
