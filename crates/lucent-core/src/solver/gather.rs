@@ -10,7 +10,9 @@
 //! `B` at its midpoint *and* the gradient of `B` there (each link's steepness along the line
 //! from its emitter), and the push hands each child the parent's value moved to the child's
 //! midpoint: first-order (linear-basis) hierarchical radiosity at the receiver, which lets
-//! receivers stay whole as far as emitters do.
+//! receivers stay whole as far as emitters do. With curved receivers
+//! ([`super::Oracle::curved_receivers`], the default) each link also adds its curvature, and
+//! the receiver carries a quadratic (value, gradient, Hessian) down to its leaves.
 
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef::{self, LinkCoef};

@@ -113,8 +113,9 @@ pub struct Oracle {
     /// change across the receiver (its curvature, from the link's steepness and the profile's
     /// falloff, see [`FALLOFF_POWER`]), and the push hands each child the receiver's
     /// quadratic moved to its midpoint. The receiver test then bounds the third-order
-    /// remainder `(k r)³ / 6`, so receivers stay whole up to about a third of their distance
-    /// to the emitter, not a fifth. Default true.
+    /// remainder `(k r)³ / 6`, so receivers stay whole up to about two fifths of their
+    /// distance to the emitter, not a fifth, and the emitter need not clear each leaf's poles
+    /// (no leaf takes its own estimate). Distance-form profiles only. Default true.
     pub curved_receivers: bool,
 }
 
@@ -125,11 +126,12 @@ impl Oracle {
     /// `cargo test --release -p lucent-core --test solver_hierarchical -- --nocapture`):
     /// `dipole` ε1 = 0.1, ε2 = 0.03, ε_abs = 3e-4 (worst 0.71%, ketchup at 1 cm); `pbd`, the
     /// default, 0.3, 0.1, 5e-4 (worst 0.72%, skim milk at 1 cm, at 53-100 links per face in
-    /// the six cases at 1 and 10 cm; ε_abs 6e-4 took the bunny's dimmest faces, which only
-    /// far transport reaches, past 1% median in `lucent bench solver --real`). Curved receivers ([`Oracle::curved_receivers`]) and the
-    /// far faces' midpoint-rule gain ([`midpoint_rule_gain`]) are what leave that room:
-    /// with linear receivers `pbd` needed 0.2, 0.05, 6e-4 for 0.71% at 97-128 links per face,
-    /// and without the gain it erred by 0.87% at 117-166. Neither has room for `eps_share` or
+    /// the six cases at 1 and 10 cm; ε_abs 6e-4 took the bunny's sampled median error in
+    /// `lucent bench solver --real` to 1.08%, through its dimmest faces, which only far
+    /// transport reaches). Curved receivers ([`Oracle::curved_receivers`]) and the far faces'
+    /// midpoint-rule gain ([`midpoint_rule_gain`]) are what leave that room: with linear
+    /// receivers `pbd` needed 0.2, 0.05, 6e-4 for 0.71% at 97-128 links per face, and without
+    /// the gain it erred by 0.87% at 117-166. Neither has room for `eps_share` or
     /// `irradiance_contrast`.
     pub fn for_profile(kind: ProfileKind) -> Oracle {
         match kind {
@@ -449,8 +451,8 @@ impl Oracle {
 
     /// The receiver test of [`OracleMode::Transport`] at an inner receiver whose estimate from
     /// the emitter at its midpoint is `f_mid`. Leaves the estimates at the children in
-    /// `samples.at_children` when it makes them, and, when the receiver stays whole, the
-    /// factor to its average in `samples.recv_scale`.
+    /// `samples.at_children` when it makes them, and, when the receiver stays whole (and is
+    /// not curved), the factor to its average in `samples.recv_scale`.
     #[inline]
     fn transport_opens_receiver(
         &self,
@@ -474,9 +476,9 @@ impl Oracle {
         // Each leaf's poles lie within `r_R` of the receiver's (plus the normals' spread), so
         // the emitter must clear them all, unless the receiver is curved: then no leaf takes
         // its own estimate from the emitter, the receiver's expansion stands in for all of
-        // them, and the size test below bounds what it leaves out (clearing the leaves took
-        // 118 links per triangle on the 48K dragon for 0.67% error, against 90 for 0.94%
-        // without, and the receivers' curvature and ε_abs trade the same error for fewer).
+        // them, and the size test below bounds what it leaves out. Clearing the leaves took 118
+        // links per triangle on the 48K dragon at 0.67% median error, against 90 at 0.94%
+        // without; with the thresholds retuned, 88 at 0.80% (ε_abs 4e-4) or 83 at 0.92%.
         let base = if curved { 0.0 } else { rg.radius };
         if !view.src.clear_of(d, eg.midpoint, SOURCE_MARGIN * eg.radius, base, view.spread) {
             samples.why[0] = Cause::Poles;
@@ -692,8 +694,8 @@ fn midpoint_rule_gain(sigma_tr: f32, dist: f32, r2: f32, max_gain: f32) -> f32 {
 /// differently fails the test. The line must stay non-negative over the receiver's bounding
 /// sphere (`s <= |D| / r_R`), and where the children barely spread along `D` the fit says
 /// nothing about the leaves that do (a fitted `s` of thousands put black blotches on a
-/// sphere): then the profile's own steepness `a + σ_tr |D|` (weighted like the fit) with
-/// `curved`, else 0, and the children are tested against the constant. Such a receiver
+/// sphere): then, with `curved`, the profile's own steepness `a + σ_tr |D|` (weighted like
+/// the fit), else 0 and the children are tested against the constant. Such a receiver
 /// barely extends along `D`, the one direction the transport changes in to first order, so
 /// the first-order bound is not asked for again: asking it cost 3% more links on the 48K
 /// dragon at the same error (0.83%). Across `D` a curved receiver's transport still falls by
