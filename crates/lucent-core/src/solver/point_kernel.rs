@@ -138,6 +138,9 @@ pub(super) struct Profile32 {
     pub batch: Lanes<WIDTH>,
     /// Lanes of a single estimate.
     pub single: Lanes<4>,
+    /// Sixteen lanes of one channel each, for sums over sixteen points at a time
+    /// ([`super::point_kernel_avx512::weighted_sum`]).
+    pub channel: [Lanes<WIDTH>; 3],
     /// Whether the analytic poles are part of the profile (all but PBD).
     pub analytic: bool,
     /// The tabulated part, if any.
@@ -151,6 +154,11 @@ impl Profile32 {
         Profile32 {
             batch: Lanes::new(per_channel, batch_channel),
             single: Lanes::new(per_channel, single_channel),
+            channel: [
+                Lanes::new(per_channel, |_| 0),
+                Lanes::new(per_channel, |_| 1),
+                Lanes::new(per_channel, |_| 2),
+            ],
             analytic,
             table,
         }

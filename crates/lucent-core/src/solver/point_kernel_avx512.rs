@@ -85,7 +85,7 @@ const S2_MIN: f32 = 1e-30;
 /// square root, and both cell ends in one 64-bit gather per lane.
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-fn radial(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, s2: __m512) -> __m512 {
+fn radial(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, s2: __m512, upper: __mmask8) -> __m512 {
     const N: f32 = TABLE_SIZE as f32;
     // At `s2 = 0`, `r = 0` (the first cell) and `1 / r` is capped below.
     let (inv_r, r_scaled) = rsqrt_sqrt(_mm512_max_ps(s2, _mm512_set1_ps(S2_MIN)), load(&l.x_scale));
@@ -100,13 +100,13 @@ fn radial(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, s2: __m512) -> __m512 {
     let at = _mm512_add_epi32(load_i(&l.table_start), cell);
     let base: *const i64 = t.as_ptr().cast();
     // SAFETY: every index is below `TABLE_LEN - 1`, so both floats of each pair are in `t`;
-    // lanes 12..16 (padding) are masked off the second gather.
+    // the upper eight lanes are gathered where `upper` says (a batch's lanes 12..16 pad).
     let (lo8, hi8) = unsafe {
         (
             _mm512_i32gather_epi64::<4>(_mm512_castsi512_si256(at), base),
             _mm512_mask_i32gather_epi64::<4>(
                 _mm512_setzero_si512(),
-                0x0f,
+                upper,
                 _mm512_extracti64x4_epi64::<1>(at),
                 base,
             ),
@@ -120,11 +120,18 @@ fn radial(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, s2: __m512) -> __m512 {
     _mm512_maskz_mul_ps(inside, w, _mm512_min_ps(inv_r, load(&l.inv_r_floor)))
 }
 
-/// `area R` over the batch lanes from the squared distances to the real and virtual poles.
+/// `area R` over the lanes of `l` from the squared distances to the real and virtual poles;
+/// the table is read for lanes 8..16 where `upper` says.
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-fn estimate(k: &Profile32, s2_r: __m512, s2_v: __m512, area: __m512) -> __m512 {
-    let l = &k.batch;
+fn lanes(
+    k: &Profile32,
+    l: &Lanes<WIDTH>,
+    s2_r: __m512,
+    s2_v: __m512,
+    area: __m512,
+    upper: __mmask8,
+) -> __m512 {
     let s2_min = _mm512_set1_ps(S2_MIN);
     let mut out = _mm512_setzero_ps();
     if k.analytic {
@@ -135,9 +142,16 @@ fn estimate(k: &Profile32, s2_r: __m512, s2_v: __m512, area: __m512) -> __m512 {
         out = _mm512_add_ps(r, pole(load(&l.kz_v), load(&l.kzs_v), e2, s2_v));
     }
     if let Some(t) = &k.table {
-        out = _mm512_add_ps(out, radial(t, l, s2_r));
+        out = _mm512_add_ps(out, radial(t, l, s2_r, upper));
     }
     _mm512_mul_ps(out, area)
+}
+
+/// `area R` over the batch lanes (four points × three channels, lanes 12..16 padding).
+#[inline]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
+fn estimate(k: &Profile32, s2_r: __m512, s2_v: __m512, area: __m512) -> __m512 {
+    lanes(k, &k.batch, s2_r, s2_v, area, 0x0f)
 }
 
 /// A point's coordinates per lane.
@@ -266,4 +280,33 @@ pub(super) fn to_point(k: &Profile32, src: &ReceiverSources, p: Vec3, area: f32)
     let s2_r = dist2(&poles(&src.x_r), &pt);
     let s2_v = if k.analytic { dist2(&poles(&src.x_v), &pt) } else { s2_r };
     unpack(estimate(k, s2_r, s2_v, _mm512_set1_ps(area)))[0]
+}
+
+/// `Σ_i w_i R(p_i)` per channel from one receiver's poles, over points given as coordinate
+/// arrays `x`, `y`, `z` and weights `w` of one length, a multiple of sixteen (pad with weight
+/// 0: padding lanes are masked off the sums). Sixteen points a channel per register, three
+/// channels: the kernel's lanes all used, where a batch of four points leaves a quarter idle.
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
+pub(super) fn weighted_sum(
+    k: &Profile32,
+    src: &ReceiverSources,
+    x: &[f32],
+    y: &[f32],
+    z: &[f32],
+    w: &[f32],
+) -> [f32; 3] {
+    assert!(x.len().is_multiple_of(WIDTH) && y.len() == x.len() && z.len() == x.len() && w.len() == x.len());
+    let mut acc = [_mm512_setzero_ps(); 3];
+    for i in (0..x.len()).step_by(WIDTH) {
+        let at = |a: &[f32]| load(a[i..i + WIDTH].try_into().expect("sixteen floats"));
+        let (p, wt) = ([at(x), at(y), at(z)], at(w));
+        let used = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(wt, _mm512_setzero_ps());
+        for (c, acc) in acc.iter_mut().enumerate() {
+            let s2_r = dist2(&splat(src.x_r[c]), &p);
+            let s2_v = if k.analytic { dist2(&splat(src.x_v[c]), &p) } else { s2_r };
+            let v = lanes(k, &k.channel[c], s2_r, s2_v, wt, 0xff);
+            *acc = _mm512_mask_add_ps(*acc, used, *acc, v);
+        }
+    }
+    acc.map(|a| _mm512_reduce_add_ps(a))
 }
