@@ -181,14 +181,14 @@ impl ReceiverSources {
 impl ReceiverSources {
     /// `∫_T R_d` over triangle `tri` (area `area`) by Radon's degree-5 rule
     /// ([`crate::formfactor::cubature`]): seven dipole points in two batches. The form
-    /// factor's own short cut in `f32`, for where [`ReceiverSources::k_rho`] is small.
+    /// factor's own short cut in `f32`, for where [`ReceiverSources::smooth_over`] holds.
     #[inline]
     pub fn triangle_cubature(&self, d: &DipoleF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
         self.cubature(d, &[(*tri, area)])
     }
 
     /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area). On
-    /// AVX-512 the points go sixteen to a register ([`kernel::avx512::weighted_sum`]),
+    /// AVX-512 the points go sixteen to a register (`point_kernel_avx512::weighted_sum`),
     /// elsewhere four to a batch.
     pub fn cubature(&self, d: &DipoleF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
         #[cfg(target_arch = "x86_64")]
@@ -198,13 +198,14 @@ impl ReceiverSources {
             let (mut x, mut y, mut z, mut w) = ([0.0f32; N], [0.0f32; N], [0.0f32; N], [0.0f32; N]);
             let mut sum = [0.0f32; 3];
             for chunk in pieces.chunks(N / 7) {
-                let mut n = 0;
+                let mut used = 0;
                 for_radon7(chunk, |p, wt| {
-                    (x[n], y[n], z[n], w[n]) = (p.x, p.y, p.z, wt);
-                    n += 1;
+                    (x[used], y[used], z[used], w[used]) = (p.x, p.y, p.z, wt);
+                    used += 1;
                 });
-                let n = n.next_multiple_of(16);
-                w[n.min(N)..].fill(0.0);
+                // The last register's unused lanes: weight 0 (a previous chunk's are stale).
+                let n = used.next_multiple_of(16);
+                w[used..n].fill(0.0);
                 // SAFETY: `d.isa` is only ever an instruction set this CPU has.
                 let f = unsafe {
                     kernel::avx512::weighted_sum(&d.kernel, self, &x[..n], &y[..n], &z[..n], &w[..n])
@@ -236,7 +237,7 @@ impl ReceiverSources {
         sum
     }
 
-    /// Whether `k ρ ≤ max` ([`ReceiverSources::k_rho`]) for an emitter with midpoint `mid`
+    /// Whether `k ρ ≤ max` ([`cubature::k_rho`]) for an emitter with midpoint `mid`
     /// and radius `radius`, in squares: `9 ρ² ≤ (max - σ_tr ρ)² s²` per channel, without
     /// the square roots and divisions (the cubature's pieces ask it up to 64 times a link).
     #[inline]
@@ -409,7 +410,7 @@ mod tests {
         use crate::bssrdf::ProfileKind;
         let m = Material::by_name("skimmilk").unwrap();
         let (x_o, n_o) = (Vec3::new(0.001, -0.002, 0.0), Vec3::new(0.1, 0.05, 1.0).normalize());
-        let pieces: Vec<([Vec3; 3], f32)> = (0..13)
+        let pieces: Vec<([Vec3; 3], f32)> = (0..37)
             .map(|i| {
                 let o = Vec3::new(0.004 * i as f32, 0.003 * (i % 4) as f32, 0.0005 * (i % 3) as f32);
                 ([o, o + Vec3::new(0.003, 0.0, 0.0), o + Vec3::new(0.0, 0.003, 0.0005)], 4.5e-6)
@@ -419,7 +420,8 @@ mod tests {
             let dip = Dipole::profile_for_model_scale(&m, 1.0, 0.01, profile, true);
             let portable = DipoleF32::new(&dip).with_isa(Isa::Scalar);
             let src = ReceiverSources::new(&portable, x_o, n_o);
-            for n in [1, 2, 5, 13] {
+            // 37 pieces: two full chunks of sixteen on AVX-512, then five.
+            for n in [1, 2, 5, 13, 37] {
                 let want = src.cubature(&portable, &pieces[..n]);
                 for isa in Isa::ALL.into_iter().filter(|i| i.is_available()) {
                     let got = src.cubature(&DipoleF32::new(&dip).with_isa(isa), &pieces[..n]);
