@@ -91,13 +91,6 @@ impl<'a> Evaluator<'a> {
         if !src.smooth_over(d, eg.midpoint, eg.radius, 8.0 * max) {
             return None;
         }
-        // Midpoint subdivision makes four copies of a triangle at half the size, so a piece's
-        // radius about its vertex average is the face's halved per level.
-        let radius = tri
-            .iter()
-            .map(|p| p.distance_squared((tri[0] + tri[1] + tri[2]) / 3.0))
-            .fold(0.0, f32::max)
-            .sqrt();
         // Depth-first over the pieces still to cut; `out.n + top` never passes MAX_PIECES.
         let mut stack = [(tri, 0u8); MAX_PIECES];
         let mut top = 1;
@@ -107,8 +100,11 @@ impl<'a> Evaluator<'a> {
             if depth >= MAX_DEPTH || out.n + top + 4 > MAX_PIECES {
                 return None;
             }
+            // Midpoint subdivision makes four copies of a triangle at half the size, so a
+            // piece's radius about its vertex average is the face's (a leaf's `radius`) halved
+            // per level.
             let scale = 0.5f32.powi(depth as i32 + 1);
-            let (area, r) = (eg.area * scale * scale, radius * scale);
+            let (area, r) = (eg.area * scale * scale, eg.radius * scale);
             for q in quarters(t) {
                 if src.smooth_over(d, (q[0] + q[1] + q[2]) / 3.0, r, max) {
                     out.tris[out.n] = (q, area);

@@ -17,7 +17,7 @@
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef::{self, LinkCoef};
 use super::link_set::LinkSet;
-use super::oracle::FALLOFF_POWER;
+use super::oracle::curvature_along;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
 use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
@@ -368,14 +368,13 @@ fn along(g: &Grad, offset: Vec3A) -> Vec3A {
 /// `k` and `w` such that the link's `E F` contributes `k E F D` to the receiver's gradient
 /// and, with a curved receiver, `E F (w D Dᵀ + k I)` to its Hessian: `F (1 - s t + ½ ((q +
 /// s) t² - s |δ|² / ρ²))` with `t = δ.D / ρ²` at an offset `δ`, for a profile of distance
-/// alone whose log-curvature `q = ρ² F'' / F` is `s² + a` ([`FALLOFF_POWER`]:
+/// alone whose log-curvature `q = ρ² F'' / F` is `s² + a` ([`FALLOFF_POWER`](super::oracle::FALLOFF_POWER):
 /// `F ~ ρ^-a e^(-σ ρ)`). A link without steepness gives `k = w = 0`, whatever `D`.
 #[inline]
 fn steepness(dv: Vec3A, slope: f32, curved: bool) -> (f32, f32) {
     let inv_d2 = 1.0 / dv.length_squared().max(f32::MIN_POSITIVE);
     let k = -slope * inv_d2;
-    let w =
-        if curved && slope > 0.0 { (slope * slope + slope + FALLOFF_POWER) * inv_d2 * inv_d2 } else { 0.0 };
+    let w = if curved && slope > 0.0 { curvature_along(slope) * inv_d2 * inv_d2 } else { 0.0 };
     (k, w)
 }
 
@@ -511,6 +510,7 @@ fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::oracle::FALLOFF_POWER;
     use super::*;
 
     /// A curved receiver's expansion of one link reproduces a profile of distance alone,

@@ -665,6 +665,15 @@ impl Oracle {
 /// `R ~ d^-a e^(-σ d)`: 3 where the dipole's `1/d³` dominates (near), 2 in its tail.
 pub(super) const FALLOFF_POWER: f32 = 2.5;
 
+/// The `t²` coefficient `q + s = s² + s + a` of a curved receiver's expansion of a link of
+/// steepness `s`, `F (1 - s t + ½ ((q + s) t² - s |δ|² / ρ²))` (`q = s² + a` the
+/// log-curvature of `F ~ ρ^-a e^(-σ ρ)`, `a` = [`FALLOFF_POWER`]): one formula for the
+/// receiver test ([`linear_slope`]) and the gather that must agree with it.
+#[inline]
+pub(super) fn curvature_along(s: f32) -> f32 {
+    s * s + s + FALLOFF_POWER
+}
+
 /// The factor from a profile's value at a face's midpoint to its average over the face, for
 /// a face of circumradius² `r2` at distance `dist` from the receiver's pole, to second
 /// order: `R ~ d^-a e^(-σ d)` has steepness `s = a + σ d` and `d² R'' / R = s² + a`, and over
@@ -724,7 +733,7 @@ fn linear_slope(
     }
     // The curvature term `½ ((s² + s + a) t² - s |δ|²/|D|²)` at child `k` for steepness `s`.
     let bend = |s: f32, k: usize| {
-        if curved { 0.5 * ((s * s + s + FALLOFF_POWER) * t[k] * t[k] - s * q[k]) } else { 0.0 }
+        if curved { 0.5 * (curvature_along(s) * t[k] * t[k] - s * q[k]) } else { 0.0 }
     };
     // Σ_c f_c (fk_c / f_c - 1 - bend) t_k over Σ_c f_c t_k².
     let fit = |s0: f32| {
