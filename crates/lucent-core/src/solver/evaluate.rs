@@ -1,11 +1,12 @@
 //! The transport coefficient of an accepted link (Mertens et al. 2003, §3.1, §4): a one-point
 //! estimate `A_E R_d` for a far emitter, and for a near one the semi-analytic form factor over
 //! its (projected, §5.1.1) polygon, the `f32` seven-point cubature where `R_d` is smooth over a
-//! face or over each of the pieces it is cut into, or uniform point sampling for the comparison
+//! face or over each of the pieces it is cut into, the polar rule of [`super::near_face`] for
+//! the receiver's own face and those beside it, or uniform point sampling for the comparison
 //! of Mertens table 5.
 
 use super::oracle::LinkKind;
-use super::point_sample::{DipoleF32, ReceiverSources};
+use super::point_sample::{DipoleF32, PointBuf, ReceiverSources};
 use crate::bssrdf::Dipole;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
@@ -44,7 +45,11 @@ pub(crate) struct Evaluator<'a> {
     pub form_factors: usize,
     /// Form factor links evaluated by the `f32` cubature instead, so far.
     pub cubatures: usize,
+    /// Form factor links evaluated in polar coordinates about the receiver instead, so far.
+    pub polar_faces: usize,
     scratch: Vec<DVec3>,
+    /// Scratch points of the cubatures.
+    points: PointBuf,
 }
 
 impl<'a> Evaluator<'a> {
@@ -57,7 +62,9 @@ impl<'a> Evaluator<'a> {
             near_point_sampling: false,
             form_factors: 0,
             cubatures: 0,
+            polar_faces: 0,
             scratch: Vec::with_capacity(16),
+            points: PointBuf::new(),
         }
     }
 
@@ -118,11 +125,32 @@ impl<'a> Evaluator<'a> {
         Some(out)
     }
 
+    /// Face `e`'s form factor at face `r`'s midpoint in polar coordinates about it
+    /// ([`super::near_face`]), for a face that [`Evaluator::smooth_face`] could not cut smooth:
+    /// `r`'s own face or one that shares a vertex with it, for a profile of tables alone.
+    #[inline]
+    fn polar_face(&self, r: usize, e: usize) -> Option<[f32; 3]> {
+        let table = self.d32.cumulative.as_ref()?;
+        let (pr, pe) = (self.h.polygon(r), self.h.polygon(e));
+        let usable = self.h.nodes[r].is_leaf()
+            && self.h.nodes[e].is_leaf()
+            && self.h.geom[r].area > 0.0
+            && !self.near_point_sampling
+            && self.opts.cubature_max_k_rho > 0.0
+            && pr.len() == 3
+            && pe.len() == 3
+            && pe.iter().any(|v| pr.contains(v));
+        if !usable {
+            return None;
+        }
+        table.polar_face(self.h.geom[r].midpoint, &[pe[0], pe[1], pe[2]], self.d32.isa()).map(|(f, _)| f)
+    }
+
     /// Whether a form factor link `e -> r` costs a full semi-analytic evaluation (the
     /// incremental budget counts only those).
     #[inline]
-    pub fn is_analytic(&self, src: &ReceiverSources, e: usize) -> bool {
-        self.smooth_face(src, e).is_none()
+    pub fn is_analytic(&self, src: &ReceiverSources, r: usize, e: usize) -> bool {
+        self.smooth_face(src, e).is_none() && self.polar_face(r, e).is_none()
     }
 
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
@@ -135,7 +163,11 @@ impl<'a> Evaluator<'a> {
                 let rg = &self.h.geom[r];
                 if let Some(p) = self.smooth_face(src, e) {
                     self.cubatures += 1;
-                    return src.cubature(&self.d32, &p.tris[..p.n]);
+                    return src.cubature_with(&self.d32, &mut self.points, &p.tris[..p.n]);
+                }
+                if let Some(f) = self.polar_face(r, e) {
+                    self.polar_faces += 1;
+                    return f;
                 }
                 self.form_factors += 1;
                 self.scratch.clear();
@@ -233,8 +265,21 @@ mod tests {
             // Whole faces, quarters, and faces cut twice or more (more than four pieces).
             assert!(pieces_seen[1] > 0 && pieces_seen[4] > 0, "{profile:?}: {pieces_seen:?}");
             assert!(pieces_seen[5..].iter().sum::<usize>() >= 3, "{profile:?}: {pieces_seen:?}");
-            // The receiver's own face holds its peak: the edge integrals take it.
+            // The receiver's own face holds its peak: it cannot be cut smooth, and the polar
+            // rule takes it where the profile is tabulated alone, else the edge integrals.
             assert!(ev.smooth_face(&src, receiver).is_none());
+            let mut ev = ev;
+            let own = ev.eval(&src, receiver, receiver, LinkKind::FormFactor);
+            let poly: Vec<DVec3> = h.polygon(receiver).iter().map(|p| p.as_dvec3()).collect();
+            let want = form_factor(&poly, rg.midpoint.as_dvec3(), rg.normal.as_dvec3(), &dip, &edges);
+            let polar = profile == ProfileKind::Pbd;
+            assert_eq!((ev.polar_faces, ev.form_factors), (polar as usize, !polar as usize), "{profile:?}");
+            for c in 0..3 {
+                assert!(
+                    (own[c] as f64 / want[c] - 1.0).abs() < 1e-3,
+                    "{profile:?} own face, channel {c}: {own:?} vs {want:?}"
+                );
+            }
         }
     }
 }

@@ -154,7 +154,7 @@ impl HierarchicalSolver {
         }
         let t3 = Instant::now();
         ctx.fill(&mut stats);
-        stats.links = stats.form_factors + stats.cubatures + stats.point_samples;
+        stats.links = stats.form_factors + stats.cubatures + stats.polar_faces + stats.point_samples;
         stats.pull_ms = ms(t1 - t0);
         stats.link_ms = ms(t2 - t1);
         stats.push_ms = ms(t3 - t2);

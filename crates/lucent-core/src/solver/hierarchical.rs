@@ -44,6 +44,9 @@ pub struct SolveStats {
     /// Near (form factor) links evaluated by the seven-point cubature instead, where `R_d` is
     /// smooth over the emitter face (see [`crate::formfactor::cubature`]).
     pub cubatures: usize,
+    /// Near links to the receiver's own face or a face beside it evaluated in polar
+    /// coordinates about the receiver instead (the tabulated profile; see `near_face`).
+    pub polar_faces: usize,
     /// One-point evaluations in this call.
     pub point_samples: usize,
     /// Time spent refining / relinking (and evaluating link coefficients), ms.

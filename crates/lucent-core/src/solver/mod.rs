@@ -17,6 +17,8 @@
 //! * [`link_set`]: the stored links, a run per receiver in a shared base or a per-update
 //!   delta, so that an incremental update writes only what changed (§5.5).
 //! * [`local`]: the profile's reach and the local limit `B = R_d E` where it is below a face.
+//! * `near_face`: the receiver's own face and those beside it, in polar coordinates about
+//!   the receiver, for the tabulated profile (§4).
 //! * [`oracle`]: the refinement oracle (§5.2).
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 //! * [`progress`]: a counter a front end polls to show a long solve's progress.
@@ -31,6 +33,7 @@ pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
 pub mod local;
+mod near_face;
 pub mod oracle;
 mod point_kernel;
 #[cfg(target_arch = "x86_64")]

@@ -9,6 +9,7 @@
 //! every estimate of one [`DipoleF32`] takes the same path, so that the oracle may hand an
 //! estimate from one form on as another's.
 
+use super::near_face::CumulativeTables;
 use super::point_kernel::{self as kernel, Profile32};
 use crate::bssrdf::Dipole;
 use crate::bssrdf::profile::TABLE_SIZE;
@@ -41,6 +42,9 @@ pub struct DipoleF32 {
     near_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
     kernel: Profile32,
+    /// The cumulative tables of a profile of tables alone (photon beam diffusion), for the
+    /// faces at the receiver's peak.
+    pub(super) cumulative: Option<CumulativeTables>,
     /// The instruction set every estimate runs on.
     isa: Isa,
 }
@@ -81,6 +85,7 @@ impl DipoleF32 {
                 d.has_analytic(),
                 table,
             ),
+            cumulative: CumulativeTables::new(d),
             isa: Isa::best(),
         }
     }
@@ -187,52 +192,60 @@ impl ReceiverSources {
         self.cubature(d, &[(*tri, area)])
     }
 
-    /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area). On
-    /// AVX-512 the points go sixteen to a register (`point_kernel_avx512::weighted_sum`),
-    /// elsewhere four to a batch.
+    /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area).
     pub fn cubature(&self, d: &DipoleF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
+        self.cubature_with(d, &mut PointBuf::new(), pieces)
+    }
+
+    /// [`ReceiverSources::cubature`] with the caller's scratch points.
+    pub(crate) fn cubature_with(
+        &self,
+        d: &DipoleF32,
+        buf: &mut PointBuf,
+        pieces: &[([Vec3; 3], f32)],
+    ) -> [f32; 3] {
+        let mut sum = [0.0f32; 3];
+        for chunk in pieces.chunks(POINT_BUF / 7) {
+            for_radon7(chunk, |p, w| buf.push(p, w));
+            let f = self.weighted_sum(d, buf);
+            sum.iter_mut().zip(f).for_each(|(s, f)| *s += f);
+        }
+        sum
+    }
+
+    /// `Σ_i w_i R(p_i)` per channel over the points in `buf`, which it empties. On AVX-512
+    /// the points go sixteen to a register (`point_kernel_avx512::weighted_sum`), elsewhere
+    /// four to a batch.
+    pub(crate) fn weighted_sum(&self, d: &DipoleF32, buf: &mut PointBuf) -> [f32; 3] {
+        let used = std::mem::take(&mut buf.used);
         #[cfg(target_arch = "x86_64")]
         if d.isa == Isa::Avx512 {
-            // Seven registers of sixteen: sixteen pieces' points.
-            const N: usize = 112;
-            let (mut x, mut y, mut z, mut w) = ([0.0f32; N], [0.0f32; N], [0.0f32; N], [0.0f32; N]);
-            let mut sum = [0.0f32; 3];
-            for chunk in pieces.chunks(N / 7) {
-                let mut used = 0;
-                for_radon7(chunk, |p, wt| {
-                    (x[used], y[used], z[used], w[used]) = (p.x, p.y, p.z, wt);
-                    used += 1;
-                });
-                // The last register's unused lanes: weight 0 (a previous chunk's are stale).
-                let n = used.next_multiple_of(16);
-                w[used..n].fill(0.0);
-                // SAFETY: `d.isa` is only ever an instruction set this CPU has.
-                let f = unsafe {
-                    kernel::avx512::weighted_sum(&d.kernel, self, &x[..n], &y[..n], &z[..n], &w[..n])
-                };
-                sum.iter_mut().zip(f).for_each(|(s, f)| *s += f);
-            }
-            return sum;
+            // The last register's unused lanes: weight 0 (they hold an earlier sum's points).
+            let n = used.next_multiple_of(16);
+            buf.w[used..n].fill(0.0);
+            // SAFETY: `d.isa` is only ever an instruction set this CPU has.
+            return unsafe {
+                kernel::avx512::weighted_sum(
+                    &d.kernel,
+                    self,
+                    &buf.x[..n],
+                    &buf.y[..n],
+                    &buf.z[..n],
+                    &buf.w[..n],
+                )
+            };
         }
-        let mut pts = [Vec3::ZERO; 4];
-        let mut wts = [0.0f32; 4];
-        let mut lanes = 0;
         let mut sum = [0.0f32; 3];
-        let mut flush = |pts: &[Vec3; 4], wts: &mut [f32; 4], lanes: &mut usize| {
-            for f in self.point_samples(d, pts, wts) {
+        for i in (0..used).step_by(4) {
+            let mut pts = [Vec3::ZERO; 4];
+            let mut wts = [0.0f32; 4];
+            for j in 0..4.min(used - i) {
+                pts[j] = Vec3::new(buf.x[i + j], buf.y[i + j], buf.z[i + j]);
+                wts[j] = buf.w[i + j];
+            }
+            for f in self.point_samples(d, &pts, &wts) {
                 sum.iter_mut().zip(f).for_each(|(s, f)| *s += f);
             }
-            (*wts, *lanes) = ([0.0; 4], 0);
-        };
-        for_radon7(pieces, |p, w| {
-            (pts[lanes], wts[lanes]) = (p, w);
-            lanes += 1;
-            if lanes == 4 {
-                flush(&pts, &mut wts, &mut lanes);
-            }
-        });
-        if lanes > 0 {
-            flush(&pts, &mut wts, &mut lanes);
         }
         sum
     }
@@ -249,6 +262,40 @@ impl ReceiverSources {
                 + d.near_off[c];
             room > 0.0 && r9 <= room * room * s2
         })
+    }
+}
+
+/// Most points one [`PointBuf`] holds: seven registers of sixteen, Radon's seven points on
+/// sixteen pieces.
+pub(crate) const POINT_BUF: usize = 112;
+
+/// Weighted points gathered for one [`ReceiverSources::weighted_sum`], as coordinate arrays
+/// (kept by the caller between sums, so no sum clears them).
+pub(crate) struct PointBuf {
+    x: [f32; POINT_BUF],
+    y: [f32; POINT_BUF],
+    z: [f32; POINT_BUF],
+    w: [f32; POINT_BUF],
+    used: usize,
+}
+
+impl PointBuf {
+    pub fn new() -> Self {
+        PointBuf {
+            x: [0.0; POINT_BUF],
+            y: [0.0; POINT_BUF],
+            z: [0.0; POINT_BUF],
+            w: [0.0; POINT_BUF],
+            used: 0,
+        }
+    }
+
+    /// Adds point `p` with weight `w`; at most [`POINT_BUF`] before a sum.
+    #[inline(always)]
+    pub fn push(&mut self, p: Vec3, w: f32) {
+        let i = self.used;
+        (self.x[i], self.y[i], self.z[i], self.w[i]) = (p.x, p.y, p.z, w);
+        self.used = i + 1;
     }
 }
 

@@ -82,6 +82,7 @@ impl<'a> Ctx<'a> {
     pub(super) fn fill(&self, stats: &mut SolveStats) {
         stats.form_factors = self.ev.form_factors;
         stats.cubatures = self.ev.cubatures;
+        stats.polar_faces = self.ev.polar_faces;
         stats.point_samples = self.point_samples;
         stats.local_faces = self.local_faces;
     }
@@ -89,6 +90,7 @@ impl<'a> Ctx<'a> {
     pub(super) fn absorb(&mut self, o: &Ctx) {
         self.ev.form_factors += o.ev.form_factors;
         self.ev.cubatures += o.ev.cubatures;
+        self.ev.polar_faces += o.ev.polar_faces;
         self.point_samples += o.point_samples;
         self.local_faces += o.local_faces;
     }
@@ -295,7 +297,7 @@ impl LinkSink for Reusing<'_, '_> {
         samples: &Samples,
     ) {
         let over = kind == LinkKind::FormFactor
-            && ctx.ev.is_analytic(src, e)
+            && ctx.ev.is_analytic(src, r, e)
             && self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
         if over {
             let f = match self.old_link(r, e) {

@@ -54,7 +54,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
     let h = face_cluster::build(&mesh);
     let faces = super::solver_real::sample_faces(mesh.triangles.len(), samples);
     let default = measure(&mesh, &h, Material::by_name("skimmilk")?, 0.05, &faces)?;
-    let evals = |s: &SolveStats| s.form_factors + s.cubatures + s.point_samples;
+    let evals = |s: &SolveStats| s.form_factors + s.cubatures + s.polar_faces + s.point_samples;
     if !json {
         println!(
             "default (skimmilk at 0.05 m): {} links, {} evaluations, {:.1} ms",
