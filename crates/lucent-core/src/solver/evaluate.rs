@@ -5,6 +5,7 @@
 //! the receiver's own face and those beside it, or uniform point sampling for the comparison
 //! of Mertens table 5.
 
+use super::near_face::Nodes;
 use super::oracle::LinkKind;
 use super::point_sample::{DipoleF32, PointBuf, ReceiverSources};
 use crate::bssrdf::Dipole;
@@ -48,8 +49,9 @@ pub(crate) struct Evaluator<'a> {
     /// Form factor links evaluated in polar coordinates about the receiver instead, so far.
     pub polar_faces: usize,
     scratch: Vec<DVec3>,
-    /// Scratch points of the cubatures.
+    /// Scratch points of the cubatures and rays of the polar rule.
     points: PointBuf,
+    rays: Nodes,
 }
 
 impl<'a> Evaluator<'a> {
@@ -65,6 +67,7 @@ impl<'a> Evaluator<'a> {
             polar_faces: 0,
             scratch: Vec::with_capacity(16),
             points: PointBuf::new(),
+            rays: Nodes::new(),
         }
     }
 
@@ -129,7 +132,7 @@ impl<'a> Evaluator<'a> {
     /// ([`super::near_face`]), for a face that [`Evaluator::smooth_face`] could not cut smooth:
     /// `r`'s own face or one that shares a vertex with it, for a profile of tables alone.
     #[inline]
-    fn polar_face(&self, r: usize, e: usize) -> Option<[f32; 3]> {
+    fn polar_face(&mut self, r: usize, e: usize) -> Option<[f32; 3]> {
         let table = self.d32.cumulative.as_ref()?;
         let (pr, pe) = (self.h.polygon(r), self.h.polygon(e));
         let usable = self.h.nodes[r].is_leaf()
@@ -143,13 +146,14 @@ impl<'a> Evaluator<'a> {
         if !usable {
             return None;
         }
-        table.polar_face(self.h.geom[r].midpoint, &[pe[0], pe[1], pe[2]], self.d32.isa()).map(|(f, _)| f)
+        let tri = [pe[0], pe[1], pe[2]];
+        table.polar_face(self.h.geom[r].midpoint, &tri, self.d32.isa(), &mut self.rays).map(|(f, _)| f)
     }
 
     /// Whether a form factor link `e -> r` costs a full semi-analytic evaluation (the
     /// incremental budget counts only those).
     #[inline]
-    pub fn is_analytic(&self, src: &ReceiverSources, r: usize, e: usize) -> bool {
+    pub fn is_analytic(&mut self, src: &ReceiverSources, r: usize, e: usize) -> bool {
         self.smooth_face(src, e).is_none() && self.polar_face(r, e).is_none()
     }
 

@@ -52,8 +52,9 @@ const MAX_NODES: usize = 3 * 4 * MAX_STEPS as usize;
 /// A face's rays: `e^u` and `e^-u` at each, its Gauss weight times the step's half-width in
 /// `u` (signed by the fan's turn), and its edge's squared distance `r²`. The sums take
 /// `cosh u`, the weight `du / cosh u` and the table's grid variable `(h² + r² cosh² u)^¼`
-/// from them, sixteen rays at a time on AVX-512.
-struct Nodes {
+/// from them, sixteen rays at a time on AVX-512. Kept by the caller between faces, so no face
+/// clears them (every ray a sum reads is written first, padding included).
+pub(crate) struct Nodes {
     e: [f32; MAX_NODES],
     ie: [f32; MAX_NODES],
     hw: [f32; MAX_NODES],
@@ -62,6 +63,16 @@ struct Nodes {
 }
 
 impl Nodes {
+    pub fn new() -> Self {
+        Nodes {
+            e: [0.0; MAX_NODES],
+            ie: [0.0; MAX_NODES],
+            hw: [0.0; MAX_NODES],
+            r2: [0.0; MAX_NODES],
+            len: 0,
+        }
+    }
+
     /// Ray `i`'s weight `du / cosh u` and grid variable `√ρ` (`ρ² = h² + r² cosh² u`).
     #[inline(always)]
     fn ray(&self, i: usize, h2: f32) -> (f32, f32) {
@@ -147,16 +158,22 @@ impl CumulativeTables {
     }
 
     /// `∫_T R dA` per channel over triangle `tri` for the receiver point `x_o` (see the module
-    /// documentation), evaluated on instruction set `isa`, and the number of rays it took.
-    /// `None` for a sliver, a face reaching farther than [`REACH`] diffusion lengths, or
-    /// where an edge would need more than [`MAX_STEPS`] steps.
-    pub fn polar_face(&self, x_o: Vec3, tri: &[Vec3; 3], isa: Isa) -> Option<([f32; 3], usize)> {
-        // Slivers (twice the area below a thousandth of the longest edge squared) to the
-        // edge integrals in `f64`: their distances from `x_o` to an edge fall to `f32`'s
-        // resolution of the coordinates.
+    /// documentation), evaluated on instruction set `isa` with the caller's scratch `nodes`,
+    /// and the number of rays it took. `None` for a sliver, a face reaching farther than
+    /// [`REACH`] diffusion lengths, or where an edge would need more than [`MAX_STEPS`] steps.
+    pub fn polar_face(
+        &self,
+        x_o: Vec3,
+        tri: &[Vec3; 3],
+        isa: Isa,
+        nodes: &mut Nodes,
+    ) -> Option<([f32; 3], usize)> {
         if !x_o.is_finite() || tri.iter().any(|v| !v.is_finite()) {
             return None;
         }
+        // Slivers (twice the area below a thousandth of the longest edge squared) to the
+        // edge integrals in `f64`: their distances from `x_o` to an edge fall to `f32`'s
+        // resolution of the coordinates.
         let cross = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
         let longest2 = (0..3).map(|k| (tri[(k + 1) % 3] - tri[k]).length_squared()).fold(0.0, f32::max);
         if cross.length() < SLIVER * longest2 || longest2 == 0.0 {
@@ -169,13 +186,7 @@ impl CumulativeTables {
         let n = cross.normalize();
         let h = (x_o - tri[0]).dot(n);
         let (h2, foot_o) = (h * h, x_o - h * n);
-        let mut nodes = Nodes {
-            e: [0.0; MAX_NODES],
-            ie: [0.0; MAX_NODES],
-            hw: [0.0; MAX_NODES],
-            r2: [0.0; MAX_NODES],
-            len: 0,
-        };
+        nodes.len = 0;
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             let len = (b - a).length();
@@ -225,7 +236,7 @@ impl CumulativeTables {
             }
         }
         let rays = nodes.len;
-        let (sum, angle) = self.sums(&mut nodes, h2, isa);
+        let (sum, angle) = self.sums(nodes, h2, isa);
         // `P(h)` times the fans' total angle (2π for a face holding `x_o`'s foot, else 0).
         let base = h.abs().sqrt();
         Some((std::array::from_fn(|c| (sum[c] - angle * self.at_root(c, base)).max(0.0)), rays))
@@ -335,7 +346,8 @@ mod tests {
                 for (x_o, tris) in &hoods {
                     let (mut got_sum, mut want_sum) = ([0.0f64; 3], [0.0f64; 3]);
                     for (k, tri) in tris.iter().enumerate() {
-                        let Some((got, _)) = table.polar_face(*x_o, tri, Isa::best()) else {
+                        let Some((got, _)) = table.polar_face(*x_o, tri, Isa::best(), &mut Nodes::new())
+                        else {
                             skipped += 1;
                             continue;
                         };
@@ -376,18 +388,26 @@ mod tests {
         let free_path = 1.0 / table.sigma_t;
         let tri = [Vec3::ZERO, Vec3::new(free_path, 0.0, 0.0), Vec3::new(0.3, 0.8, 0.0) * free_path];
         let x_o = (tri[0] + tri[1] + tri[2]) / 3.0;
-        let (scalar, rays) = table.polar_face(x_o, &tri, Isa::Scalar).unwrap();
+        let (scalar, rays) = table.polar_face(x_o, &tri, Isa::Scalar, &mut Nodes::new()).unwrap();
         assert!(rays >= 12 && rays % 4 == 0, "{rays}");
         for isa in Isa::ALL.into_iter().filter(|i| i.is_available()) {
-            let (f, _) = table.polar_face(x_o, &tri, isa).unwrap();
+            let (f, _) = table.polar_face(x_o, &tri, isa, &mut Nodes::new()).unwrap();
             for c in 0..3 {
                 assert!((f[c] / scalar[c] - 1.0).abs() < 1e-5, "{isa:?} channel {c}: {f:?} vs {scalar:?}");
             }
         }
         let sliver =
             [Vec3::ZERO, Vec3::new(free_path, 0.0, 0.0), Vec3::new(0.5 * free_path, 1e-5 * free_path, 0.0)];
-        assert!(table.polar_face((sliver[0] + sliver[1]) * 0.5, &sliver, Isa::Scalar).is_none());
+        assert!(
+            table
+                .polar_face((sliver[0] + sliver[1]) * 0.5, &sliver, Isa::Scalar, &mut Nodes::new())
+                .is_none()
+        );
         let far = tri.map(|v| v * 10.0 * table.sigma_t / table.sigma_tr);
-        assert!(table.polar_face((far[0] + far[1] + far[2]) / 3.0, &far, Isa::Scalar).is_none());
+        assert!(
+            table
+                .polar_face((far[0] + far[1] + far[2]) / 3.0, &far, Isa::Scalar, &mut Nodes::new())
+                .is_none()
+        );
     }
 }
