@@ -20,18 +20,73 @@ const MAX_PIECES: usize = 16;
 /// sixteenth or a sixty-fourth of the face's area).
 const MAX_DEPTH: u8 = 3;
 
-/// A face cut into pieces over each of which `R_d` is smooth, so that Radon's seven points on
-/// every piece stand in for the form factor ([`Evaluator::smooth_face`]).
-struct Pieces {
-    tris: [([Vec3; 3], f32); MAX_PIECES],
-    n: usize,
-}
-
 /// The four triangles of the midpoint subdivision of `t` (equal areas).
 fn quarters(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
     let [a, b, c] = t;
     let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
     [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+}
+
+/// [`ReceiverSources::smooth_over`]'s bounds for the pieces of one face at each level of its
+/// midpoint subdivision (level `k`: radius `r 2^-k`), for a distance-form profile, whose
+/// poles all sit at the receiver point: per level `9 ρ²` and per channel `(max - σ_tr ρ)²`
+/// (negative where `σ_tr ρ` alone passes `max`, so that no distance passes).
+struct SmoothLevels {
+    r9: [f32; MAX_DEPTH as usize + 1],
+    room2: [[f32; 3]; MAX_DEPTH as usize + 1],
+}
+
+impl SmoothLevels {
+    #[inline]
+    fn new(d: &DipoleF32, radius: f32, max: f32) -> Self {
+        let mut out =
+            SmoothLevels { r9: [0.0; MAX_DEPTH as usize + 1], room2: [[0.0; 3]; MAX_DEPTH as usize + 1] };
+        for k in 1..=MAX_DEPTH as usize {
+            let r = radius * 0.5f32.powi(k as i32);
+            out.r9[k] = 9.0 * r * r;
+            out.room2[k] = std::array::from_fn(|c| {
+                let room = max - d.sigma_tr[c] * r;
+                if room > 0.0 { room * room } else { -1.0 }
+            });
+        }
+        out
+    }
+
+    /// Whether a piece at `level` whose centroid lies `√dist2` from the receiver point is
+    /// smooth.
+    #[inline]
+    fn smooth(&self, d: &DipoleF32, dist2: f32, level: u8) -> bool {
+        let k = level as usize;
+        (0..3).all(|c| self.r9[k] <= self.room2[k][c] * (dist2 + d.near_off[c]))
+    }
+}
+
+/// Cuts triangle `t` (area `area`, at subdivision `level`) into its midpoint quarters and adds
+/// Radon's points on each quarter that `smooth(centroid, level + 1)` passes to `buf`, cutting
+/// the others again, depth first. `pieces` counts the pieces so far (`t` among them); false
+/// once a piece below [`MAX_DEPTH`] levels or more than [`MAX_PIECES`] pieces would be
+/// needed (`buf` then holds a part of the points).
+fn cut_smooth(
+    t: [Vec3; 3],
+    area: f32,
+    level: u8,
+    pieces: &mut usize,
+    buf: &mut PointBuf,
+    smooth: &impl Fn(Vec3, u8) -> bool,
+) -> bool {
+    if level > MAX_DEPTH || *pieces + 3 > MAX_PIECES {
+        return false;
+    }
+    *pieces += 3;
+    let area = 0.25 * area;
+    quarters(t).into_iter().all(|q| {
+        if smooth((q[0] + q[1] + q[2]) / 3.0, level) {
+            buf.push_radon7(q, area);
+            true
+        } else {
+            cut_smooth(q, area, level + 1, pieces, buf, smooth)
+        }
+    })
 }
 
 /// Evaluates links: holds the dipole in both precisions and a scratch polygon buffer.
@@ -71,18 +126,20 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// Face `e` cut into pieces over each of which `R_d` from `src` is smooth, so that the
-    /// `f32` cubature stands in for the form factor: whole when its `k ρ` is within
+    /// Face `e` cut into pieces over each of which `R_d` from `src` is smooth, with Radon's
+    /// seven points on every piece added to the evaluator's scratch points for the `f32`
+    /// cubature to stand in for the form factor: whole when its `k ρ` is within
     /// [`FormFactorOptions::cubature_max_k_rho`] (the form factor would take the same short
     /// cut in `f64`), else by midpoint subdivision of the pieces that are not, down to
     /// [`MAX_DEPTH`] levels and [`MAX_PIECES`] pieces (a piece has half its parent's radius;
     /// faces past eight times the limit are not tried). Only the pieces near the receiver are
     /// cut again, so a face beside it takes 7 to 13 pieces, 49 to 91 points, about half the
     /// cycles of its edge integrals (48K dragon: 1,400 against 3,000), which on dense scanned
-    /// meshes were a quarter of the solve. `None`: too close to be cut smooth (the receiver's
-    /// own face, which holds the profile's peak), so the edge integrals.
+    /// meshes were a quarter of the solve. Returns the number of pieces; `None` (and no points
+    /// added): too close to be cut smooth (the receiver's own face, which holds the profile's
+    /// peak), so the polar rule or the edge integrals.
     #[inline]
-    fn smooth_face(&self, src: &ReceiverSources, e: usize) -> Option<Pieces> {
+    fn smooth_face(&mut self, src: &ReceiverSources, e: usize) -> Option<usize> {
         let eg = &self.h.geom[e];
         let poly = self.h.polygon(e);
         let max = self.opts.cubature_max_k_rho as f32;
@@ -90,42 +147,35 @@ impl<'a> Evaluator<'a> {
             return None;
         }
         let tri = [poly[0], poly[1], poly[2]];
-        let d = &self.d32;
-        let mut out = Pieces { tris: [(tri, eg.area); MAX_PIECES], n: 0 };
+        let (d, buf) = (&self.d32, &mut self.points);
         if src.smooth_over(d, eg.midpoint, eg.radius, max) {
-            out.n = 1;
-            return Some(out);
+            buf.push_radon7(tri, eg.area);
+            return Some(1);
         }
         // A face holding the receiver's peak (its own face) or a source next to it cannot be
         // cut smooth: no piece would pass.
         if !src.smooth_over(d, eg.midpoint, eg.radius, 8.0 * max) {
             return None;
         }
-        // Depth-first over the pieces still to cut; `out.n + top` never passes MAX_PIECES.
-        let mut stack = [(tri, 0u8); MAX_PIECES];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (t, depth) = stack[top];
-            if depth >= MAX_DEPTH || out.n + top + 4 > MAX_PIECES {
-                return None;
-            }
-            // Midpoint subdivision makes four copies of a triangle at half the size, so a
-            // piece's radius about its vertex average is the face's (a leaf's `radius`) halved
-            // per level.
-            let scale = 0.5f32.powi(depth as i32 + 1);
-            let (area, r) = (eg.area * scale * scale, eg.radius * scale);
-            for q in quarters(t) {
-                if src.smooth_over(d, (q[0] + q[1] + q[2]) / 3.0, r, max) {
-                    out.tris[out.n] = (q, area);
-                    out.n += 1;
-                } else {
-                    stack[top] = (q, depth + 1);
-                    top += 1;
-                }
-            }
+        let mut pieces = 1;
+        let cut = if d.normal_weight == 0.0 {
+            // The distance form's poles all sit at the receiver point: one squared distance a
+            // piece, against bounds made once per level (`smooth_over` in the same order).
+            let x_o = src.x_r[0];
+            let levels = SmoothLevels::new(d, eg.radius, max);
+            cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
+                levels.smooth(d, (x_o - q).length_squared(), level)
+            })
+        } else {
+            cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
+                src.smooth_over(d, q, eg.radius * 0.5f32.powi(level as i32), max)
+            })
+        };
+        if !cut {
+            buf.clear();
+            return None;
         }
-        Some(out)
+        Some(pieces)
     }
 
     /// Face `e`'s form factor at face `r`'s midpoint in polar coordinates about it
@@ -154,7 +204,11 @@ impl<'a> Evaluator<'a> {
     /// incremental budget counts only those).
     #[inline]
     pub fn is_analytic(&mut self, src: &ReceiverSources, r: usize, e: usize) -> bool {
-        self.smooth_face(src, e).is_none() && self.polar_face(r, e).is_none()
+        if self.smooth_face(src, e).is_some() {
+            self.points.clear();
+            return false;
+        }
+        self.polar_face(r, e).is_none()
     }
 
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
@@ -165,9 +219,9 @@ impl<'a> Evaluator<'a> {
             LinkKind::PointSample => src.point_sample(&self.d32, eg.midpoint, eg.area),
             LinkKind::FormFactor => {
                 let rg = &self.h.geom[r];
-                if let Some(p) = self.smooth_face(src, e) {
+                if self.smooth_face(src, e).is_some() {
                     self.cubatures += 1;
-                    return src.cubature_with(&self.d32, &mut self.points, &p.tris[..p.n]);
+                    return src.weighted_sum(&self.d32, &mut self.points);
                 }
                 if let Some(f) = self.polar_face(r, e) {
                     self.polar_faces += 1;
@@ -244,23 +298,23 @@ mod tests {
             let positions = mesh_tris.iter().flatten().copied().collect();
             let triangles = (0..mesh_tris.len() as u32).map(|f| [3 * f, 3 * f + 1, 3 * f + 2]).collect();
             let h = crate::hierarchy::face_cluster::build(&crate::mesh::Mesh::new(positions, triangles));
-            let ev = Evaluator::new(&h, &dip, FormFactorOptions::default());
+            let mut ev = Evaluator::new(&h, &dip, FormFactorOptions::default());
             let receiver = h.face_node[mesh_tris.len() - 1] as usize;
             let rg = &h.geom[receiver];
             let src = ReceiverSources::new(&ev.d32, rg.midpoint, rg.normal);
             let mut pieces_seen = [0usize; MAX_PIECES + 1];
             for f in 0..mesh_tris.len() - 1 {
                 let e = h.face_node[f] as usize;
-                let Some(p) = ev.smooth_face(&src, e) else { continue };
-                pieces_seen[p.n] += 1;
-                let got = src.cubature(&ev.d32, &p.tris[..p.n]);
+                let Some(n) = ev.smooth_face(&src, e) else { continue };
+                pieces_seen[n] += 1;
+                let got = src.weighted_sum(&ev.d32, &mut ev.points);
                 let poly: Vec<DVec3> = h.polygon(e).iter().map(|p| p.as_dvec3()).collect();
                 let want = form_factor(&poly, rg.midpoint.as_dvec3(), rg.normal.as_dvec3(), &dip, &edges);
                 for c in 0..3 {
                     assert!(
                         (got[c] as f64 / want[c] - 1.0).abs() < 2e-3,
                         "{profile:?} face {f} in {} pieces, channel {c}: {} vs {}",
-                        p.n,
+                        n,
                         got[c],
                         want[c]
                     );
@@ -272,7 +326,6 @@ mod tests {
             // The receiver's own face holds its peak: it cannot be cut smooth, and the polar
             // rule takes it where the profile is tabulated alone, else the edge integrals.
             assert!(ev.smooth_face(&src, receiver).is_none());
-            let mut ev = ev;
             let own = ev.eval(&src, receiver, receiver, LinkKind::FormFactor);
             let poly: Vec<DVec3> = h.polygon(receiver).iter().map(|p| p.as_dvec3()).collect();
             let want = form_factor(&poly, rg.midpoint.as_dvec3(), rg.normal.as_dvec3(), &dip, &edges);

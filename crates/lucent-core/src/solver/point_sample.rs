@@ -39,7 +39,7 @@ pub struct DipoleF32 {
     /// Squared length (per channel) on which the profile is smooth at the receiver point, for
     /// the oracle's error estimates: `z_r²` for the analytic distance form; a tabulated profile
     /// with single scattering peaks like `1/r` there, so a tenth of `z_r`.
-    near_off: [f32; 3],
+    pub(super) near_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
     kernel: Profile32,
     /// The cumulative tables of a profile of tables alone (photon beam diffusion), for the
@@ -131,23 +131,34 @@ impl ReceiverSources {
     /// from `p` (the distance form's poles do not move with the normal: callers pass 0).
     #[inline]
     pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
+        let at = self.at(d, p);
         (0..3).all(|c| {
             let rr = margin + base + spread * d.z_r[c];
             let rv = margin + base + spread * d.z_v[c];
-            (self.x_r[c] - p).length_squared() + d.off_r[c] > rr * rr
-                && (self.x_v[c] - p).length_squared() + d.off_v[c] > rv * rv
+            at.real(c) + d.off_r[c] > rr * rr && at.virt(c) + d.off_v[c] > rv * rv
         })
+    }
+
+    /// The squared distances from `p` to the poles, made once where all poles coincide (the
+    /// distance form: the receiver point) rather than six times.
+    #[inline]
+    fn at(&self, d: &DipoleF32, p: Vec3) -> PoleDistances {
+        if d.normal_weight == 0.0 {
+            PoleDistances::One((self.x_r[0] - p).length_squared())
+        } else {
+            PoleDistances::Each(
+                std::array::from_fn(|c| (self.x_r[c] - p).length_squared()),
+                std::array::from_fn(|c| (self.x_v[c] - p).length_squared()),
+            )
+        }
     }
 
     /// Distance from `p` to the nearer of the two poles, per channel (with the distance
     /// form's added `z²`): where `R` varies fastest.
     #[inline]
     pub fn nearest(&self, d: &DipoleF32, p: Vec3) -> [f32; 3] {
-        std::array::from_fn(|c| {
-            ((self.x_r[c] - p).length_squared() + d.near_off[c])
-                .min((self.x_v[c] - p).length_squared() + d.near_off[c])
-                .sqrt()
-        })
+        let at = self.at(d, p);
+        std::array::from_fn(|c| (at.nearer(c) + d.near_off[c]).sqrt())
     }
 
     /// One-point form factor `A R(p)` for an emitter of area `area` at `p`.
@@ -194,20 +205,10 @@ impl ReceiverSources {
 
     /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area).
     pub fn cubature(&self, d: &DipoleF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
-        self.cubature_with(d, &mut PointBuf::new(), pieces)
-    }
-
-    /// [`ReceiverSources::cubature`] with the caller's scratch points.
-    pub(crate) fn cubature_with(
-        &self,
-        d: &DipoleF32,
-        buf: &mut PointBuf,
-        pieces: &[([Vec3; 3], f32)],
-    ) -> [f32; 3] {
-        let mut sum = [0.0f32; 3];
+        let (mut buf, mut sum) = (PointBuf::new(), [0.0f32; 3]);
         for chunk in pieces.chunks(POINT_BUF / 7) {
-            for_radon7(chunk, |p, w| buf.push(p, w));
-            let f = self.weighted_sum(d, buf);
+            chunk.iter().for_each(|&(tri, area)| buf.push_radon7(tri, area));
+            let f = self.weighted_sum(d, &mut buf);
             sum.iter_mut().zip(f).for_each(|(s, f)| *s += f);
         }
         sum
@@ -256,12 +257,47 @@ impl ReceiverSources {
     #[inline]
     pub fn smooth_over(&self, d: &DipoleF32, mid: Vec3, radius: f32, max: f32) -> bool {
         let r9 = 9.0 * radius * radius;
+        let at = self.at(d, mid);
         (0..3).all(|c| {
             let room = max - d.sigma_tr[c] * radius;
-            let s2 = (self.x_r[c] - mid).length_squared().min((self.x_v[c] - mid).length_squared())
-                + d.near_off[c];
+            let s2 = at.nearer(c) + d.near_off[c];
             room > 0.0 && r9 <= room * room * s2
         })
+    }
+}
+
+/// Squared distances from a point to a receiver's poles ([`ReceiverSources::at`]).
+#[derive(Clone, Copy)]
+enum PoleDistances {
+    /// All six poles at one place.
+    One(f32),
+    /// Per channel, to the real and the virtual pole.
+    Each([f32; 3], [f32; 3]),
+}
+
+impl PoleDistances {
+    #[inline(always)]
+    fn real(self, c: usize) -> f32 {
+        match self {
+            PoleDistances::One(s2) => s2,
+            PoleDistances::Each(r, _) => r[c],
+        }
+    }
+
+    #[inline(always)]
+    fn virt(self, c: usize) -> f32 {
+        match self {
+            PoleDistances::One(s2) => s2,
+            PoleDistances::Each(_, v) => v[c],
+        }
+    }
+
+    #[inline(always)]
+    fn nearer(self, c: usize) -> f32 {
+        match self {
+            PoleDistances::One(s2) => s2,
+            PoleDistances::Each(r, v) => r[c].min(v[c]),
+        }
     }
 }
 
@@ -297,22 +333,26 @@ impl PointBuf {
         (self.x[i], self.y[i], self.z[i], self.w[i]) = (p.x, p.y, p.z, w);
         self.used = i + 1;
     }
-}
 
-/// Radon's seven points on each of `pieces` (triangle, area), with their weights times the
-/// piece's area, in order.
-#[inline(always)]
-fn for_radon7(pieces: &[([Vec3; 3], f32)], mut f: impl FnMut(Vec3, f32)) {
-    let w0 = cubature::RADON7_CENTROID_WEIGHT as f32;
-    let [(t1, w1), (t2, w2)] = cubature::RADON7_ORBITS.map(|(t, w)| (t as f32, w as f32));
-    let orbit = |t: f32, u: Vec3, v: Vec3, x: Vec3| (1.0 - 2.0 * t) * u + t * (v + x);
-    for &([a, b, c], area) in pieces {
-        f((a + b + c) * (1.0 / 3.0), w0 * area);
+    /// Adds Radon's seven points on triangle `tri` of area `area` (the rule of
+    /// [`cubature::radon7`]), with their weights times the area.
+    #[inline]
+    pub fn push_radon7(&mut self, [a, b, c]: [Vec3; 3], area: f32) {
+        let w0 = cubature::RADON7_CENTROID_WEIGHT as f32;
+        let [(t1, w1), (t2, w2)] = cubature::RADON7_ORBITS.map(|(t, w)| (t as f32, w as f32));
+        let orbit = |t: f32, u: Vec3, v: Vec3, x: Vec3| (1.0 - 2.0 * t) * u + t * (v + x);
+        self.push((a + b + c) * (1.0 / 3.0), w0 * area);
         for (t, w) in [(t1, w1), (t2, w2)] {
-            f(orbit(t, a, b, c), w * area);
-            f(orbit(t, b, c, a), w * area);
-            f(orbit(t, c, a, b), w * area);
+            self.push(orbit(t, a, b, c), w * area);
+            self.push(orbit(t, b, c, a), w * area);
+            self.push(orbit(t, c, a, b), w * area);
         }
+    }
+
+    /// Drops the points added since the last sum.
+    #[inline]
+    pub fn clear(&mut self) {
+        self.used = 0;
     }
 }
 

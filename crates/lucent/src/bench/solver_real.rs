@@ -67,6 +67,12 @@ struct RealRow {
     /// one-point estimates of a convex profile fall short, so a bias shows here.
     median_signed_err: f64,
     exact_ms: f64,
+    /// The link's evaluations by kind (the stored links' coefficients): semi-analytic form
+    /// factors, seven-point cubatures, polar-rule faces, one-point estimates.
+    form_factors: usize,
+    cubatures: usize,
+    polar_faces: usize,
+    point_samples: usize,
     threads: usize,
     oracle: String,
 }
@@ -299,7 +305,8 @@ fn measure(
     } else {
         median((0..otf_runs).map(|_| solver.solve_on_the_fly(&e).stats.total_ms).collect())
     };
-    let link_ms = solver.link().total_ms;
+    let link_stats = solver.link();
+    let link_ms = link_stats.total_ms;
     let render_ms = median((0..3).map(|_| solver.solve_render(&e).stats.total_ms).collect());
     let face_b = solver.solve_render(&e).face_b;
 
@@ -362,6 +369,10 @@ fn measure(
         max_rel_err,
         median_signed_err,
         exact_ms,
+        form_factors: link_stats.form_factors,
+        cubatures: link_stats.cubatures,
+        polar_faces: link_stats.polar_faces,
+        point_samples: link_stats.point_samples,
         threads: rayon::current_num_threads(),
         oracle: format!(
             "{}:{},{},{},{},{}",
