@@ -61,9 +61,9 @@ impl SmoothLevels {
     }
 }
 
-/// Cuts triangle `t` (area `area`, at subdivision `level`) into its midpoint quarters and adds
-/// Radon's points on each quarter that `smooth(centroid, level + 1)` passes to `buf`, cutting
-/// the others again, depth first. `pieces` counts the pieces so far (`t` among them); false
+/// Cuts triangle `t` (area `area`) into its midpoint quarters, which lie at subdivision
+/// `level` (the whole face's quarters: 1), and adds Radon's points on each quarter that
+/// `smooth(centroid, level)` passes to `buf`, cutting the others again, depth first. `pieces` counts the pieces so far (`t` among them); false
 /// once a piece below [`MAX_DEPTH`] levels or more than [`MAX_PIECES`] pieces would be
 /// needed (`buf` then holds a part of the points).
 fn cut_smooth(
