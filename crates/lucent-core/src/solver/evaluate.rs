@@ -27,40 +27,6 @@ fn quarters(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
     [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
 }
 
-/// [`ReceiverSources::smooth_over`]'s bounds for the pieces of one face at each level of its
-/// midpoint subdivision (level `k`: radius `r 2^-k`), for a distance-form profile, whose
-/// poles all sit at the receiver point: per level `9 ρ²` and per channel `(max - σ_tr ρ)²`
-/// (negative where `σ_tr ρ` alone passes `max`, so that no distance passes).
-struct SmoothLevels {
-    r9: [f32; MAX_DEPTH as usize + 1],
-    room2: [[f32; 3]; MAX_DEPTH as usize + 1],
-}
-
-impl SmoothLevels {
-    #[inline]
-    fn new(d: &DipoleF32, radius: f32, max: f32) -> Self {
-        let mut out =
-            SmoothLevels { r9: [0.0; MAX_DEPTH as usize + 1], room2: [[0.0; 3]; MAX_DEPTH as usize + 1] };
-        for k in 1..=MAX_DEPTH as usize {
-            let r = radius * 0.5f32.powi(k as i32);
-            out.r9[k] = 9.0 * r * r;
-            out.room2[k] = std::array::from_fn(|c| {
-                let room = max - d.sigma_tr[c] * r;
-                if room > 0.0 { room * room } else { -1.0 }
-            });
-        }
-        out
-    }
-
-    /// Whether a piece at `level` whose centroid lies `√dist2` from the receiver point is
-    /// smooth.
-    #[inline]
-    fn smooth(&self, d: &DipoleF32, dist2: f32, level: u8) -> bool {
-        let k = level as usize;
-        (0..3).all(|c| self.r9[k] <= self.room2[k][c] * (dist2 + d.near_off[c]))
-    }
-}
-
 /// Cuts triangle `t` (area `area`) into its midpoint quarters, which lie at subdivision
 /// `level` (the whole face's quarters: 1), and adds Radon's points on each quarter that
 /// `smooth(centroid, level)` passes to `buf`, cutting the others again, depth first. `pieces` counts the pieces so far (`t` among them); false
@@ -157,20 +123,14 @@ impl<'a> Evaluator<'a> {
         if !src.smooth_over(d, eg.midpoint, eg.radius, 8.0 * max) {
             return None;
         }
+        // Midpoint subdivision makes four copies of a triangle at half the size, so a piece's
+        // radius about its vertex average is the face's (a leaf's `radius`) halved per level.
+        let radius: [f32; MAX_DEPTH as usize + 1] =
+            std::array::from_fn(|k| eg.radius * 0.5f32.powi(k as i32));
         let mut pieces = 1;
-        let cut = if d.normal_weight == 0.0 {
-            // The distance form's poles all sit at the receiver point: one squared distance a
-            // piece, against bounds made once per level (`smooth_over` in the same order).
-            let x_o = src.x_r[0];
-            let levels = SmoothLevels::new(d, eg.radius, max);
-            cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
-                levels.smooth(d, (x_o - q).length_squared(), level)
-            })
-        } else {
-            cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
-                src.smooth_over(d, q, eg.radius * 0.5f32.powi(level as i32), max)
-            })
-        };
+        let cut = cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
+            src.smooth_over(d, q, radius[level as usize], max)
+        });
         if !cut {
             buf.clear();
             return None;

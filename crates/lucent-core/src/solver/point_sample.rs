@@ -39,7 +39,7 @@ pub struct DipoleF32 {
     /// Squared length (per channel) on which the profile is smooth at the receiver point, for
     /// the oracle's error estimates: `z_r²` for the analytic distance form; a tabulated profile
     /// with single scattering peaks like `1/r` there, so a tenth of `z_r`.
-    pub(super) near_off: [f32; 3],
+    near_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
     kernel: Profile32,
     /// The cumulative tables of a profile of tables alone (photon beam diffusion), for the
