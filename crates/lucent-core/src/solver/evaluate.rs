@@ -7,18 +7,20 @@
 
 use super::near_face::Nodes;
 use super::oracle::LinkKind;
-use super::point_sample::{DipoleF32, PointBuf, ReceiverSources};
+use super::point_sample::{DipoleF32, PointBuf, ReceiverSources, SmoothBound};
 use crate::bssrdf::Dipole;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::Hierarchy;
 use glam::{DVec3, Vec3};
 
-/// Most pieces [`Evaluator::smooth_face`] cuts a face into for the cubature.
-const MAX_PIECES: usize = 16;
-/// Deepest midpoint subdivision [`Evaluator::smooth_face`] tries (pieces of a quarter, a
-/// sixteenth or a sixty-fourth of the face's area).
-const MAX_DEPTH: u8 = 3;
+/// Most pieces [`Evaluator::smooth_face`] cuts a face into for the cubature: 280 points,
+/// still cheaper than the edge integrals of a face that needs them (871K dragon: 1.2M such
+/// links took the edge integrals at 16 pieces, 0.17M at 40).
+pub(super) const MAX_PIECES: usize = 40;
+/// Deepest midpoint subdivision [`Evaluator::smooth_face`] tries (pieces of a quarter of
+/// the face's area, a sixteenth, ..., a 1024th).
+const MAX_DEPTH: u8 = 5;
 
 /// The four triangles of the midpoint subdivision of `t` (equal areas).
 fn quarters(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
@@ -38,7 +40,7 @@ fn cut_smooth(
     level: u8,
     pieces: &mut usize,
     buf: &mut PointBuf,
-    smooth: &impl Fn(Vec3, u8) -> bool,
+    smooth: &mut impl FnMut(Vec3, u8) -> bool,
 ) -> bool {
     if level > MAX_DEPTH || *pieces + 3 > MAX_PIECES {
         return false;
@@ -98,12 +100,14 @@ impl<'a> Evaluator<'a> {
     /// [`FormFactorOptions::cubature_max_k_rho`] (the form factor would take the same short
     /// cut in `f64`), else by midpoint subdivision of the pieces that are not, down to
     /// [`MAX_DEPTH`] levels and [`MAX_PIECES`] pieces (a piece has half its parent's radius;
-    /// faces past eight times the limit are not tried). Only the pieces near the receiver are
-    /// cut again, so a face beside it takes 7 to 13 pieces, 49 to 91 points, about half the
-    /// cycles of its edge integrals (48K dragon: 1,400 against 3,000), which on dense scanned
-    /// meshes were a quarter of the solve. Returns the number of pieces; `None` (and no points
-    /// added): too close to be cut smooth (the receiver's own face, which holds the profile's
-    /// peak), so the polar rule or the edge integrals.
+    /// faces past 32 times the limit, which no piece could meet, are not tried). Only the
+    /// pieces near the receiver are cut again, so a face beside it takes 7 to 13 pieces,
+    /// 49 to 91 points, about half the cycles of its edge integrals (48K dragon: 1,400
+    /// against 3,000), which on dense scanned meshes were a quarter of the solve. Each
+    /// level's [`SmoothBound`] is made once, so a piece's test is one squared distance.
+    /// Returns the number of pieces; `None` (and no points added): too close to be cut
+    /// smooth (the receiver's own face, which holds the profile's peak), so the polar rule
+    /// or the edge integrals.
     #[inline]
     fn smooth_face(&mut self, src: &ReceiverSources, e: usize) -> Option<usize> {
         let eg = &self.h.geom[e];
@@ -114,22 +118,24 @@ impl<'a> Evaluator<'a> {
         }
         let tri = [poly[0], poly[1], poly[2]];
         let (d, buf) = (&self.d32, &mut self.points);
-        if src.smooth_over(d, eg.midpoint, eg.radius, max) {
+        if src.smooth_within(d, eg.midpoint, &SmoothBound::new(d, eg.radius, max)) {
             buf.push_radon7(tri, eg.area);
             return Some(1);
         }
         // A face holding the receiver's peak (its own face) or a source next to it cannot be
         // cut smooth: no piece would pass.
-        if !src.smooth_over(d, eg.midpoint, eg.radius, 8.0 * max) {
+        if !src.smooth_within(d, eg.midpoint, &SmoothBound::new(d, eg.radius, 32.0 * max)) {
             return None;
         }
         // Midpoint subdivision makes four copies of a triangle at half the size, so a piece's
-        // radius about its vertex average is the face's (a leaf's `radius`) halved per level.
-        let radius: [f32; MAX_DEPTH as usize + 1] =
-            std::array::from_fn(|k| eg.radius * 0.5f32.powi(k as i32));
+        // radius about its vertex average is the face's (a leaf's `radius`) halved per level;
+        // each level's bound is made when a piece first reaches it.
+        let mut bounds: [Option<SmoothBound>; MAX_DEPTH as usize + 1] = [None; MAX_DEPTH as usize + 1];
         let mut pieces = 1;
-        let cut = cut_smooth(tri, eg.area, 1, &mut pieces, buf, &|q, level| {
-            src.smooth_over(d, q, radius[level as usize], max)
+        let cut = cut_smooth(tri, eg.area, 1, &mut pieces, buf, &mut |q, level| {
+            let bound = bounds[level as usize]
+                .get_or_insert_with(|| SmoothBound::new(d, eg.radius * 0.5f32.powi(level as i32), max));
+            src.smooth_within(d, q, bound)
         });
         if !cut {
             buf.clear();
@@ -233,7 +239,7 @@ mod tests {
     /// Where a face is too close to the receiver for the whole-face rule, the pieces
     /// [`Evaluator::smooth_face`] cuts it into agree with the semi-analytic edge integrals (the
     /// cubature short cut off) within 0.2%, for the default profile and the dipole, at every
-    /// depth of cutting (measured: within 1.7e-4, in 1 to 16 pieces).
+    /// depth of cutting (measured: within 3.4e-4, in 1 to 28 pieces).
     #[test]
     fn cut_faces_match_the_edge_integrals() {
         let m = Material::by_name("marble").unwrap();
@@ -283,6 +289,8 @@ mod tests {
             // Whole faces, quarters, and faces cut twice or more (more than four pieces).
             assert!(pieces_seen[1] > 0 && pieces_seen[4] > 0, "{profile:?}: {pieces_seen:?}");
             assert!(pieces_seen[5..].iter().sum::<usize>() >= 3, "{profile:?}: {pieces_seen:?}");
+            // And faces that once took the edge integrals: more than sixteen pieces.
+            assert!(pieces_seen[17..].iter().sum::<usize>() >= 2, "{profile:?}: {pieces_seen:?}");
             // The receiver's own face holds its peak: it cannot be cut smooth, and the polar
             // rule takes it where the profile is tabulated alone, else the edge integrals.
             assert!(ev.smooth_face(&src, receiver).is_none());

@@ -197,7 +197,7 @@ impl ReceiverSources {
 impl ReceiverSources {
     /// `∫_T R_d` over triangle `tri` (area `area`) by Radon's degree-5 rule
     /// ([`crate::formfactor::cubature`]): seven dipole points in two batches. The form
-    /// factor's own short cut in `f32`, for where [`ReceiverSources::smooth_over`] holds.
+    /// factor's own short cut in `f32`, for where [`ReceiverSources::smooth_within`] holds.
     #[inline]
     pub fn triangle_cubature(&self, d: &DipoleF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
         self.cubature(d, &[(*tri, area)])
@@ -206,7 +206,7 @@ impl ReceiverSources {
     /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area).
     pub fn cubature(&self, d: &DipoleF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
         let (mut buf, mut sum) = (PointBuf::new(), [0.0f32; 3]);
-        for chunk in pieces.chunks(POINT_BUF / 7) {
+        for chunk in pieces.chunks((POINT_BUF - 1) / 7) {
             chunk.iter().for_each(|&(tri, area)| buf.push_radon7(tri, area));
             let f = self.weighted_sum(d, &mut buf);
             sum.iter_mut().zip(f).for_each(|(s, f)| *s += f);
@@ -251,18 +251,41 @@ impl ReceiverSources {
         sum
     }
 
-    /// Whether `k ρ ≤ max` ([`cubature::k_rho`]) for an emitter with midpoint `mid`
-    /// and radius `radius`, in squares: `9 ρ² ≤ (max - σ_tr ρ)² s²` per channel, without
-    /// the square roots and divisions (the cubature's pieces ask it up to 64 times a link).
+    /// Whether `k ρ ≤ max` ([`cubature::k_rho`]) for an emitter with midpoint `mid` and the
+    /// radius and `max` of `bound`: one squared distance against the bound where all poles
+    /// coincide, else one per channel (the cubature's pieces ask it dozens of times a link).
     #[inline]
-    pub fn smooth_over(&self, d: &DipoleF32, mid: Vec3, radius: f32, max: f32) -> bool {
+    pub(crate) fn smooth_within(&self, d: &DipoleF32, mid: Vec3, bound: &SmoothBound) -> bool {
+        match self.at(d, mid) {
+            PoleDistances::One(s2) => s2 >= bound.s2_max,
+            at => (0..3).all(|c| at.nearer(c) >= bound.s2[c]),
+        }
+    }
+}
+
+/// [`ReceiverSources::smooth_within`]'s test for one piece radius, `k ρ ≤ max` in squares,
+/// `9 ρ² ≤ (max - σ_tr ρ)² (s² + near_off)`, solved for the squared
+/// distance: a piece of that radius is smooth where every channel's nearer pole is at least
+/// `s2[c]` away (squared), so a test is one distance and a comparison. Made once per level
+/// of [`super::evaluate::Evaluator::smooth_face`]'s cutting rather than per piece.
+#[derive(Clone, Copy)]
+pub(crate) struct SmoothBound {
+    /// Least squared distance per channel (`f32::INFINITY`: never smooth).
+    s2: [f32; 3],
+    /// The largest of `s2`, for the distance form (all poles at one place).
+    s2_max: f32,
+}
+
+impl SmoothBound {
+    /// The bound for pieces of radius `radius` and largest `k ρ` `max`.
+    #[inline]
+    pub fn new(d: &DipoleF32, radius: f32, max: f32) -> Self {
         let r9 = 9.0 * radius * radius;
-        let at = self.at(d, mid);
-        (0..3).all(|c| {
+        let s2: [f32; 3] = std::array::from_fn(|c| {
             let room = max - d.sigma_tr[c] * radius;
-            let s2 = at.nearer(c) + d.near_off[c];
-            room > 0.0 && r9 <= room * room * s2
-        })
+            if room > 0.0 { r9 / (room * room) - d.near_off[c] } else { f32::INFINITY }
+        });
+        SmoothBound { s2, s2_max: s2[0].max(s2[1]).max(s2[2]) }
     }
 }
 
@@ -301,9 +324,23 @@ impl PoleDistances {
     }
 }
 
-/// Most points one [`PointBuf`] holds: seven registers of sixteen, Radon's seven points on
-/// sixteen pieces.
-pub(crate) const POINT_BUF: usize = 112;
+/// Most points one [`PointBuf`] holds: Radon's seven points on each of the most pieces a
+/// face is cut into, plus the padding lane of the last piece, in whole registers of sixteen.
+pub(crate) const POINT_BUF: usize = (7 * super::evaluate::MAX_PIECES + 1).next_multiple_of(16);
+
+/// Radon's seven points as barycentric weights of a triangle's vertices `a`, `b`, `c` (rows
+/// 0-2) and their rule weights (row 3), padded to eight lanes with a point of weight 0.
+const RADON7_BARY: [[f32; 8]; 4] = {
+    let (w0, [(t1, w1), (t2, w2)]) = (cubature::RADON7_CENTROID_WEIGHT, cubature::RADON7_ORBITS);
+    let third = 1.0 / 3.0;
+    let (s1, s2) = (1.0 - 2.0 * t1, 1.0 - 2.0 * t2);
+    [
+        [third as f32, s1 as f32, t1 as f32, t1 as f32, s2 as f32, t2 as f32, t2 as f32, 0.0],
+        [third as f32, t1 as f32, s1 as f32, t1 as f32, t2 as f32, s2 as f32, t2 as f32, 0.0],
+        [third as f32, t1 as f32, t1 as f32, s1 as f32, t2 as f32, t2 as f32, s2 as f32, 0.0],
+        [w0 as f32, w1 as f32, w1 as f32, w1 as f32, w2 as f32, w2 as f32, w2 as f32, 0.0],
+    ]
+};
 
 /// Weighted points gathered for one [`ReceiverSources::weighted_sum`], as coordinate arrays
 /// (kept by the caller between sums, so no sum clears them).
@@ -326,27 +363,27 @@ impl PointBuf {
         }
     }
 
-    /// Adds point `p` with weight `w`; at most [`POINT_BUF`] before a sum.
-    #[inline(always)]
-    pub fn push(&mut self, p: Vec3, w: f32) {
-        let i = self.used;
-        (self.x[i], self.y[i], self.z[i], self.w[i]) = (p.x, p.y, p.z, w);
-        self.used = i + 1;
-    }
-
     /// Adds Radon's seven points on triangle `tri` of area `area` (the rule of
-    /// [`cubature::radon7`]), with their weights times the area.
+    /// [`cubature::radon7`]), with their weights times the area. Writes eight lanes (the
+    /// eighth, weight 0, is overwritten by the next piece or ignored by the sum), so that
+    /// each coordinate is one eight-wide multiply-add of the vertices.
     #[inline]
     pub fn push_radon7(&mut self, [a, b, c]: [Vec3; 3], area: f32) {
-        let w0 = cubature::RADON7_CENTROID_WEIGHT as f32;
-        let [(t1, w1), (t2, w2)] = cubature::RADON7_ORBITS.map(|(t, w)| (t as f32, w as f32));
-        let orbit = |t: f32, u: Vec3, v: Vec3, x: Vec3| (1.0 - 2.0 * t) * u + t * (v + x);
-        self.push((a + b + c) * (1.0 / 3.0), w0 * area);
-        for (t, w) in [(t1, w1), (t2, w2)] {
-            self.push(orbit(t, a, b, c), w * area);
-            self.push(orbit(t, b, c, a), w * area);
-            self.push(orbit(t, c, a, b), w * area);
+        let i = self.used;
+        let lanes = |v: &mut [f32; POINT_BUF], (a, b, c): (f32, f32, f32)| {
+            let out: &mut [f32; 8] = (&mut v[i..i + 8]).try_into().unwrap();
+            for k in 0..8 {
+                out[k] = a * RADON7_BARY[0][k] + b * RADON7_BARY[1][k] + c * RADON7_BARY[2][k];
+            }
+        };
+        lanes(&mut self.x, (a.x, b.x, c.x));
+        lanes(&mut self.y, (a.y, b.y, c.y));
+        lanes(&mut self.z, (a.z, b.z, c.z));
+        let w: &mut [f32; 8] = (&mut self.w[i..i + 8]).try_into().unwrap();
+        for k in 0..8 {
+            w[k] = area * RADON7_BARY[3][k];
         }
+        self.used = i + 7;
     }
 
     /// Drops the points added since the last sum.
@@ -480,12 +517,13 @@ mod tests {
         for c in 0..3 {
             assert!((got[c] as f64 / want[c] - 1.0).abs() < 1e-5, "{c}: {} vs {}", got[c], want[c]);
         }
-        // `smooth_over` is `k ρ ≤ max` in squares: at the f64 rule's own `k ρ`, either side.
+        // `smooth_within` is `k ρ ≤ max` in squares: at the f64 rule's own `k ρ`, either side.
         let (mid, radius) = ((tri[0] + tri[1] + tri[2]) / 3.0, 0.02f32);
         let k_rho =
             cubature::k_rho(&dip, x_o.as_dvec3(), n_o.as_dvec3(), mid.as_dvec3(), radius as f64) as f32;
         assert!(
-            src.smooth_over(&d, mid, radius, 1.01 * k_rho) && !src.smooth_over(&d, mid, radius, 0.99 * k_rho)
+            src.smooth_within(&d, mid, &SmoothBound::new(&d, radius, 1.01 * k_rho))
+                && !src.smooth_within(&d, mid, &SmoothBound::new(&d, radius, 0.99 * k_rho))
         );
     }
 
