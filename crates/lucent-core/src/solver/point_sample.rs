@@ -40,6 +40,13 @@ pub struct DipoleF32 {
     /// the oracle's error estimates: `z_r²` for the analytic distance form; a tabulated profile
     /// with single scattering peaks like `1/r` there, so a tenth of `z_r`.
     near_off: [f32; 3],
+    /// Squared length added to a piece's squared distance in the cubature's smoothness test
+    /// ([`SmoothBound`]): the analytic distance form's `z_r²` (its poles lie `z_r` off the
+    /// surface, so it is smooth on that scale), but 0 with tables: single scattering peaks
+    /// like `1/r` at the receiver point, which no polynomial rule integrates however small
+    /// the piece (with `near_off` there, a receiver's own face under a tenth of `z_r` took
+    /// the cubature and fell short by 50-85%).
+    cut_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
     kernel: Profile32,
     /// The cumulative tables of a profile of tables alone (photon beam diffusion), for the
@@ -59,9 +66,9 @@ impl DipoleF32 {
         let normal_weight = if d.profile.uses_normals() { 1.0 } else { 0.0 };
         let off = |z: [f32; 3]| z.map(|z| (1.0 - normal_weight) * z * z);
         let (off_r, off_v) = (off(z_r), off(z_v));
-        let near_off = match &d.tables {
-            Some(_) => off(z_r.map(|z| 0.1 * z)),
-            None => off_r,
+        let (near_off, cut_off) = match &d.tables {
+            Some(_) => (off(z_r.map(|z| 0.1 * z)), [0.0; 3]),
+            None => (off_r, off_r),
         };
         let table = d.tables.as_ref().map(|t| {
             let n = TABLE_SIZE + 1;
@@ -80,6 +87,7 @@ impl DipoleF32 {
             off_r,
             off_v,
             near_off,
+            cut_off,
             kernel: Profile32::new(
                 [sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor],
                 d.has_analytic(),
@@ -264,7 +272,7 @@ impl ReceiverSources {
 }
 
 /// [`ReceiverSources::smooth_within`]'s test for one piece radius, `k ρ ≤ max` in squares,
-/// `9 ρ² ≤ (max - σ_tr ρ)² (s² + near_off)`, solved for the squared
+/// `9 ρ² ≤ (max - σ_tr ρ)² (s² + cut_off)`, solved for the squared
 /// distance: a piece of that radius is smooth where every channel's nearer pole is at least
 /// `s2[c]` away (squared), so a test is one distance and a comparison. Made once per level
 /// of [`super::evaluate::Evaluator::smooth_face`]'s cutting rather than per piece.
@@ -283,7 +291,7 @@ impl SmoothBound {
         let r9 = 9.0 * radius * radius;
         let s2: [f32; 3] = std::array::from_fn(|c| {
             let room = max - d.sigma_tr[c] * radius;
-            if room > 0.0 { r9 / (room * room) - d.near_off[c] } else { f32::INFINITY }
+            if room > 0.0 { r9 / (room * room) - d.cut_off[c] } else { f32::INFINITY }
         });
         SmoothBound { s2, s2_max: s2[0].max(s2[1]).max(s2[2]) }
     }
