@@ -86,12 +86,18 @@ const S2_MIN: f32 = 1e-30;
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 fn radial(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, s2: __m512, upper: __mmask8) -> __m512 {
-    const N: f32 = TABLE_SIZE as f32;
     // At `s2 = 0`, `r = 0` (the first cell) and `1 / r` is capped below.
     let (inv_r, r_scaled) = rsqrt_sqrt(_mm512_max_ps(s2, _mm512_set1_ps(S2_MIN)), load(&l.x_scale));
     let r_scaled = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(s2, _mm512_setzero_ps()), r_scaled);
     // A true square root for the grid variable: its rounding moves the cell fraction.
-    let x = _mm512_sqrt_ps(r_scaled);
+    radial_at(t, l, _mm512_sqrt_ps(r_scaled), inv_r, upper)
+}
+
+/// [`radial`] from the grid variable `x = √(r N² / r_max)` and `1 / r` (`r = 0`: `x = 0`).
+#[inline]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
+fn radial_at(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, x: __m512, inv_r: __m512, upper: __mmask8) -> __m512 {
+    const N: f32 = TABLE_SIZE as f32;
     let inside = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(x, _mm512_set1_ps(N));
     let x = _mm512_maskz_mov_ps(inside, x);
     let cell = _mm512_cvttps_epi32(x);
@@ -297,9 +303,29 @@ pub(super) fn weighted_sum(
 ) -> [f32; 3] {
     assert!(x.len().is_multiple_of(WIDTH) && y.len() == x.len() && z.len() == x.len() && w.len() == x.len());
     let mut acc = [_mm512_setzero_ps(); 3];
+    let at = |a: &[f32], i: usize| load(a[i..i + WIDTH].try_into().expect("sixteen floats"));
+    if let Some(t) = k.table.as_deref().filter(|_| !k.analytic && src.x_r.iter().all(|&x| x == src.x_r[0])) {
+        // A profile of tables alone whose poles are all at the receiver point (the distance
+        // form): one distance, reciprocal root and grid root `r^¼` serve the three channels,
+        // whose grid variables `√(r s_c) = r^¼ √s_c` differ by a factor only.
+        let grid: [__m512; 3] = std::array::from_fn(|c| _mm512_sqrt_ps(load(&k.channel[c].x_scale)));
+        for i in (0..x.len()).step_by(WIDTH) {
+            let (p, wt) = ([at(x, i), at(y, i), at(z, i)], at(w, i));
+            let used = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(wt, _mm512_setzero_ps());
+            let s2 = dist2(&splat(src.x_r[0]), &p);
+            let (inv_r, r) = rsqrt_sqrt(_mm512_max_ps(s2, _mm512_set1_ps(S2_MIN)), _mm512_set1_ps(1.0));
+            let r = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(s2, _mm512_setzero_ps()), r);
+            let quarter = _mm512_sqrt_ps(r);
+            for (c, acc) in acc.iter_mut().enumerate() {
+                let l = &k.channel[c];
+                let v = _mm512_mul_ps(radial_at(t, l, _mm512_mul_ps(quarter, grid[c]), inv_r, 0xff), wt);
+                *acc = _mm512_mask_add_ps(*acc, used, *acc, v);
+            }
+        }
+        return acc.map(|a| _mm512_reduce_add_ps(a));
+    }
     for i in (0..x.len()).step_by(WIDTH) {
-        let at = |a: &[f32]| load(a[i..i + WIDTH].try_into().expect("sixteen floats"));
-        let (p, wt) = ([at(x), at(y), at(z)], at(w));
+        let (p, wt) = ([at(x, i), at(y, i), at(z, i)], at(w, i));
         let used = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(wt, _mm512_setzero_ps());
         for (c, acc) in acc.iter_mut().enumerate() {
             let s2_r = dist2(&splat(src.x_r[c]), &p);
