@@ -44,8 +44,8 @@ pub struct DipoleF32 {
     /// ([`SmoothBound`]): the analytic distance form's `z_r²` (its poles lie `z_r` off the
     /// surface, so it is smooth on that scale), but 0 with tables: single scattering peaks
     /// like `1/r` at the receiver point, which no polynomial rule integrates however small
-    /// the piece (with `near_off` there, a receiver's own face under a tenth of `z_r` took
-    /// the cubature and fell short by 50-85%).
+    /// the piece (with `near_off` there, a receiver's own face of radius `z_r / 10` and under
+    /// took the cubature and fell 13-85% short).
     cut_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
     kernel: Profile32,
