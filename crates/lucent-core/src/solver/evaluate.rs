@@ -31,9 +31,10 @@ fn quarters(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
 
 /// Cuts triangle `t` (area `area`) into its midpoint quarters, which lie at subdivision
 /// `level` (the whole face's quarters: 1), and adds Radon's points on each quarter that
-/// `smooth(centroid, level)` passes to `buf`, cutting the others again, depth first. `pieces` counts the pieces so far (`t` among them); false
-/// once a piece below [`MAX_DEPTH`] levels or more than [`MAX_PIECES`] pieces would be
-/// needed (`buf` then holds a part of the points).
+/// `smooth(centroid, level)` passes to `buf`, cutting the others again, depth first.
+/// `pieces` counts the pieces so far (`t` among them); false once a piece below
+/// [`MAX_DEPTH`] levels or more than [`MAX_PIECES`] pieces would be needed (`buf` then holds
+/// a part of the points).
 fn cut_smooth(
     t: [Vec3; 3],
     area: f32,
@@ -118,7 +119,16 @@ impl<'a> Evaluator<'a> {
         }
         let tri = [poly[0], poly[1], poly[2]];
         let (d, buf) = (&self.d32, &mut self.points);
-        if src.smooth_within(d, eg.midpoint, &SmoothBound::new(d, eg.radius, max)) {
+        // Midpoint subdivision makes four copies of a triangle at half the size, so a piece's
+        // radius about its vertex average is the face's (a leaf's `radius`) halved per level
+        // (the whole face: level 0); each level's bound is made when a piece first reaches it.
+        let mut bounds: [Option<SmoothBound>; MAX_DEPTH as usize + 1] = [None; MAX_DEPTH as usize + 1];
+        let mut smooth = |q: Vec3, level: u8| {
+            let bound = bounds[level as usize]
+                .get_or_insert_with(|| SmoothBound::new(d, eg.radius * 0.5f32.powi(level as i32), max));
+            src.smooth_within(d, q, bound)
+        };
+        if smooth(eg.midpoint, 0) {
             buf.push_radon7(tri, eg.area);
             return Some(1);
         }
@@ -127,16 +137,8 @@ impl<'a> Evaluator<'a> {
         if !src.smooth_within(d, eg.midpoint, &SmoothBound::new(d, eg.radius, 32.0 * max)) {
             return None;
         }
-        // Midpoint subdivision makes four copies of a triangle at half the size, so a piece's
-        // radius about its vertex average is the face's (a leaf's `radius`) halved per level;
-        // each level's bound is made when a piece first reaches it.
-        let mut bounds: [Option<SmoothBound>; MAX_DEPTH as usize + 1] = [None; MAX_DEPTH as usize + 1];
         let mut pieces = 1;
-        let cut = cut_smooth(tri, eg.area, 1, &mut pieces, buf, &mut |q, level| {
-            let bound = bounds[level as usize]
-                .get_or_insert_with(|| SmoothBound::new(d, eg.radius * 0.5f32.powi(level as i32), max));
-            src.smooth_within(d, q, bound)
-        });
+        let cut = cut_smooth(tri, eg.area, 1, &mut pieces, buf, &mut smooth);
         if !cut {
             buf.clear();
             return None;
