@@ -14,9 +14,10 @@
 //! ([`super::Oracle::curved_receivers`], the default) each link also adds its curvature, and
 //! the receiver carries a quadratic (value, gradient, Hessian) down to its leaves.
 
+use super::gather_linear::sum_linear;
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
-use super::link_coef::{self, LinkCoef};
-use super::link_set::LinkSet;
+use super::link_coef;
+use super::link_set::{LinkSet, StoredLinks};
 use super::oracle::curvature_along;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
@@ -69,7 +70,6 @@ impl HierarchicalSolver {
     fn render_stored(&mut self, face_irradiance: &[Rgb]) -> Solution {
         let t0 = Instant::now();
         let [mut e_node, mut b_node] = std::mem::take(&mut self.frame);
-        let mut x_node = std::mem::take(&mut self.frame_expansion);
         e_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         self.pull_into(face_irradiance, &mut e_node);
         let t1 = Instant::now();
@@ -78,15 +78,26 @@ impl HierarchicalSolver {
         let face_b;
         let t2;
         if linear {
-            x_node.resize(self.hierarchy.len(), Linear::default());
+            // The gather and the push in one pass down the tree: an inner receiver's
+            // expansion lives only while its subtree is visited.
+            b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
             let mid = self
                 .midpoints
                 .get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect());
-            gather_links_linear(&self.hierarchy, links, &e_node, mid, self.curved_receivers(), &mut x_node);
+            let frame = LinearFrame {
+                h: &self.hierarchy,
+                links: links.view(),
+                e_node: &e_node,
+                mid,
+                curved: self.curved_receivers(),
+                isa: crate::simd::Isa::best(),
+            };
+            if !self.hierarchy.is_empty() {
+                frame.gather_push(0, Linear::default(), &mut b_node, 0);
+            }
             t2 = Instant::now();
-            face_b = self.push_linear(&mut x_node);
+            face_b = self.leaf_values(&b_node);
         } else {
-            // Linear receivers keep their values in `x_node`: `b_node` is only made here.
             b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
             gather_links(links, &e_node, &mut b_node);
             t2 = Instant::now();
@@ -95,7 +106,6 @@ impl HierarchicalSolver {
         let t3 = Instant::now();
         let links = links.len();
         self.frame = [e_node, b_node];
-        self.frame_expansion = x_node;
         Solution {
             face_b,
             stats: SolveStats {
@@ -116,17 +126,12 @@ impl HierarchicalSolver {
         if !h.is_empty() {
             push_subtree(h, 0, Vec3A::ZERO, b_node);
         }
-        h.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
+        self.leaf_values(b_node)
     }
 
-    /// [`HierarchicalSolver::push`] with linear receivers: every cluster's expansion moved
-    /// down to its leaves' midpoints.
-    fn push_linear(&self, x_node: &mut [Linear]) -> Vec<Rgb> {
-        let h = &self.hierarchy;
-        if !h.is_empty() {
-            push_linear(h, 0, Linear::default(), x_node);
-        }
-        h.face_node.par_iter().with_min_len(4096).map(|&n| x_node[n as usize].value.into()).collect()
+    /// `B` per original face, from the leaves' entries of `b_node`.
+    fn leaf_values(&self, b_node: &[Vec3A]) -> Vec<Rgb> {
+        self.hierarchy.face_node.par_iter().with_min_len(4096).map(|&n| b_node[n as usize].into()).collect()
     }
 
     /// On-the-fly mode: refine from the root's self-link and gather in one parallel traversal,
@@ -247,8 +252,8 @@ pub(crate) type Grad = [Vec3A; 3];
 /// midpoint, symmetric: its diagonal (xx, yy, zz) and its off-diagonal (yz, xz, xy).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Hess {
-    diag: Grad,
-    off: Grad,
+    pub(super) diag: Grad,
+    pub(super) off: Grad,
 }
 
 impl Hess {
@@ -298,16 +303,16 @@ impl Hess {
 /// gradient and (with curved receivers) its Hessian there.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Linear {
-    value: Vec3A,
-    grad: Grad,
-    hess: Hess,
+    pub(super) value: Vec3A,
+    pub(super) grad: Grad,
+    pub(super) hess: Hess,
 }
 
 impl Linear {
     /// Adds one link's `t = E F` with steepness `slope` from an emitter at `-dv` from the
     /// receiver's midpoint (`dv = m_R - m_E`): its gradient and, if `curved`, its Hessian.
     #[inline]
-    fn add_link(&mut self, t: Vec3A, slope: f32, dv: Vec3A, curved: bool) {
+    pub(super) fn add_link(&mut self, t: Vec3A, slope: f32, dv: Vec3A, curved: bool) {
         let (k, w) = steepness(dv, slope, curved);
         let tk = t * k;
         self.grad[0] += dv * tk.x;
@@ -331,7 +336,7 @@ impl Linear {
 
     /// `self += o`.
     #[inline]
-    fn add(&mut self, o: &Linear) {
+    pub(super) fn add(&mut self, o: &Linear) {
         self.value += o.value;
         add_grad(&mut self.grad, &o.grad);
         self.hess.add(&o.hess);
@@ -378,81 +383,58 @@ fn steepness(dv: Vec3A, slope: f32, curved: bool) -> (f32, f32) {
     (k, w)
 }
 
-/// [`gather_links`] with linear receivers: a leaf's `B` as there, an inner receiver's `B`
-/// and its expansion `x_node` in one pass over its links (`mid`: every cluster's midpoint).
-fn gather_links_linear(
-    h: &Hierarchy,
-    links: &LinkSet,
-    e_node: &[Vec3A],
-    mid: &[Vec3A],
+/// Render mode's gather and push with linear receivers, over the stored links.
+struct LinearFrame<'a> {
+    h: &'a Hierarchy,
+    links: StoredLinks<'a>,
+    /// Every cluster's irradiance.
+    e_node: &'a [Vec3A],
+    /// Every cluster's midpoint.
+    mid: &'a [Vec3A],
     curved: bool,
-    x_node: &mut [Linear],
-) {
-    const CHUNK: usize = 1024;
-    let stored = links.view();
-    x_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, x)| {
-        let isa = crate::simd::Isa::best();
-        for (i, x) in x.iter_mut().enumerate() {
-            let r = ci * CHUNK + i;
-            let (emitter, coef, scale) = stored.of(r);
-            if h.nodes[r].is_leaf() {
-                // A leaf's gradient and Hessian are never read: only its value is written.
-                x.value = link_coef::gather_sum(isa, e_node, emitter, coef) * scale;
-                continue;
-            }
-            let m_r = mid[r];
-            // Four independent sums: one is bound by the adds' latency.
-            let mut acc = [Linear::default(); 4];
-            let term = |acc: &mut Linear, w: u32, c: LinkCoef| {
-                let e = (w & !link_coef::FF_BIT) as usize;
-                let t = e_node[e] * link_coef::decode(c);
-                acc.value += t;
-                // Links without steepness add nothing (no branch: most links have one).
-                acc.add_link(t, c.slope(), m_r - mid[e], curved);
-            };
-            let n4 = emitter.len() / 4 * 4;
-            for (w, c) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)) {
-                for k in 0..4 {
-                    term(&mut acc[k], w[k], c[k]);
-                }
-            }
-            for (k, (&w, &c)) in emitter[n4..].iter().zip(&coef[n4..]).enumerate() {
-                term(&mut acc[k], w, c);
-            }
-            let [mut sum, a1, a2, a3] = acc;
-            sum.add(&a1);
-            sum.add(&a2);
-            sum.add(&a3);
-            *x = sum.scaled(scale);
-        }
-    });
+    isa: crate::simd::Isa,
 }
 
-/// [`push_subtree`] with expansions: every cluster's `x`, gathered at its midpoint, plus its
-/// ancestors' `above` (moved to its midpoint), parents before children; leaves end with
-/// their `B` in `x`'s value.
-fn push_linear(h: &Hierarchy, r: usize, above: Linear, x: &mut [Linear]) {
-    let n = h.nodes[r];
-    x[0].add(&above);
-    if n.leaf_count() > PAR_LEAVES {
-        let own = x[0];
-        let m_r = h.geom[r].midpoint;
-        let (_, rest) = x.split_at_mut(1);
-        split_subtrees(&h.nodes, r, rest).into_par_iter().for_each(|(c, xs)| {
-            push_linear(h, c, own.moved(Vec3A::from(h.geom[c].midpoint - m_r)), xs);
-        });
-        return;
-    }
-    for i in r + 1..n.subtree_end as usize {
-        let p = h.nodes[i].parent as usize;
-        let offset = Vec3A::from(h.geom[i].midpoint - h.geom[p].midpoint);
-        if h.nodes[i].is_leaf() {
-            let value = x[p - r].value_at(offset);
-            x[i - r].value += value;
-        } else {
-            let moved = x[p - r].moved(offset);
-            x[i - r].add(&moved);
+impl LinearFrame<'_> {
+    /// Gathers cluster `r`'s links (its expansion at its midpoint, [`sum_linear`]; a leaf's
+    /// value alone), adds its ancestors' `above`, and passes the sum on to its children moved
+    /// to their midpoints; a leaf's `B` lands in `b`, which holds clusters `base..` in
+    /// preorder (`r`'s subtree among them). Subtrees of more than [`PAR_LEAVES`] leaves run in
+    /// parallel. Storing no expansion (160 bytes a cluster) is the point: written by a gather
+    /// and read back by a push, they cost as much as the push's arithmetic.
+    fn gather_push(&self, r: usize, above: Linear, b: &mut [Vec3A], base: usize) {
+        let h = self.h;
+        let n = h.nodes[r];
+        if n.is_leaf() {
+            b[r - base] = self.leaf(r) + above.value;
+            return;
         }
+        let (emitter, coef, scale) = self.links.of(r);
+        let mut own = sum_linear(self.isa, self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
+        own = own.scaled(scale);
+        own.add(&above);
+        let offset = |c: usize| Vec3A::from(h.geom[c].midpoint - h.geom[r].midpoint);
+        if n.leaf_count() > PAR_LEAVES {
+            let parts = split_subtrees(&h.nodes, r, &mut b[r - base + 1..]);
+            parts.into_par_iter().for_each(|(c, b)| self.gather_push(c, own.moved(offset(c)), b, c));
+            return;
+        }
+        for &c in n.children() {
+            let c = c as usize;
+            if h.nodes[c].is_leaf() {
+                // A leaf needs only the value of its parent's expansion.
+                b[c - base] = self.leaf(c) + own.value_at(offset(c));
+            } else {
+                self.gather_push(c, own.moved(offset(c)), b, base);
+            }
+        }
+    }
+
+    /// Leaf `r`'s gathered `B` (no expansion).
+    #[inline]
+    fn leaf(&self, r: usize) -> Vec3A {
+        let (emitter, coef, scale) = self.links.of(r);
+        link_coef::gather_sum(self.isa, self.e_node, emitter, coef) * scale
     }
 }
 

@@ -113,8 +113,6 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     pub(super) frame: [Vec<Vec3A>; 2],
-    /// Render mode's per-cluster expansion of the gathered `B` (linear receivers), likewise.
-    pub(super) frame_expansion: Vec<super::gather::Linear>,
     /// Every cluster's midpoint, packed for render mode's gather with linear receivers; made
     /// on first use, dropped wherever the hierarchy is refitted.
     pub(super) midpoints: std::sync::OnceLock<Vec<Vec3A>>,
@@ -150,7 +148,6 @@ impl HierarchicalSolver {
             spare: None,
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
-            frame_expansion: Vec::new(),
             midpoints: Default::default(),
             bound: None,
             face_gain: None,

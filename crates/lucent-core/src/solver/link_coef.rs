@@ -39,7 +39,7 @@ const SHIFT: u32 = 13;
 
 /// `2^112`: rescales an `f32` whose bits are a half float's shifted up by [`SHIFT`] (exponent
 /// bias 127 instead of 15) to the half float's value, subnormals included.
-const HALF_RESCALE: f32 = f32::from_bits((127 + 112) << 23);
+pub(super) const HALF_RESCALE: f32 = f32::from_bits((127 + 112) << 23);
 
 /// Smallest normal half float, `2^-14`.
 const HALF_MIN_NORMAL: f32 = 1.0 / 16384.0;

@@ -29,6 +29,7 @@ mod evaluate;
 pub mod exact;
 pub mod finite_body;
 mod gather;
+mod gather_linear;
 pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
