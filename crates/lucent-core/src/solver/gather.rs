@@ -1,8 +1,8 @@
 //! A frame of the hierarchical solve (Mertens et al. 2003, §3.2, §5.5): *pull* (area-weighted
 //! irradiance up the tree), *gather* (`B_R = Σ_E E_E F_ER` along the links into each receiver)
 //! and *push* (a receiver's `B` added to all its leaves). Render mode gathers over the stored
-//! links ([`HierarchicalSolver::solve_render`], with the packed kernel of [`super::link_coef`]);
-//! on-the-fly mode gathers each link as the refinement accepts it and pushes down the traversal
+//! links ([`HierarchicalSolver::solve_render`], with the packed kernels of [`super::link_coef`]
+//! and [`super::gather_linear`]) and pushes in the same pass down the tree; on-the-fly mode gathers each link as the refinement accepts it and pushes down the traversal
 //! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
 //! the energy bound of [`super::energy`].
 //!
@@ -17,7 +17,7 @@
 use super::gather_linear::sum_linear;
 use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
 use super::link_coef;
-use super::link_set::{LinkSet, StoredLinks};
+use super::link_set::StoredLinks;
 use super::oracle::curvature_along;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
@@ -74,35 +74,29 @@ impl HierarchicalSolver {
         self.pull_into(face_irradiance, &mut e_node);
         let t1 = Instant::now();
         let links = self.links.as_ref().expect("links stored");
+        // The gather and the push in one pass down the tree: an inner receiver's `B` (and
+        // expansion) lives only while its subtree is visited.
+        b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         let linear = self.linear_receivers();
-        let face_b;
-        let t2;
-        if linear {
-            // The gather and the push in one pass down the tree: an inner receiver's
-            // expansion lives only while its subtree is visited.
-            b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
-            let mid = self
-                .midpoints
-                .get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect());
-            let frame = LinearFrame {
-                h: &self.hierarchy,
-                links: links.view(),
-                e_node: &e_node,
-                mid,
-                curved: self.curved_receivers(),
-                isa: crate::simd::Isa::best(),
-            };
-            if !self.hierarchy.is_empty() {
-                frame.gather_push(0, Linear::default(), &mut b_node, 0);
-            }
-            t2 = Instant::now();
-            face_b = self.leaf_values(&b_node);
+        let mid: &[Vec3A] = if linear {
+            self.midpoints.get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect())
         } else {
-            b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
-            gather_links(links, &e_node, &mut b_node);
-            t2 = Instant::now();
-            face_b = self.push(&mut b_node);
+            &[]
+        };
+        let frame = RenderFrame {
+            h: &self.hierarchy,
+            links: links.view(),
+            e_node: &e_node,
+            mid,
+            linear,
+            curved: self.curved_receivers(),
+            isa: crate::simd::Isa::best(),
+        };
+        if !self.hierarchy.is_empty() {
+            frame.gather_push(0, Linear::default(), &mut b_node, 0);
         }
+        let t2 = Instant::now();
+        let face_b = self.leaf_values(&b_node);
         let t3 = Instant::now();
         let links = links.len();
         self.frame = [e_node, b_node];
@@ -117,16 +111,6 @@ impl HierarchicalSolver {
                 ..Default::default()
             },
         }
-    }
-
-    /// Push: accumulates every cluster's gathered `B` down to its leaves, in parallel over
-    /// subtrees, and returns `B` per original face.
-    fn push(&self, b_node: &mut [Vec3A]) -> Vec<Rgb> {
-        let h = &self.hierarchy;
-        if !h.is_empty() {
-            push_subtree(h, 0, Vec3A::ZERO, b_node);
-        }
-        self.leaf_values(b_node)
     }
 
     /// `B` per original face, from the leaves' entries of `b_node`.
@@ -233,16 +217,6 @@ impl HierarchicalSolver {
             }
         }
     }
-}
-
-/// Render mode's gather: `b_node[r] = Σ E(e) F` over receiver `r`'s stored links, for every
-/// cluster `r`, with `e_node` the pulled irradiance; in parallel over runs of receivers.
-fn gather_links(links: &LinkSet, e_node: &[Vec3A], b_node: &mut [Vec3A]) {
-    const CHUNK: usize = 1024;
-    let stored = links.view();
-    b_node.par_chunks_mut(CHUNK).enumerate().for_each(|(ci, b)| {
-        link_coef::gather(e_node, stored, ci * CHUNK, b);
-    });
 }
 
 /// Per channel, the gradient of `B` (per mesh unit of length) at a receiver's midpoint.
@@ -383,56 +357,68 @@ fn steepness(dv: Vec3A, slope: f32, curved: bool) -> (f32, f32) {
     (k, w)
 }
 
-/// Render mode's gather and push with linear receivers, over the stored links.
-struct LinearFrame<'a> {
+/// Render mode's gather and push over the stored links, in one pass down the tree.
+struct RenderFrame<'a> {
     h: &'a Hierarchy,
     links: StoredLinks<'a>,
     /// Every cluster's irradiance.
     e_node: &'a [Vec3A],
-    /// Every cluster's midpoint.
+    /// Every cluster's midpoint (with linear receivers; else empty).
     mid: &'a [Vec3A],
+    /// Whether inner receivers carry an expansion ([`super::Oracle::linear_receivers`]).
+    linear: bool,
+    /// Whether the expansion has a Hessian ([`super::Oracle::curved_receivers`]).
     curved: bool,
     isa: crate::simd::Isa,
 }
 
-impl LinearFrame<'_> {
-    /// Gathers cluster `r`'s links (its expansion at its midpoint, [`sum_linear`]; a leaf's
-    /// value alone), adds its ancestors' `above`, and passes the sum on to its children moved
-    /// to their midpoints; a leaf's `B` lands in `b`, which holds clusters `base..` in
-    /// preorder (`r`'s subtree among them). Subtrees of more than [`PAR_LEAVES`] leaves run in
-    /// parallel. Storing no expansion (160 bytes a cluster) is the point: written by a gather
-    /// and read back by a push, they cost as much as the push's arithmetic.
+impl RenderFrame<'_> {
+    /// Gathers cluster `r`'s links (with linear receivers, an inner cluster's expansion at
+    /// its midpoint, [`sum_linear`]; else, and for a leaf, its value alone), adds its
+    /// ancestors' `above`, and passes the sum on to its children (moved to their midpoints);
+    /// a leaf's `B` lands in `b`, which holds clusters `base..` in preorder (`r`'s subtree
+    /// among them). Subtrees of more than [`PAR_LEAVES`] leaves run in parallel. No
+    /// cluster's gathered `B` is stored: an expansion is 160 bytes, and written by a gather
+    /// and read back by a push, expansions cost as much as the push's arithmetic.
     fn gather_push(&self, r: usize, above: Linear, b: &mut [Vec3A], base: usize) {
         let h = self.h;
         let n = h.nodes[r];
         if n.is_leaf() {
-            b[r - base] = self.leaf(r) + above.value;
+            b[r - base] = self.value(r) + above.value;
             return;
         }
-        let (emitter, coef, scale) = self.links.of(r);
-        let mut own = sum_linear(self.isa, self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
-        own = own.scaled(scale);
-        own.add(&above);
+        let own = if self.linear {
+            let (emitter, coef, scale) = self.links.of(r);
+            let sum = sum_linear(self.isa, self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
+            let mut own = sum.scaled(scale);
+            own.add(&above);
+            own
+        } else {
+            Linear { value: self.value(r) + above.value, ..Linear::default() }
+        };
         let offset = |c: usize| Vec3A::from(h.geom[c].midpoint - h.geom[r].midpoint);
+        let moved = |c: usize| if self.linear { own.moved(offset(c)) } else { own };
         if n.leaf_count() > PAR_LEAVES {
             let parts = split_subtrees(&h.nodes, r, &mut b[r - base + 1..]);
-            parts.into_par_iter().for_each(|(c, b)| self.gather_push(c, own.moved(offset(c)), b, c));
+            parts.into_par_iter().for_each(|(c, b)| self.gather_push(c, moved(c), b, c));
             return;
         }
         for &c in n.children() {
             let c = c as usize;
             if h.nodes[c].is_leaf() {
                 // A leaf needs only the value of its parent's expansion.
-                b[c - base] = self.leaf(c) + own.value_at(offset(c));
+                let above = if self.linear { own.value_at(offset(c)) } else { own.value };
+                b[c - base] = self.value(c) + above;
             } else {
-                self.gather_push(c, own.moved(offset(c)), b, base);
+                self.gather_push(c, moved(c), b, base);
             }
         }
     }
 
-    /// Leaf `r`'s gathered `B` (no expansion).
+    /// Cluster `r`'s gathered `B`, taken as one value (a leaf, or any cluster with constant
+    /// receivers).
     #[inline]
-    fn leaf(&self, r: usize) -> Vec3A {
+    fn value(&self, r: usize) -> Vec3A {
         let (emitter, coef, scale) = self.links.of(r);
         link_coef::gather_sum(self.isa, self.e_node, emitter, coef) * scale
     }
@@ -471,23 +457,6 @@ fn average_children(h: &Hierarchy, i: usize, value: impl Fn(usize) -> Vec3A) -> 
         s += if area > 0.0 { value(c) * (h.geom[c].area / area) } else { value(c) / n.child_count as f32 };
     }
     s
-}
-
-/// The push below cluster `r` (subtree `b`, preorder), whose ancestors gathered `above`:
-/// parents before children, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
-fn push_subtree(h: &Hierarchy, r: usize, above: Vec3A, b: &mut [Vec3A]) {
-    let n = h.nodes[r];
-    b[0] += above;
-    if n.leaf_count() > PAR_LEAVES {
-        let (own, rest) = b.split_at_mut(1);
-        let own = own[0];
-        split_subtrees(&h.nodes, r, rest).into_par_iter().for_each(|(c, s)| push_subtree(h, c, own, s));
-        return;
-    }
-    for i in r + 1..n.subtree_end as usize {
-        let p = h.nodes[i].parent as usize;
-        b[i - r] += b[p - r];
-    }
 }
 
 #[cfg(test)]

@@ -26,7 +26,6 @@
 //! bound by the dependent fetch of `E`, not by bandwidth or arithmetic, so the wider paths
 //! gain little and fewer links are what speeds render mode up.
 
-use super::link_set::StoredLinks;
 use crate::simd::Isa;
 use glam::Vec3A;
 
@@ -134,21 +133,6 @@ fn half_bits(y: f32) -> u16 {
     }
 }
 
-/// Render mode's gather: for the receivers `r0 .. r0 + out.len()`, `out[i] = Σ_j E(e_j) F_j`
-/// over receiver `r0 + i`'s links, with `e_node` the clusters' irradiance, on
-/// [`Isa::best`]'s instruction set.
-pub(crate) fn gather(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
-    match Isa::best() {
-        // SAFETY: `Isa::best` is an instruction set this CPU has (AVX-512 F/VL, AVX2, FMA, F16C).
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { wide::gather_avx512(e_node, links, r0, out) },
-        // SAFETY: as above (AVX2, FMA, F16C).
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { wide::gather_avx2(e_node, links, r0, out) },
-        _ => each_receiver(links, r0, out, |e, c| gather_one(e_node, e, c)),
-    }
-}
-
 /// One receiver's `Σ E F` before its scale (`emitter` and `coef` its links), on `isa` if this
 /// CPU has it (else the portable path): the gather's inner loop, public for the benches.
 pub fn gather_sum(isa: Isa, e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
@@ -160,15 +144,6 @@ pub fn gather_sum(isa: Isa, e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 if isa.is_available() => unsafe { wide::sum_avx2(e_node, emitter, coef) },
         _ => gather_one(e_node, emitter, coef),
-    }
-}
-
-/// `out[i]` = `sum` over receiver `r0 + i`'s emitters and coefficients, times its scale.
-#[inline(always)]
-fn each_receiver(l: StoredLinks, r0: usize, out: &mut [Vec3A], sum: impl Fn(&[u32], &[LinkCoef]) -> Vec3A) {
-    for (i, b) in out.iter_mut().enumerate() {
-        let (emitter, coef, scale) = l.of(r0 + i);
-        *b = sum(emitter, coef) * scale;
     }
 }
 
@@ -211,21 +186,9 @@ pub(crate) fn decode(c: LinkCoef) -> Vec3A {
 
 #[cfg(target_arch = "x86_64")]
 mod wide {
-    use super::{FF_BIT, LinkCoef, StoredLinks};
+    use super::{FF_BIT, LinkCoef};
     use glam::Vec3A;
     use std::arch::x86_64::*;
-
-    /// [`super::gather`] two links to a 256-bit register.
-    #[target_feature(enable = "avx2,fma,f16c")]
-    pub(super) fn gather_avx2(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
-        super::each_receiver(links, r0, out, |e, c| sum_avx2(e_node, e, c));
-    }
-
-    /// [`super::gather`] four links to a 512-bit register.
-    #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-    pub(super) fn gather_avx512(e_node: &[Vec3A], links: StoredLinks, r0: usize, out: &mut [Vec3A]) {
-        super::each_receiver(links, r0, out, |e, c| sum_avx512(e_node, e, c));
-    }
 
     /// `E` of the link with emitter word `e`, as a 128-bit vector (fourth lane 0).
     #[inline(always)]
@@ -316,7 +279,7 @@ mod wide {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::link_set::Span;
+    use crate::solver::link_set::{Span, StoredLinks};
 
     #[test]
     fn round_trip_is_within_the_stated_error() {
@@ -388,9 +351,7 @@ mod tests {
             scale.push(s);
             want.push(sum);
         }
-        let mut out = vec![Vec3A::ZERO; 20];
         let links = StoredLinks::single(&spans, &emitter, &coef, &scale);
-        gather(&e_node, links, 0, &mut out);
         let per_isa: Vec<Vec<Vec3A>> = Isa::available()
             .into_iter()
             .map(|isa| {
@@ -404,7 +365,7 @@ mod tests {
             .collect();
         for r in 0..20 {
             for k in 0..3 {
-                for got in per_isa.iter().map(|v| v[r][k]).chain([out[r][k]]) {
+                for got in per_isa.iter().map(|v| v[r][k]) {
                     assert!(
                         (got as f64 - want[r][k]).abs() <= 1e-6 * want[r][k],
                         "receiver {r}: {got} vs {}",
