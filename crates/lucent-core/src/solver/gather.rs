@@ -90,7 +90,6 @@ impl HierarchicalSolver {
             mid,
             linear,
             curved: self.curved_receivers(),
-            isa: crate::simd::Isa::best(),
         };
         if !self.hierarchy.is_empty() {
             frame.gather_push(0, Linear::default(), &mut b_node, 0);
@@ -369,7 +368,6 @@ struct RenderFrame<'a> {
     linear: bool,
     /// Whether the expansion has a Hessian ([`super::Oracle::curved_receivers`]).
     curved: bool,
-    isa: crate::simd::Isa,
 }
 
 impl RenderFrame<'_> {
@@ -389,7 +387,7 @@ impl RenderFrame<'_> {
         }
         let own = if self.linear {
             let (emitter, coef, scale) = self.links.of(r);
-            let sum = sum_linear(self.isa, self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
+            let sum = sum_linear(self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
             let mut own = sum.scaled(scale);
             own.add(&above);
             own
@@ -420,7 +418,7 @@ impl RenderFrame<'_> {
     #[inline]
     fn value(&self, r: usize) -> Vec3A {
         let (emitter, coef, scale) = self.links.of(r);
-        link_coef::gather_sum(self.isa, self.e_node, emitter, coef) * scale
+        link_coef::gather_sum_best(self.e_node, emitter, coef) * scale
     }
 }
 
