@@ -21,7 +21,7 @@ use super::link_set::StoredLinks;
 use super::oracle::curvature_along;
 use super::refine::{Cands, Ctx, Deferred, Evaluate};
 use crate::Rgb;
-use crate::hierarchy::{Hierarchy, PAR_LEAVES, split_leaves, split_subtrees};
+use crate::hierarchy::{Hierarchy, NO_NODE, PAR_LEAVES, split_leaves, split_subtrees};
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -40,8 +40,13 @@ impl HierarchicalSolver {
         let h = &self.hierarchy;
         assert_eq!(face_irradiance.len(), h.leaf_count());
         if !h.is_empty() {
-            pull_subtree(h, face_irradiance, 0, e);
+            pull_subtree(h, self.frame_geom(), face_irradiance, 0, e);
         }
+    }
+
+    /// The hierarchy's [`FrameGeom`], made on first use.
+    fn frame_geom(&self) -> &FrameGeom {
+        self.frame_geom.get_or_init(|| FrameGeom::new(&self.hierarchy))
     }
 
     /// Render mode: pull, gather over the stored links, push. Links are created on first use.
@@ -78,11 +83,7 @@ impl HierarchicalSolver {
         // expansion) lives only while its subtree is visited.
         b_node.resize(self.hierarchy.len(), Vec3A::ZERO);
         let linear = self.linear_receivers();
-        let mid: &[Vec3A] = if linear {
-            self.midpoints.get_or_init(|| self.hierarchy.geom.iter().map(|g| g.midpoint.into()).collect())
-        } else {
-            &[]
-        };
+        let mid: &[Vec3A] = if linear { &self.frame_geom().mid } else { &[] };
         let frame = RenderFrame {
             h: &self.hierarchy,
             links: links.view(),
@@ -422,45 +423,109 @@ impl RenderFrame<'_> {
     }
 }
 
+/// What a frame reads of the hierarchy, one flat array a quantity (the pull read two
+/// 40-byte records a cluster: on the 203K dragon it was 8% of a render frame).
+#[derive(Clone, Debug)]
+pub(crate) struct FrameGeom {
+    /// Every cluster's midpoint (mesh units), for linear receivers.
+    pub(super) mid: Vec<Vec3A>,
+    /// Every cluster's parent ([`NO_NODE`] for the root).
+    parent: Vec<u32>,
+    /// Every cluster's weight in its parent's average irradiance: its share of the parent's
+    /// area, or `1 / children` where the parent has no area (the root's is unused).
+    weight: Vec<f32>,
+    /// Every leaf's face, `u32::MAX` for inner clusters.
+    leaf_face: Vec<u32>,
+}
+
+impl FrameGeom {
+    fn new(h: &Hierarchy) -> Self {
+        let weight = (0..h.len())
+            .map(|i| {
+                let p = h.nodes[i].parent;
+                if p == NO_NODE {
+                    return 1.0;
+                }
+                let p = p as usize;
+                let area = h.geom[p].area;
+                if area > 0.0 { h.geom[i].area / area } else { 1.0 / h.nodes[p].child_count.max(1) as f32 }
+            })
+            .collect();
+        let leaf_face = h
+            .nodes
+            .iter()
+            .map(|n| if n.is_leaf() { h.leaf_faces[n.leaf_start as usize] } else { u32::MAX })
+            .collect();
+        FrameGeom {
+            mid: h.geom.iter().map(|g| g.midpoint.into()).collect(),
+            parent: h.nodes.iter().map(|n| n.parent).collect(),
+            weight,
+            leaf_face,
+        }
+    }
+}
+
 /// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children
-/// before parents, subtrees of more than [`PAR_LEAVES`] leaves in parallel.
-fn pull_subtree(h: &Hierarchy, face_irradiance: &[Rgb], r: usize, e: &mut [Vec3A]) {
+/// before parents, each adding its share to its parent, subtrees of more than [`PAR_LEAVES`]
+/// leaves in parallel.
+fn pull_subtree(h: &Hierarchy, g: &FrameGeom, face_irradiance: &[Rgb], r: usize, e: &mut [Vec3A]) {
     let n = h.nodes[r];
     if n.leaf_count() > PAR_LEAVES {
         let (_, rest) = e.split_at_mut(1);
         split_subtrees(&h.nodes, r, rest)
             .into_par_iter()
-            .for_each(|(c, s)| pull_subtree(h, face_irradiance, c, s));
-        e[0] = average_children(h, r, |c| e[c - r]);
+            .for_each(|(c, s)| pull_subtree(h, g, face_irradiance, c, s));
+        e[0] = n.children().iter().map(|&c| e[c as usize - r] * g.weight[c as usize]).sum();
         return;
     }
+    e.fill(Vec3A::ZERO);
     for i in (r..n.subtree_end as usize).rev() {
-        let m = &h.nodes[i];
-        e[i - r] = if m.is_leaf() {
-            face_irradiance[h.leaf_faces[m.leaf_start as usize] as usize].into()
-        } else {
-            average_children(h, i, |c| e[c - r])
-        };
+        let f = g.leaf_face[i];
+        let v = if f == u32::MAX { e[i - r] } else { face_irradiance[f as usize].into() };
+        e[i - r] = v;
+        if i > r {
+            e[g.parent[i] as usize - r] += v * g.weight[i];
+        }
     }
-}
-
-/// The area-weighted average over cluster `i`'s children of `value(child)`.
-#[inline]
-fn average_children(h: &Hierarchy, i: usize, value: impl Fn(usize) -> Vec3A) -> Vec3A {
-    let n = &h.nodes[i];
-    let area = h.geom[i].area;
-    let mut s = Vec3A::ZERO;
-    for &c in n.children() {
-        let c = c as usize;
-        s += if area > 0.0 { value(c) * (h.geom[c].area / area) } else { value(c) / n.child_count as f32 };
-    }
-    s
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::oracle::FALLOFF_POWER;
     use super::*;
+
+    /// The pull gives every cluster the area-weighted mean irradiance of its faces, on a
+    /// binary face-cluster tree and a four-way subdivision tree, both past [`PAR_LEAVES`]
+    /// leaves (so that subtrees run in parallel).
+    #[test]
+    fn pull_averages_each_clusters_faces_by_area() {
+        use crate::hierarchy::{face_cluster, subdivision};
+        let sub =
+            subdivision::butterfly(&subdivision::octahedron(glam::Vec3::new(1.0, 1.25, 0.9)), 5).unwrap();
+        let binary = face_cluster::build(&sub.mesh);
+        for h in [sub.hierarchy, binary] {
+            let n = h.leaf_count();
+            assert!(n > 2 * PAR_LEAVES as usize);
+            let e: Vec<Rgb> = (0..n).map(|f| Rgb::new(f as f32, 1.0, (f % 7) as f32)).collect();
+            let mut got = vec![Vec3A::ZERO; h.len()];
+            pull_subtree(&h, &FrameGeom::new(&h), &e, 0, &mut got);
+            let area: Vec<f64> = (0..n).map(|f| sub.mesh.face_area(f) as f64).collect();
+            for (i, node) in h.nodes.iter().enumerate().step_by(97) {
+                let faces = &h.leaf_faces[node.leaf_start as usize..node.leaf_end as usize];
+                let total: f64 = faces.iter().map(|&f| area[f as usize]).sum();
+                for c in 0..3 {
+                    let want = faces.iter().map(|&f| area[f as usize] * e[f as usize][c] as f64).sum::<f64>()
+                        / total;
+                    let err = (got[i][c] as f64 - want).abs();
+                    assert!(
+                        err <= 1e-5 * want.abs().max(1.0),
+                        "cluster {i} channel {c}: {} vs {want}",
+                        got[i][c]
+                    );
+                }
+            }
+        }
+    }
 
     /// A curved receiver's expansion of one link reproduces a profile of distance alone,
     /// `F ~ ρ^-a e^(-σ ρ)` (`a` = [`FALLOFF_POWER`]), at offsets `δ` in every direction as far

@@ -113,9 +113,9 @@ pub struct HierarchicalSolver {
     /// Render mode's per-cluster irradiance and gathered `B`, kept between frames for the
     /// same reason (each is 4 MB at 131K triangles).
     pub(super) frame: [Vec<Vec3A>; 2],
-    /// Every cluster's midpoint, packed for render mode's gather with linear receivers; made
-    /// on first use, dropped wherever the hierarchy is refitted.
-    pub(super) midpoints: std::sync::OnceLock<Vec<Vec3A>>,
+    /// What a frame's pull and gather read of the hierarchy, packed flat; made on first use,
+    /// dropped wherever the hierarchy is refitted.
+    pub(super) frame_geom: std::sync::OnceLock<super::gather::FrameGeom>,
     /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
@@ -148,7 +148,7 @@ impl HierarchicalSolver {
             spare: None,
             chunk_pool: ChunkPool::default(),
             frame: Default::default(),
-            midpoints: Default::default(),
+            frame_geom: Default::default(),
             bound: None,
             face_gain: None,
             locality,
@@ -206,7 +206,7 @@ impl HierarchicalSolver {
             self.keep_candidates = true;
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit(&self.mesh);
-            self.midpoints = Default::default();
+            self.frame_geom = Default::default();
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
             return self.link();
         }
@@ -236,7 +236,7 @@ impl HierarchicalSolver {
         if any_moved {
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit_changed(&self.mesh, &changed);
-            self.midpoints = Default::default();
+            self.frame_geom = Default::default();
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         }
         if !changed[0] && !stale[0] {
@@ -264,7 +264,7 @@ impl HierarchicalSolver {
         assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
         self.mesh.positions.copy_from_slice(positions);
         self.hierarchy.refit(&self.mesh);
-        self.midpoints = Default::default();
+        self.frame_geom = Default::default();
         self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         self.links = None;
         self.bound = None;
