@@ -439,8 +439,11 @@ pub(crate) struct FrameGeom {
 }
 
 impl FrameGeom {
+    /// In parallel: an incremental update refits the hierarchy and so makes this anew.
     fn new(h: &Hierarchy) -> Self {
         let weight = (0..h.len())
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|i| {
                 let p = h.nodes[i].parent;
                 if p == NO_NODE {
@@ -453,12 +456,13 @@ impl FrameGeom {
             .collect();
         let leaf_face = h
             .nodes
-            .iter()
+            .par_iter()
+            .with_min_len(4096)
             .map(|n| if n.is_leaf() { h.leaf_faces[n.leaf_start as usize] } else { u32::MAX })
             .collect();
         FrameGeom {
-            mid: h.geom.iter().map(|g| g.midpoint.into()).collect(),
-            parent: h.nodes.iter().map(|n| n.parent).collect(),
+            mid: h.geom.par_iter().with_min_len(4096).map(|g| g.midpoint.into()).collect(),
+            parent: h.nodes.par_iter().with_min_len(4096).map(|n| n.parent).collect(),
             weight,
             leaf_face,
         }
