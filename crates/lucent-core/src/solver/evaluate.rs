@@ -168,68 +168,67 @@ impl<'a> Evaluator<'a> {
         table.polar_face(self.h.geom[r].midpoint, &tri, self.d32.isa(), &mut self.rays).map(|(f, _)| f)
     }
 
-    /// Whether a form factor link `e -> r` costs a full semi-analytic evaluation (the
-    /// incremental budget counts only those).
-    #[inline]
-    pub fn is_analytic(&mut self, src: &ReceiverSources, r: usize, e: usize) -> bool {
-        if self.smooth_face(src, e).is_some() {
-            self.points.clear();
-            return false;
-        }
-        self.polar_face(r, e).is_none()
-    }
-
     /// The transport coefficient of the link `e -> r` (per channel, unitless).
     #[inline]
     pub fn eval(&mut self, src: &ReceiverSources, r: usize, e: usize, kind: LinkKind) -> [f32; 3] {
-        let eg = &self.h.geom[e];
         match kind {
-            LinkKind::PointSample => src.point_sample(&self.d32, eg.midpoint, eg.area),
+            LinkKind::PointSample => {
+                let eg = &self.h.geom[e];
+                src.point_sample(&self.d32, eg.midpoint, eg.area)
+            }
             LinkKind::FormFactor => {
-                let rg = &self.h.geom[r];
-                if self.smooth_face(src, e).is_some() {
-                    self.cubatures += 1;
-                    return src.weighted_sum(&self.d32, &mut self.points);
-                }
-                if let Some(f) = self.polar_face(r, e) {
-                    self.polar_faces += 1;
-                    return f;
-                }
-                self.form_factors += 1;
-                self.scratch.clear();
-                self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
-                if self.near_point_sampling {
-                    // Jensen & Buhler 2002 space their samples about one mean free path
-                    // `1/sigma_t'` apart: that many uniform samples over the polygon.
-                    let mfp = self.dipole.z_r.iter().copied().fold(f64::MAX, f64::min);
-                    let n = ((eg.area as f64 / (mfp * mfp)).ceil() as usize).clamp(1, 1 << 16);
-                    let f = sample_estimate(
-                        &self.scratch,
-                        rg.midpoint.as_dvec3(),
-                        rg.normal.as_dvec3(),
-                        self.dipole,
-                        n,
-                        (r as u64) << 32 | e as u64,
-                    );
-                    return f.map(|v| v as f32);
-                }
-                let f = form_factor(
-                    &self.scratch,
-                    rg.midpoint.as_dvec3(),
-                    rg.normal.as_dvec3(),
-                    self.dipole,
-                    &self.opts,
-                );
-                // The projected polygon stands for the cluster's true area (§5.1.1); scale so
-                // that the far field matches the point sample `A R_d`. Leaves: scale 1.
-                let scale = if self.h.nodes[e].is_leaf() || eg.polygon_area <= 0.0 {
-                    1.0
-                } else {
-                    eg.area as f64 / eg.polygon_area as f64
-                };
-                f.map(|v| (v * scale) as f32)
+                self.cheap_form_factor(src, r, e).unwrap_or_else(|| self.edge_form_factor(r, e))
             }
         }
+    }
+
+    /// A form factor link's coefficient where a rule of points gives it (the cubature over a
+    /// face that is smooth, else the polar rule over a face beside the receiver), or `None`
+    /// where it takes the semi-analytic edge integrals ([`Evaluator::edge_form_factor`]),
+    /// the cost an incremental update's budget counts.
+    #[inline]
+    pub fn cheap_form_factor(&mut self, src: &ReceiverSources, r: usize, e: usize) -> Option<[f32; 3]> {
+        if self.smooth_face(src, e).is_some() {
+            self.cubatures += 1;
+            return Some(src.weighted_sum(&self.d32, &mut self.points));
+        }
+        let f = self.polar_face(r, e)?;
+        self.polar_faces += 1;
+        Some(f)
+    }
+
+    /// A form factor link's coefficient by the semi-analytic edge integrals (or, with
+    /// `near_point_sampling`, Jensen & Buhler's uniform samples).
+    pub fn edge_form_factor(&mut self, r: usize, e: usize) -> [f32; 3] {
+        let (eg, rg) = (&self.h.geom[e], &self.h.geom[r]);
+        self.form_factors += 1;
+        self.scratch.clear();
+        self.scratch.extend(self.h.polygon(e).iter().map(|p| p.as_dvec3()));
+        if self.near_point_sampling {
+            // Jensen & Buhler 2002 space their samples about one mean free path
+            // `1/sigma_t'` apart: that many uniform samples over the polygon.
+            let mfp = self.dipole.z_r.iter().copied().fold(f64::MAX, f64::min);
+            let n = ((eg.area as f64 / (mfp * mfp)).ceil() as usize).clamp(1, 1 << 16);
+            let f = sample_estimate(
+                &self.scratch,
+                rg.midpoint.as_dvec3(),
+                rg.normal.as_dvec3(),
+                self.dipole,
+                n,
+                (r as u64) << 32 | e as u64,
+            );
+            return f.map(|v| v as f32);
+        }
+        let f =
+            form_factor(&self.scratch, rg.midpoint.as_dvec3(), rg.normal.as_dvec3(), self.dipole, &self.opts);
+        // The projected polygon stands for the cluster's true area (§5.1.1); scale so
+        // that the far field matches the point sample `A R_d`. Leaves: scale 1.
+        let scale = if self.h.nodes[e].is_leaf() || eg.polygon_area <= 0.0 {
+            1.0
+        } else {
+            eg.area as f64 / eg.polygon_area as f64
+        };
+        f.map(|v| (v * scale) as f32)
     }
 }
 

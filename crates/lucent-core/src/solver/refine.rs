@@ -296,10 +296,14 @@ impl LinkSink for Reusing<'_, '_> {
         kind: LinkKind,
         samples: &Samples,
     ) {
-        let over = kind == LinkKind::FormFactor
-            && ctx.ev.is_analytic(src, r, e)
-            && self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) <= 0;
-        if over {
+        let f = if kind != LinkKind::FormFactor {
+            ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale)
+        } else if let Some(f) = ctx.ev.cheap_form_factor(src, r, e) {
+            f
+        } else if self.reuse.remaining.fetch_sub(1, Ordering::Relaxed) > 0 {
+            ctx.ev.edge_form_factor(r, e)
+        } else {
+            // Over the budget: the old coefficient, or a point sample, marked stale.
             let f = match self.old_link(r, e) {
                 Some(l) if l.kind == LinkKind::FormFactor => l.coef,
                 _ => {
@@ -309,8 +313,7 @@ impl LinkSink for Reusing<'_, '_> {
             };
             self.chunk.push(r, e, kind, f, samples.slope, true);
             return;
-        }
-        let f = ctx.coefficient(src, r, e, kind, samples.estimate, samples.recv_scale);
+        };
         self.chunk.push(r, e, kind, Vec3A::from_array(f), samples.slope, false);
     }
 }
