@@ -15,7 +15,7 @@
 //! [`crate::tonemap`] turns it into an image. Optionally the environment map itself is drawn
 //! behind the mesh first ([`Shading::background`], alpha 1, tone mapped with the mesh).
 //!
-//! Bind groups: 0 = [`MeshUniforms`] (camera and shading), 1 = environment map and sampler,
+//! Bind groups: 0 = `MeshUniforms` (camera and shading), 1 = environment map and sampler,
 //! 2 = albedo map and sampler (a mesh's colour texture: the radiance is multiplied by its
 //! square root per pixel, the exit half of `lucent_core::mesh::texture`'s modulation).
 

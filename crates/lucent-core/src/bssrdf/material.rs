@@ -38,8 +38,8 @@ pub enum MaterialError {
 /// black to any display; 0.999 is as white as a slab that absorbs gets.
 pub const ALBEDO: std::ops::RangeInclusive<f64> = 1e-3..=0.999;
 /// Reduced mean free paths [`Material::from_albedo_mfp`] accepts, mm: from 0.1 micrometre
-/// (`sigma_t' =` [`MAX_SIGMA`]) to a metre, where both coefficients of any accepted albedo stay
-/// at or above [`MIN_SIGMA`] for every `eta` up to 3 (albedo 0.999 at eta 3 needs
+/// (`sigma_t' =` `MAX_SIGMA`) to a metre, where both coefficients of any accepted albedo stay
+/// at or above `MIN_SIGMA` for every `eta` up to 3 (albedo 0.999 at eta 3 needs
 /// `1 - rho' = 1e-9`).
 pub const MEAN_FREE_PATH_MM: std::ops::RangeInclusive<f64> = 1e-4..=1e3;
 

@@ -111,7 +111,7 @@ fn cell_at(x: f64) -> Option<(usize, f64)> {
 impl RadialTable {
     /// Tabulates a profile given in *optical* units (`σ_t = 1`) for a medium with extinction
     /// `sigma_t` (per mesh unit): `R(r) = σ_t² R_opt(σ_t r)`, `Q(r) = Q_opt(σ_t r)`.
-    /// `tail_opt` must be non-increasing and reach 0 (or [`TAIL_CUT`] of its start) by
+    /// `tail_opt` must be non-increasing and reach 0 (or `TAIL_CUT` of its start) by
     /// optical radius `r_opt_max`.
     pub fn from_optical(
         sigma_t: f64,

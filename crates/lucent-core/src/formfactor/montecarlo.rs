@@ -74,7 +74,7 @@ fn add(acc: &mut [f64; 3], v: [f64; 3], w: f64) {
 }
 
 /// Stratified Monte Carlo estimate of `F(A, x_o)` with about `samples` evaluations of `R_d`
-/// (at least [`REPLICATES`] × 1 per fan triangle), seeded by `seed` (same seed, same result).
+/// (at least `REPLICATES` × 1 per fan triangle), seeded by `seed` (same seed, same result).
 ///
 /// The samples are split into 16 independent replicates; each replicate jitters one sample per
 /// cell of a `m × m` grid over every fan triangle (`m²` in proportion to the triangle's area).

@@ -18,7 +18,7 @@
 //!   out-of-range indices, non-finite coordinates) are errors; degenerate faces are removed
 //!   and, with open or non-manifold edges and the component count, reported in a
 //!   [`MeshReport`].
-//! - glTF and GLB are read in [`super::io_gltf`].
+//! - glTF and GLB are read in `io_gltf`.
 //! - No input panics the loader: malformed files are errors naming the file and the reason.
 //!   The third-party parsers are additionally run under `limits::catch_quietly` as a last line
 //!   of defence, so their panic text never reaches the user.

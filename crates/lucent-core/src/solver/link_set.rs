@@ -6,7 +6,7 @@
 //! for a local deformation; copying the rest into new arrays every frame took 15 ms for 10.7M
 //! kept links at 131K triangles, twice render mode's gather. So the links live in two stores: a
 //! *base*, shared from update to update, and a *delta* holding what changed since the base was
-//! built. Each receiver's [`Span`] says which store holds its run. An update writes a new delta
+//! built. Each receiver's `Span` says which store holds its run. An update writes a new delta
 //! and shares the base; the base is built anew when nothing in it is live any more (the delta
 //! becomes the base) or when more than half of it is dead (one copy, then shared again).
 
@@ -145,7 +145,7 @@ pub struct LinkSet {
     len: usize,
 }
 
-/// The arrays render mode's gather reads (see [`super::link_coef::gather`]).
+/// The arrays render mode's gather reads (see `solver::gather`'s `RenderFrame`).
 #[derive(Clone, Copy)]
 pub(crate) struct StoredLinks<'a> {
     links: &'a [Span],

@@ -103,7 +103,7 @@ pub struct Oracle {
     pub irradiance_contrast: f32,
     /// [`OracleMode::Transport`] with a distance-form profile only: a receiver cluster's
     /// point-sample links carry the transport's first-order change across the receiver (see
-    /// [`Samples::slope`]), and the push hands each child the gathered `B` *plus* its gradient
+    /// `Samples::slope`), and the push hands each child the gathered `B` *plus* its gradient
     /// times the child's offset, instead of one value for the whole cluster. The receiver
     /// test then bounds the second-order remainder, not the first-order change, so receivers
     /// stay whole up to about a third of their distance to the emitter, as emitters do, not
@@ -111,7 +111,7 @@ pub struct Oracle {
     pub linear_receivers: bool,
     /// With [`Oracle::linear_receivers`]: the links also carry the transport's second-order
     /// change across the receiver (its curvature, from the link's steepness and the profile's
-    /// falloff, see [`FALLOFF_POWER`]), and the push hands each child the receiver's
+    /// falloff, see `FALLOFF_POWER`), and the push hands each child the receiver's
     /// quadratic moved to its midpoint. The receiver test then bounds the third-order
     /// remainder `(k r)³ / 6`, so receivers stay whole up to about two fifths of their
     /// distance to the emitter, not a fifth, and the emitter need not clear each leaf's poles
@@ -129,7 +129,7 @@ impl Oracle {
     /// the six cases at 1 and 10 cm; ε_abs 6e-4 took the bunny's sampled median error in
     /// `lucent bench solver --real` to 1.08%, through its dimmest faces, which only far
     /// transport reaches). Curved receivers ([`Oracle::curved_receivers`]) and the far faces'
-    /// midpoint-rule gain ([`midpoint_rule_gain`]) are what leave that room: with linear
+    /// midpoint-rule gain (`midpoint_rule_gain`) are what leave that room: with linear
     /// receivers `pbd` needed 0.2, 0.05, 6e-4 for 0.71% at 97-128 links per face, and without
     /// the gain it erred by 0.87% at 117-166. Neither has room for `eps_share` or
     /// `irradiance_contrast`.

@@ -5,7 +5,7 @@
 //! The oracle asks for the estimate between a receiver and an emitter, then between the
 //! receiver and the emitter's children, then between the receiver's children and the emitter:
 //! twelve profile evaluations (four points × three channels) per question. The arithmetic is
-//! [`super::point_kernel`]'s, run on the widest instruction set the CPU has ([`Isa::best`]);
+//! `point_kernel`'s, run on the widest instruction set the CPU has ([`Isa::best`]);
 //! every estimate of one [`DipoleF32`] takes the same path, so that the oracle may hand an
 //! estimate from one form on as another's.
 
@@ -205,7 +205,7 @@ impl ReceiverSources {
 impl ReceiverSources {
     /// `∫_T R_d` over triangle `tri` (area `area`) by Radon's degree-5 rule
     /// ([`crate::formfactor::cubature`]): seven dipole points in two batches. The form
-    /// factor's own short cut in `f32`, for where [`ReceiverSources::smooth_within`] holds.
+    /// factor's own short cut in `f32`, for where `ReceiverSources::smooth_within` holds.
     #[inline]
     pub fn triangle_cubature(&self, d: &DipoleF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
         self.cubature(d, &[(*tri, area)])

@@ -4,7 +4,7 @@
 //! A translucent object is a mesh plus a [`DensityVolume`] over its rest bounding box (§4.2).
 //! Each frame runs, for every light in turn (files in brackets):
 //!
-//! 1. **Reference images** (§4.3, fig. 4.2; [`reference`]): the mesh seen from the light into
+//! 1. **Reference images** (§4.3, fig. 4.2; [`reference`](mod@reference)): the mesh seen from the light into
 //!    images of the irradiance transmitted through the surface (Schlick's Fresnel) times the
 //!    light colour, the 3D texture coordinate of the lit surface (its rest position in the
 //!    volume's `[0,1]^3` box), its normal, and (not in the thesis) its deformation offset.
