@@ -218,9 +218,61 @@ mod wide {
             }
             k += 16;
         }
-        let r = |v: __m512| _mm512_reduce_add_ps(v);
-        let r3 = |v: [__m512; 3]| v.map(r);
-        assemble(r3(value), grad.map(r3), diag.map(r3), r3(iso), off.map(r3))
+        // The sums' lanes added up, sixteen registers at a time.
+        let mut all = [zero; 48];
+        all[..3].copy_from_slice(&value);
+        all[21..24].copy_from_slice(&iso);
+        for c in 0..3 {
+            all[3 + 3 * c..6 + 3 * c].copy_from_slice(&grad[c]);
+            all[12 + 3 * c..15 + 3 * c].copy_from_slice(&diag[c]);
+            all[24 + 3 * c..27 + 3 * c].copy_from_slice(&off[c]);
+        }
+        let groups = if CURVED { 3 } else { 1 };
+        let mut t = [0.0f32; 48];
+        for g in 0..groups {
+            add_lanes(&all[16 * g..16 * g + 16], &mut t[16 * g..16 * g + 16]);
+        }
+        let three = |k: usize| [t[k], t[k + 1], t[k + 2]];
+        let nine = |k: usize| [three(k), three(k + 3), three(k + 6)];
+        assemble(three(0), nine(3), nine(12), three(21), nine(24))
+    }
+
+    /// `out[i]` = the sum of `v[i]`'s lanes (sixteen registers): 45 shuffles and adds where
+    /// sixteen horizontal sums take about 130. Each step adds halves of two registers into
+    /// one, so the last holds every sum. (203K dragon, one core: the frame's gather 51-52 →
+    /// 47-49 ms.)
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn add_lanes(v: &[__m512], out: &mut [f32]) {
+        assert!(v.len() == 16 && out.len() == 16);
+        // Quarters of 128 bits: [a0, a1, b0, b1] + [a2, a3, b2, b3]: w[i] holds halves of
+        // v[2 i] and v[2 i + 1].
+        let mut w = [_mm512_setzero_ps(); 8];
+        for i in 0..8 {
+            let (a, b) = (v[2 * i], v[2 * i + 1]);
+            w[i] = _mm512_add_ps(_mm512_shuffle_f32x4::<0x44>(a, b), _mm512_shuffle_f32x4::<0xee>(a, b));
+        }
+        // Quarter k of x[i]: four partial sums of v[4 i + k].
+        let mut x = [_mm512_setzero_ps(); 4];
+        for i in 0..4 {
+            let (a, b) = (w[2 * i], w[2 * i + 1]);
+            x[i] = _mm512_add_ps(_mm512_shuffle_f32x4::<0x88>(a, b), _mm512_shuffle_f32x4::<0xdd>(a, b));
+        }
+        // Within quarters: quarter k of y[i] holds two partial sums each of v[8 i + k] and
+        // v[8 i + k + 4].
+        let mut y = [_mm512_setzero_ps(); 2];
+        for i in 0..2 {
+            let (a, b) = (x[2 * i], x[2 * i + 1]);
+            y[i] = _mm512_add_ps(_mm512_shuffle_ps::<0x44>(a, b), _mm512_shuffle_ps::<0xee>(a, b));
+        }
+        // Lane 4 k + m: the sum of v[k + 4 m].
+        let z = _mm512_add_ps(_mm512_shuffle_ps::<0x88>(y[0], y[1]), _mm512_shuffle_ps::<0xdd>(y[0], y[1]));
+        let mut lanes = [0.0f32; 16];
+        // SAFETY: `lanes` holds sixteen floats; the store is unaligned.
+        unsafe { _mm512_storeu_ps(lanes.as_mut_ptr(), z) };
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = lanes[4 * (i % 4) + i / 4];
+        }
     }
 
     /// The half floats in the low 16 bits of each lane, as floats (exact, subnormals
