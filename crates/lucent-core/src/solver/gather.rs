@@ -2,7 +2,8 @@
 //! irradiance up the tree), *gather* (`B_R = Σ_E E_E F_ER` along the links into each receiver)
 //! and *push* (a receiver's `B` added to all its leaves). Render mode gathers over the stored
 //! links ([`HierarchicalSolver::solve_render`], with the packed kernels of [`super::link_coef`]
-//! and [`super::gather_linear`]) and pushes in the same pass down the tree; on-the-fly mode gathers each link as the refinement accepts it and pushes down the traversal
+//! and [`super::gather_linear`]) and pushes in the same pass down the tree; on-the-fly mode
+//! gathers each link as the refinement accepts it and pushes down the traversal
 //! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
 //! the energy bound of [`super::energy`].
 //!
