@@ -21,10 +21,13 @@
 //! shifts (exact, as the hardware conversion), one link per 128-bit operation. Each keeps two
 //! running sums, as one is bound by the add's latency. A link is 12 bytes streamed (emitter
 //! word and coefficients) plus a 16-byte fetch of the emitter's `E` at an index read from the
-//! stream. On the development machine (Zen 4, `benches/kernel.rs`) all three paths run at
-//! 0.4-0.65 links per ns, while streaming the same bytes alone runs at 1.3-1.7: the gather is
-//! bound by the dependent fetch of `E`, not by bandwidth or arithmetic, so the wider paths
-//! gain little and fewer links are what speeds render mode up.
+//! stream. On a Zen 4 machine (`benches/kernel.rs`, one core) all three paths ran at
+//! 0.4-0.65 links per ns, while streaming the same bytes alone ran at 1.3-1.7: there the
+//! gather was bound by the dependent fetch of `E`. On an Intel Xeon with AVX-512, in the 131K
+//! blob's frame on two cores, the links streamed at about three quarters of the memory's
+//! 21 GB/s, and fetching every `E` from the first level of cache saved only a tenth: there it
+//! is bound by bandwidth. Either way the wider paths gain little, and fewer links (or fewer
+//! bytes a link) are what speeds render mode up.
 
 use crate::simd::Isa;
 use glam::Vec3A;
