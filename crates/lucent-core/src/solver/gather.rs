@@ -389,7 +389,15 @@ impl RenderFrame<'_> {
         }
         let own = if self.linear {
             let (emitter, coef, scale) = self.links.of(r);
-            let sum = sum_linear(self.e_node, self.mid, emitter, coef, self.mid[r], self.curved);
+            let sum = sum_linear(
+                crate::simd::Isa::best(),
+                self.e_node,
+                self.mid,
+                emitter,
+                coef,
+                self.mid[r],
+                self.curved,
+            );
             let mut own = sum.scaled(scale);
             own.add(&above);
             own

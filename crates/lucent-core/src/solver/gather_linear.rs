@@ -22,22 +22,9 @@ use glam::Vec3A;
 
 /// One inner receiver's expansion `Σ` over its links (emitter words `emitter`, coefficients
 /// `coef`), before its scale: value, gradient and (if `curved`) Hessian at its midpoint `m_r`,
-/// with `e_node` the clusters' irradiance and `mid` their midpoints; on AVX-512 where
-/// [`Isa::best`] is, the portable path otherwise.
-#[inline]
+/// with `e_node` the clusters' irradiance and `mid` their midpoints; on `isa` where this CPU
+/// has it (AVX-512; the portable path otherwise).
 pub(super) fn sum_linear(
-    e_node: &[Vec3A],
-    mid: &[Vec3A],
-    emitter: &[u32],
-    coef: &[LinkCoef],
-    m_r: Vec3A,
-    curved: bool,
-) -> Linear {
-    sum_linear_on(Isa::best(), e_node, mid, emitter, coef, m_r, curved)
-}
-
-/// [`sum_linear`] on `isa` where this CPU has it (AVX-512; the portable path otherwise).
-fn sum_linear_on(
     isa: Isa,
     e_node: &[Vec3A],
     mid: &[Vec3A],
@@ -331,8 +318,8 @@ mod tests {
             let (e_node, mid, emitter, coef) = links(n, 257, seed);
             let m_r = mid[3] + Vec3A::new(0.1, -0.2, 0.05);
             for curved in [false, true] {
-                let a = sum_linear_on(Isa::Scalar, &e_node, &mid, &emitter, &coef, m_r, curved);
-                let b = sum_linear_on(Isa::Avx512, &e_node, &mid, &emitter, &coef, m_r, curved);
+                let a = sum_linear(Isa::Scalar, &e_node, &mid, &emitter, &coef, m_r, curved);
+                let b = sum_linear(Isa::Avx512, &e_node, &mid, &emitter, &coef, m_r, curved);
                 // Sums of up to 333 terms in another order: relative to their magnitude.
                 let size = |l: &Linear| {
                     let all = [l.value].into_iter().chain(l.grad).chain(l.hess.diag).chain(l.hess.off);
