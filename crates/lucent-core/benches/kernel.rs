@@ -4,6 +4,10 @@
 //! * `point_samples/<profile>/<isa>`: the one-point estimate `A R(d)` (Mertens §4.2) for four
 //!   emitters and one receiver, three channels each, over 1,024 batches of four. Criterion's
 //!   throughput (elements/s) counts three-channel estimates: Gelem/s is estimates per ns.
+//! * `point_sums/<profile>/<isa>`: the same estimates as the near field's cubature makes them
+//!   (`ReceiverSources::cubature`: Radon's seven points on each of 1,024 triangles, summed per
+//!   channel), sixteen points a channel per register on AVX-512 (four a batch elsewhere).
+//!   Gelem/s is three-channel estimates per ns, the points' set-up included.
 //! * `gather/<isa>`: render mode's `Σ E F` (§5.5) over 8M stored links (32 a receiver, 96 MB
 //!   of coefficients and emitter words, more than the caches), one core. Gelem/s is links per
 //!   ns. `gather/stream` reads the same 12 bytes a link and does nothing with them: the
@@ -45,6 +49,22 @@ fn point_samples(c: &mut Criterion) {
                     }
                     black_box(acc)
                 })
+            });
+        }
+    }
+    group.finish();
+    // The same estimates sixteen points to a register, as the near field's cubature makes
+    // them: Radon's seven points on each triangle.
+    let tris: Vec<([Vec3; 3], f32)> = emitters.iter().map(|p| ([p[0], p[1], p[2]], 1e-3)).collect();
+    let mut group = c.benchmark_group("point_sums");
+    group.throughput(Throughput::Elements((7 * tris.len()) as u64));
+    for kind in ProfileKind::ALL {
+        for isa in Isa::available() {
+            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
+            let d = DipoleF32::new(&dip).with_isa(isa);
+            let src = ReceiverSources::new(&d, x_o, n_o);
+            group.bench_function(format!("{}/{}", kind.name(), isa.name()), |b| {
+                b.iter(|| black_box(src.cubature(&d, black_box(&tris))))
             });
         }
     }

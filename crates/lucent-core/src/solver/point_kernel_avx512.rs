@@ -304,7 +304,9 @@ pub(super) fn weighted_sum(
     assert!(x.len().is_multiple_of(WIDTH) && y.len() == x.len() && z.len() == x.len() && w.len() == x.len());
     let mut acc = [_mm512_setzero_ps(); 3];
     let at = |a: &[f32], i: usize| load(a[i..i + WIDTH].try_into().expect("sixteen floats"));
-    if let Some(t) = k.table.as_deref().filter(|_| !k.analytic && src.x_r.iter().all(|&x| x == src.x_r[0])) {
+    // The distance form: every pole at the receiver point, one squared distance a point.
+    let one_pole = src.x_r.iter().chain(&src.x_v).all(|&x| x == src.x_r[0]);
+    if let Some(t) = k.table.as_deref().filter(|_| !k.analytic && one_pole) {
         // A profile of tables alone whose poles are all at the receiver point (the distance
         // form): one distance, reciprocal root and grid root `r^¼` serve the three channels,
         // whose grid variables `√(r s_c) = r^¼ √s_c` differ by a factor only.
@@ -327,9 +329,14 @@ pub(super) fn weighted_sum(
     for i in (0..x.len()).step_by(WIDTH) {
         let (p, wt) = ([at(x, i), at(y, i), at(z, i)], at(w, i));
         let used = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(wt, _mm512_setzero_ps());
+        let s2 = one_pole.then(|| dist2(&splat(src.x_r[0]), &p));
         for (c, acc) in acc.iter_mut().enumerate() {
-            let s2_r = dist2(&splat(src.x_r[c]), &p);
-            let s2_v = if k.analytic { dist2(&splat(src.x_v[c]), &p) } else { s2_r };
+            let s2_r = s2.unwrap_or_else(|| dist2(&splat(src.x_r[c]), &p));
+            let s2_v = match s2 {
+                Some(s2) => s2,
+                None if k.analytic => dist2(&splat(src.x_v[c]), &p),
+                None => s2_r,
+            };
             let v = lanes(k, &k.channel[c], s2_r, s2_v, wt, 0xff);
             *acc = _mm512_mask_add_ps(*acc, used, *acc, v);
         }
