@@ -448,21 +448,9 @@ pub(crate) struct FrameGeom {
 }
 
 impl FrameGeom {
-    /// In parallel: an incremental update refits the hierarchy and so makes this anew.
+    /// In parallel (a mesh moved without [`FrameGeom::refit`] makes this anew).
     fn new(h: &Hierarchy) -> Self {
-        let weight = (0..h.len())
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| {
-                let p = h.nodes[i].parent;
-                if p == NO_NODE {
-                    return 1.0;
-                }
-                let p = p as usize;
-                let area = h.geom[p].area;
-                if area > 0.0 { h.geom[i].area / area } else { 1.0 / h.nodes[p].child_count.max(1) as f32 }
-            })
-            .collect();
+        let weight = (0..h.len()).into_par_iter().with_min_len(4096).map(|i| area_weight(h, i)).collect();
         let leaf_face = h
             .nodes
             .par_iter()
@@ -476,6 +464,34 @@ impl FrameGeom {
             leaf_face,
         }
     }
+}
+
+impl FrameGeom {
+    /// After `h` was refitted where `changed` says (an incremental update): the midpoints of
+    /// the changed clusters and the weights of their children and themselves. The topology
+    /// stays, so this visits each cluster once instead of making every array anew.
+    pub(super) fn refit(&mut self, h: &Hierarchy, changed: &[bool]) {
+        debug_assert_eq!(changed.len(), self.mid.len());
+        for i in (0..h.len()).filter(|&i| changed[i]) {
+            self.mid[i] = h.geom[i].midpoint.into();
+            self.weight[i] = area_weight(h, i);
+            for &c in h.nodes[i].children() {
+                self.weight[c as usize] = area_weight(h, c as usize);
+            }
+        }
+    }
+}
+
+/// Cluster `i`'s weight in its parent's average irradiance ([`FrameGeom`]'s `weight`).
+#[inline]
+fn area_weight(h: &Hierarchy, i: usize) -> f32 {
+    let p = h.nodes[i].parent;
+    if p == NO_NODE {
+        return 1.0;
+    }
+    let p = p as usize;
+    let area = h.geom[p].area;
+    if area > 0.0 { h.geom[i].area / area } else { 1.0 / h.nodes[p].child_count.max(1) as f32 }
 }
 
 /// The pull below cluster `r`, whose subtree is `e` (`r..subtree_end` in preorder): children
@@ -538,6 +554,44 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// After a local deformation, refitting the frame's geometry where clusters changed gives
+    /// what making it anew gives (the same bits: the same formulas on the same inputs).
+    #[test]
+    fn refit_equals_a_new_frame_geometry() {
+        use crate::hierarchy::subdivision;
+        let sub =
+            subdivision::butterfly(&subdivision::octahedron(glam::Vec3::new(1.0, 1.25, 0.9)), 4).unwrap();
+        let (mut mesh, mut h) = (sub.mesh, sub.hierarchy);
+        let mut g = FrameGeom::new(&h);
+        // Lift the vertices near one pole: a bump, as an incremental update sees it.
+        let moved: Vec<bool> = mesh.positions.iter().map(|p| p.z > 0.8).collect();
+        assert!(moved.iter().any(|&m| m) && !moved.iter().all(|&m| m));
+        for (p, &m) in mesh.positions.iter_mut().zip(&moved) {
+            if m {
+                p.z += 0.05 * (1.0 + p.x);
+            }
+        }
+        let mut changed = vec![false; h.len()];
+        for i in (0..h.len()).rev() {
+            let n = h.nodes[i];
+            if n.is_leaf() {
+                let t = mesh.triangles[h.leaf_faces[n.leaf_start as usize] as usize];
+                changed[i] = t.iter().any(|&v| moved[v as usize]);
+            }
+            if n.parent != NO_NODE {
+                changed[n.parent as usize] |= changed[i];
+            }
+        }
+        h.refit_changed(&mesh, &changed);
+        let before = g.weight.clone();
+        g.refit(&h, &changed);
+        let want = FrameGeom::new(&h);
+        assert_ne!(before, want.weight, "the bump changes areas");
+        assert_eq!(g.mid, want.mid);
+        assert_eq!(g.weight, want.weight);
+        assert_eq!((&g.parent, &g.leaf_face), (&want.parent, &want.leaf_face));
     }
 
     /// A curved receiver's expansion of one link reproduces a profile of distance alone,

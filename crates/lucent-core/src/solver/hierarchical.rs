@@ -236,7 +236,9 @@ impl HierarchicalSolver {
         if any_moved {
             self.mesh.positions.copy_from_slice(positions);
             self.hierarchy.refit_changed(&self.mesh, &changed);
-            self.frame_geom = Default::default();
+            if let Some(g) = self.frame_geom.get_mut() {
+                g.refit(&self.hierarchy, &changed);
+            }
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         }
         if !changed[0] && !stale[0] {
