@@ -18,6 +18,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 pub mod query;
+mod wide;
 
 pub use query::closest_on_triangle;
 
@@ -82,6 +83,8 @@ pub struct Bvh {
     /// Corner positions of each triangle slot (copied from the mesh at build and refit, so
     /// queries read contiguous memory and need no mesh).
     tris: Vec<[Vec3; 3]>,
+    /// The tree with four children a node, which the ray queries walk ([`wide`]).
+    wide: Vec<wide::Node4>,
     /// SAH cost when last built (see [`Bvh::sah_cost`]).
     built_cost: f32,
 }
@@ -104,7 +107,8 @@ impl Bvh {
         let nodes = if items.is_empty() { Vec::new() } else { build_subtree(&mut items, 0) };
         let faces: Vec<u32> = items.iter().map(|i| i.face).collect();
         let tris = faces.iter().map(|&f| mesh.corners(f as usize)).collect();
-        let mut bvh = Bvh { nodes, faces, tris, built_cost: 0.0 };
+        let wide = wide::collapse(&nodes);
+        let mut bvh = Bvh { nodes, faces, tris, wide, built_cost: 0.0 };
         bvh.built_cost = bvh.sah_cost();
         bvh
     }
@@ -132,6 +136,7 @@ impl Bvh {
             self.nodes[i].min = min;
             self.nodes[i].max = max;
         }
+        wide::refit(&mut self.wide, &self.nodes);
     }
 
     /// The surface area heuristic cost of the tree: expected box and triangle tests for a random

@@ -3,6 +3,7 @@
 //! closest point of the mesh (shrink-wrapping, Mertens §5.1.2). Rays hit triangles from either
 //! side, and a ray's parameter `t` is in units of the length of its direction.
 
+use super::wide::RayWalk;
 use super::{Bvh, BvhNode};
 use glam::Vec3;
 use std::ops::Range;
@@ -133,81 +134,19 @@ impl Bvh {
         Some(best)
     }
 
-    /// Depth-first walk over the leaves whose boxes the ray `origin + t dir` enters for
-    /// `lo < t < hi` (from `t_min` and `t_max`), nearer child first, calling
-    /// `leaf(triangle slots, &mut lo, &mut hi)` for each. `leaf` may raise `lo` (a farthest-hit
-    /// search) or lower `hi` (a closest-hit search, which then skips every box beyond its best
-    /// hit), and stops the walk by returning true. A tree deeper than the fixed stack (only for
-    /// pathological inputs) ends the walk with [`RayWalk::TooDeep`], and the caller answers by
-    /// brute force rather than overflow.
+    /// The leaves the ray `origin + t dir` enters for `t_min < t < t_max`, nearer first
+    /// ([`super::wide::walk`] over the four-wide tree).
+    #[inline]
     fn ray_leaves(
         &self,
         origin: Vec3,
         dir: Vec3,
         t_min: f32,
         t_max: f32,
-        mut leaf: impl FnMut(Range<usize>, &mut f32, &mut f32) -> bool,
+        leaf: impl FnMut(Range<usize>, &mut f32, &mut f32) -> bool,
     ) -> RayWalk {
-        if self.nodes.is_empty() {
-            return RayWalk::Done;
-        }
-        let inv = dir.recip();
-        let (mut lo, mut hi) = (t_min, t_max);
-        let Some(root) = ray_box(origin, inv, &self.nodes[0], lo, hi) else {
-            return RayWalk::Done;
-        };
-        // Each entry: a node and the span of the ray inside its box when it was pushed.
-        let mut stack = [(0u32, root); 64];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let (index, (near, far)) = stack[top];
-            // The bounds may have moved since the node was pushed.
-            if near > hi || far < lo {
-                continue;
-            }
-            let node = &self.nodes[index as usize];
-            if node.is_leaf() {
-                if leaf(node.first as usize..(node.first + node.count) as usize, &mut lo, &mut hi) {
-                    return RayWalk::Stopped;
-                }
-                continue;
-            }
-            let (l, r) = (index + 1, node.first);
-            let spans = (
-                ray_box(origin, inv, &self.nodes[l as usize], lo, hi),
-                ray_box(origin, inv, &self.nodes[r as usize], lo, hi),
-            );
-            let (a, b) = match spans {
-                (Some(sl), Some(sr)) if sl.0 <= sr.0 => (Some((r, sr)), (l, sl)),
-                (Some(sl), Some(sr)) => (Some((l, sl)), (r, sr)),
-                (Some(sl), None) => (None, (l, sl)),
-                (None, Some(sr)) => (None, (r, sr)),
-                (None, None) => continue,
-            };
-            if top + 2 > stack.len() {
-                return RayWalk::TooDeep;
-            }
-            // The farther child first, so the nearer one is popped next.
-            if let Some(farther) = a {
-                stack[top] = farther;
-                top += 1;
-            }
-            stack[top] = b;
-            top += 1;
-        }
-        RayWalk::Done
+        super::wide::walk(&self.wide, origin, dir, t_min, t_max, leaf)
     }
-}
-
-/// How [`Bvh::ray_leaves`] ended.
-enum RayWalk {
-    /// The leaf callback asked to stop.
-    Stopped,
-    /// Every leaf the ray enters was visited.
-    Done,
-    /// The tree is deeper than the traversal stack.
-    TooDeep,
 }
 
 /// Squared distance from `p` to the node's box (0 inside).
@@ -256,19 +195,6 @@ pub fn closest_on_triangle(p: Vec3, t: &[Vec3; 3]) -> Vec3 {
     a + ab * (vb / denom) + ac * (vc / denom)
 }
 
-/// Slab test: the span `(near, far)` of the ray inside the node's box within `(t_min, t_max)`,
-/// or `None` if it misses it there.
-#[inline]
-fn ray_box(origin: Vec3, inv_dir: Vec3, n: &BvhNode, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
-    let t0 = (n.min - origin) * inv_dir;
-    let t1 = (n.max - origin) * inv_dir;
-    // NaN (0 * inf on a slab the ray lies in) is ignored by min/max of glam's lane-wise ops on
-    // most targets; a ray parallel to a face counts as inside, which is conservative.
-    let near = t0.min(t1).max_element().max(t_min);
-    let far = t0.max(t1).min_element().min(t_max);
-    (near <= far).then_some((near, far))
-}
-
 /// Möller–Trumbore, both sides: whether the ray hits triangle `t` at `t_min < t < t_max`.
 #[inline]
 fn ray_triangle(origin: Vec3, dir: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f32) -> bool {
@@ -279,6 +205,9 @@ fn ray_triangle(origin: Vec3, dir: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f32
 /// `t_min < t < t_max`.
 #[inline]
 fn ray_triangle_t(origin: Vec3, dir: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f32) -> Option<f32> {
+    use glam::Vec3A;
+    let (origin, dir) = (Vec3A::from(origin), Vec3A::from(dir));
+    let tri = tri.map(Vec3A::from);
     let e1 = tri[1] - tri[0];
     let e2 = tri[2] - tri[0];
     let p = dir.cross(e2);
@@ -305,12 +234,10 @@ fn ray_triangle_t(origin: Vec3, dir: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f
 mod tests {
     use super::*;
 
-    /// The ray queries against every triangle tried in turn, on random rays through and around
-    /// the bunny, from outside and from on its surface (as the bounce and thickness rays are).
-    #[test]
-    fn ray_queries_agree_with_brute_force() {
-        let mesh = crate::mesh::embedded::bunny();
-        let bvh = Bvh::build(&mesh);
+    /// The ray queries against every triangle tried in turn on `rays` random rays through and
+    /// around `mesh`, from outside and from on its surface (as the bounce and thickness rays
+    /// are); returns how many hit.
+    fn agree_with_brute_force(mesh: &crate::mesh::Mesh, bvh: &Bvh, rays: usize) -> usize {
         let (lo, hi) = mesh.bounds();
         let mut seed = 0x2545_f491_u32;
         let mut rnd = || {
@@ -319,13 +246,18 @@ mod tests {
         };
         let tris: Vec<[Vec3; 3]> = (0..mesh.triangles.len()).map(|f| mesh.corners(f)).collect();
         let mut hits = 0;
-        for i in 0..400 {
-            let origin = if i % 2 == 0 {
+        for i in 0..rays {
+            let origin = if i % 2 == 0 || tris.is_empty() {
                 lo - (hi - lo) * 0.25 + (hi - lo) * 1.5 * Vec3::new(rnd(), rnd(), rnd())
             } else {
                 mesh.face_centroid((rnd() * mesh.triangles.len() as f32) as usize % mesh.triangles.len())
             };
-            let dir = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+            // Every seventh ray along an axis: direction components of exactly 0.
+            let dir = if i % 7 == 3 {
+                [Vec3::X, Vec3::NEG_Y, Vec3::Z][i % 3]
+            } else {
+                Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize()
+            };
             let (t_min, t_max) = (1e-4, if i % 3 == 0 { 5.0 } else { f32::INFINITY });
             let ts: Vec<f32> =
                 tris.iter().filter_map(|t| ray_triangle_t(origin, dir, t, t_min, t_max)).collect();
@@ -350,6 +282,34 @@ mod tests {
             }
             hits += ts.len().min(1);
         }
+        hits
+    }
+
+    #[test]
+    fn ray_queries_agree_with_brute_force() {
+        let mesh = crate::mesh::embedded::bunny();
+        let hits = agree_with_brute_force(&mesh, &Bvh::build(&mesh), 400);
         assert!(hits > 100, "{hits} of 400 rays hit");
+    }
+
+    /// The four-wide tree the queries walk follows a refit (a twisted bunny, without a
+    /// rebuild), and trees of no, one and two triangles (a root that is a leaf).
+    #[test]
+    fn ray_queries_agree_after_a_refit_and_on_tiny_trees() {
+        let mut mesh = crate::mesh::embedded::bunny();
+        let mut bvh = Bvh::build(&mesh);
+        let (lo, hi) = mesh.bounds();
+        for p in &mut mesh.positions {
+            let a = 1.5 * (p.y - lo.y) / (hi.y - lo.y);
+            *p = Vec3::new(p.x * a.cos() - p.z * a.sin(), p.y, p.x * a.sin() + p.z * a.cos());
+        }
+        bvh.refit(&mesh);
+        let hits = agree_with_brute_force(&mesh, &bvh, 300);
+        assert!(hits > 60, "{hits} of 300 rays hit");
+        let (p, t) = (mesh.positions.clone(), mesh.triangles.clone());
+        for n in [0, 1, 2] {
+            let small = crate::mesh::Mesh::new(p.clone(), t[..n].to_vec());
+            agree_with_brute_force(&small, &Bvh::build(&small), 100);
+        }
     }
 }
