@@ -24,8 +24,24 @@ use std::hint::black_box;
 
 const BATCHES: usize = 1024;
 
-fn point_samples(c: &mut Criterion) {
+/// Every profile on every instruction set this CPU has, for a receiver at `x_o` with normal
+/// `n_o`: the bench's name, the profile and the receiver's poles. Marble at 10 cm on a unit
+/// mesh: distances span the profile's whole range.
+fn profiles(x_o: Vec3, n_o: Vec3) -> Vec<(String, DipoleF32, ReceiverSources)> {
     let m = Material::by_name("marble").unwrap();
+    let mut out = Vec::new();
+    for kind in ProfileKind::ALL {
+        for isa in Isa::available() {
+            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
+            let d = DipoleF32::new(&dip).with_isa(isa);
+            let src = ReceiverSources::new(&d, x_o, n_o);
+            out.push((format!("{}/{}", kind.name(), isa.name()), d, src));
+        }
+    }
+    out
+}
+
+fn point_samples(c: &mut Criterion) {
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
     let mut point = || Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
     let x_o = point();
@@ -34,23 +50,17 @@ fn point_samples(c: &mut Criterion) {
     let areas = [1e-3f32, 2e-3, 5e-4, 1e-3];
     let mut group = c.benchmark_group("point_samples");
     group.throughput(Throughput::Elements((4 * BATCHES) as u64));
-    for kind in ProfileKind::ALL {
-        for isa in Isa::available() {
-            // Marble at 10 cm on a unit mesh: distances span the profile's whole range.
-            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
-            let d = DipoleF32::new(&dip).with_isa(isa);
-            let src = ReceiverSources::new(&d, x_o, n_o);
-            group.bench_function(format!("{}/{}", kind.name(), isa.name()), |b| {
-                b.iter(|| {
-                    let mut acc = 0.0f32;
-                    for p in &emitters {
-                        let v = src.point_samples(&d, black_box(p), &areas);
-                        acc += v[0][0] + v[1][1] + v[2][2] + v[3][0];
-                    }
-                    black_box(acc)
-                })
-            });
-        }
+    for (name, d, src) in profiles(x_o, n_o) {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let mut acc = 0.0f32;
+                for p in &emitters {
+                    let v = src.point_samples(&d, black_box(p), &areas);
+                    acc += v[0][0] + v[1][1] + v[2][2] + v[3][0];
+                }
+                black_box(acc)
+            })
+        });
     }
     group.finish();
     // The same estimates sixteen points to a register, as the near field's cubature makes
@@ -58,15 +68,8 @@ fn point_samples(c: &mut Criterion) {
     let tris: Vec<([Vec3; 3], f32)> = emitters.iter().map(|p| ([p[0], p[1], p[2]], 1e-3)).collect();
     let mut group = c.benchmark_group("point_sums");
     group.throughput(Throughput::Elements((7 * tris.len()) as u64));
-    for kind in ProfileKind::ALL {
-        for isa in Isa::available() {
-            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
-            let d = DipoleF32::new(&dip).with_isa(isa);
-            let src = ReceiverSources::new(&d, x_o, n_o);
-            group.bench_function(format!("{}/{}", kind.name(), isa.name()), |b| {
-                b.iter(|| black_box(src.cubature(&d, black_box(&tris))))
-            });
-        }
+    for (name, d, src) in profiles(x_o, n_o) {
+        group.bench_function(name, |b| b.iter(|| black_box(src.cubature(&d, black_box(&tris)))));
     }
     group.finish();
 }
