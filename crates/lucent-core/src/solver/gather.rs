@@ -464,9 +464,7 @@ impl FrameGeom {
             leaf_face,
         }
     }
-}
 
-impl FrameGeom {
     /// After `h` was refitted where `changed` says (an incremental update): the midpoints of
     /// the changed clusters and the weights of their children and themselves. The topology
     /// stays, so this visits each cluster once instead of making every array anew.
