@@ -1,8 +1,9 @@
 //! The binary tree of [`super::Bvh`] collapsed to four children a node, their boxes side by
-//! side so that one ray tests all four in a few SIMD operations (glam's `Vec4`: SSE2 on x86-64,
-//! NEON on aarch64, scalar elsewhere). The rays of subsurface bounces, shadows and single scattering start
-//! on the surface and mostly escape, so they visit many boxes and few triangles: on the 48K
-//! Stanford dragon a bounce ray popped 38 binary nodes (76 box tests) for 7.5 leaves.
+//! side so that one ray tests all four in a few SIMD operations (glam's `Vec4`: SSE2 on
+//! x86-64, NEON on aarch64, scalar elsewhere). The rays of subsurface bounces, shadows and
+//! single scattering start on the surface and mostly escape, so they visit many boxes and few
+//! triangles: on the 48K Stanford dragon a bounce ray popped 38 binary nodes (76 box tests)
+//! for 7.5 leaves.
 //!
 //! The binary tree stays the one built and refitted; this copy is made from it after each,
 //! and each of its child slots remembers the binary node it mirrors.
