@@ -404,7 +404,8 @@ impl RenderFrame<'_> {
         } else {
             Linear { value: self.value(r) + above.value, ..Linear::default() }
         };
-        let offset = |c: usize| Vec3A::from(h.geom[c].midpoint - h.geom[r].midpoint);
+        // Only linear receivers move their sum, and they have the flat midpoints.
+        let offset = |c: usize| self.mid[c] - self.mid[r];
         let moved = |c: usize| if self.linear { own.moved(offset(c)) } else { own };
         if n.leaf_count() > PAR_LEAVES {
             let parts = split_subtrees(&h.nodes, r, &mut b[r - base + 1..]);
