@@ -66,7 +66,10 @@ fn sum_portable(
         acc.add_link(t, c.slope(), m_r - mid[e], curved);
     };
     let n4 = emitter.len() / 4 * 4;
-    for (w, c) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)) {
+    for (i, (w, c)) in emitter.chunks_exact(4).zip(coef.chunks_exact(4)).enumerate() {
+        if i % 2 == 0 {
+            link_coef::prefetch_links(emitter, coef, 4 * i);
+        }
         for k in 0..4 {
             term(&mut acc[k], w[k], c[k]);
         }
@@ -100,7 +103,7 @@ fn assemble(
 
 #[cfg(target_arch = "x86_64")]
 mod wide {
-    use super::{FF_BIT, Linear, LinkCoef, assemble, curvature_along};
+    use super::{FF_BIT, Linear, LinkCoef, assemble, curvature_along, link_coef};
     use crate::solver::oracle::FALLOFF_POWER;
     use glam::Vec3A;
     use std::arch::x86_64::*;
@@ -137,6 +140,9 @@ mod wide {
         let odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
         let mut k = 0;
         while k < n {
+            // Sixteen links are two cache lines of coefficients.
+            link_coef::prefetch_links(emitter, coef, k);
+            link_coef::prefetch_links(emitter, coef, k + 8);
             let left = n - k;
             let lanes: __mmask16 = if left >= 16 { !0 } else { (1u16 << left) - 1 };
             // SAFETY: masked loads touch only the lanes of `lanes`, which lie inside
