@@ -24,6 +24,86 @@ use glam::Vec3;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+/// The pending merges: a heap with four children a node, popping the greatest [`Merge`] (the
+/// cheapest, through its reversed `Ord`) first, so in the order `std`'s binary heap pops them
+/// (the order is total: the same tree). Each entry is one 128-bit key that orders as `Merge`
+/// does. The heap holds millions of entries, and a pop waits on memory at every level: four
+/// children share a 64-byte line, which halves the levels, and integer keys compare in one
+/// step (the 871K dragon's hierarchy 5.9 -> 4.6 s; eight children gave no more).
+#[derive(Debug, Default)]
+struct MergeQueue(Vec<u128>);
+
+/// Children a node of [`MergeQueue`].
+const ARITY: usize = 4;
+
+impl MergeQueue {
+    fn with_capacity(n: usize) -> Self {
+        MergeQueue(Vec::with_capacity(n))
+    }
+
+    /// `m`'s key: greater for a greater `Merge` (lower cost, then lower `a`, then lower `b`).
+    fn key(m: Merge) -> u128 {
+        let bits = m.cost.to_bits();
+        // `f64::total_cmp`'s order as an unsigned integer's.
+        let ordered = bits ^ if bits >> 63 == 1 { u64::MAX } else { 1 << 63 };
+        ((!ordered as u128) << 64) | ((!m.a as u128) << 32) | (!m.b as u128)
+    }
+
+    fn merge_of(k: u128) -> Merge {
+        let ordered = !((k >> 64) as u64);
+        let bits = ordered ^ if ordered >> 63 == 1 { 1 << 63 } else { u64::MAX };
+        Merge { cost: f64::from_bits(bits), a: !((k >> 32) as u32), b: !(k as u32) }
+    }
+
+    fn push(&mut self, m: Merge) {
+        let k = Self::key(m);
+        let v = &mut self.0;
+        let mut i = v.len();
+        v.push(k);
+        while i > 0 {
+            let parent = (i - 1) / ARITY;
+            if v[parent] >= k {
+                break;
+            }
+            v[i] = v[parent];
+            i = parent;
+        }
+        v[i] = k;
+    }
+
+    fn pop(&mut self) -> Option<Merge> {
+        let v = &mut self.0;
+        let last = v.pop()?;
+        if v.is_empty() {
+            return Some(Self::merge_of(last));
+        }
+        let top = v[0];
+        // Sift `last` down from the root: at each level the greatest of up to four children
+        // moves up while it is greater.
+        let n = v.len();
+        let mut i = 0;
+        loop {
+            let first = ARITY * i + 1;
+            if first >= n {
+                break;
+            }
+            let mut best = first;
+            for c in first + 1..(first + ARITY).min(n) {
+                if v[c] > v[best] {
+                    best = c;
+                }
+            }
+            if v[best] <= last {
+                break;
+            }
+            v[i] = v[best];
+            i = best;
+        }
+        v[i] = last;
+        Some(Self::merge_of(top))
+    }
+}
+
 /// A pending merge in the heap (min-heap on `cost` through the reversed `Ord`).
 #[derive(Clone, Copy, Debug)]
 struct Merge {
@@ -194,7 +274,7 @@ impl Clusters {
     /// Greedy contraction of the dual graph of the `n` faces, cheapest merge first, until no
     /// dual edge is left.
     fn contract(&mut self, n: usize) {
-        let mut heap = BinaryHeap::with_capacity(3 * n);
+        let mut heap = MergeQueue::with_capacity(3 * n);
         for a in 0..n {
             for &(b, shared) in &self.adj[a] {
                 if (a as u32) < b {
@@ -216,7 +296,7 @@ impl Clusters {
 
     /// Merges the live clusters `a` and `b` into a new one and queues its merges with its
     /// neighbours.
-    fn merge(&mut self, a: u32, b: u32, heap: &mut BinaryHeap<Merge>) {
+    fn merge(&mut self, a: u32, b: u32, heap: &mut MergeQueue) {
         let c = self.children.len() as u32;
         // Entries may name clusters merged since: resolve them (their lengths add up).
         let mut shared = 0.0;
@@ -227,7 +307,8 @@ impl Clusters {
             }
         }
         self.adj[a as usize] = list;
-        let mut nb: Vec<(u32, f64)> = Vec::new();
+        let mut nb: Vec<(u32, f64)> =
+            Vec::with_capacity(self.adj[a as usize].len() + self.adj[b as usize].len());
         for src in [a, b] {
             for &(x, len) in &std::mem::take(&mut self.adj[src as usize]) {
                 let x = find(&mut self.forward, x);
@@ -334,18 +415,53 @@ impl Clusters {
     }
 }
 
-/// Sums the lengths of repeated neighbour ids (keeps the first occurrence's position order).
+/// Sorts `list` by neighbour id and sums the lengths of repeated ids into one entry, in place.
 fn combine_duplicates(list: &mut Vec<(u32, f64)>) {
     if list.len() < 2 {
         return;
     }
     list.sort_unstable_by_key(|e| e.0);
-    let mut out: Vec<(u32, f64)> = Vec::with_capacity(list.len());
-    for &(x, l) in list.iter() {
-        match out.last_mut() {
-            Some(last) if last.0 == x => last.1 += l,
-            _ => out.push((x, l)),
+    list.dedup_by(|next, kept| {
+        let same = next.0 == kept.0;
+        if same {
+            kept.1 += next.1;
         }
+        same
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The queue pops what `std`'s binary heap pops, entry for entry, with pushes and pops
+    /// interleaved, costs repeated (ties broken by the ids), zero of both signs and very
+    /// large and small costs.
+    #[test]
+    fn merge_queue_pops_in_the_binary_heaps_order() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        let costs = [0.0, -0.0, 1e-300, 0.5, 0.5, 2.0, 1e300, f64::MAX];
+        let (mut q, mut want) = (MergeQueue::with_capacity(0), BinaryHeap::new());
+        for step in 0..20_000 {
+            if rng.random_range(0..3) > 0 || want.is_empty() {
+                let cost = if step % 2 == 0 {
+                    costs[rng.random_range(0..costs.len())]
+                } else {
+                    rng.random_range(0.0..4.0)
+                };
+                let m = Merge { cost, a: rng.random_range(0..50), b: rng.random_range(0..u32::MAX) };
+                q.push(m);
+                want.push(m);
+            } else {
+                let (got, w) = (q.pop().expect("not empty"), want.pop().expect("not empty"));
+                assert_eq!((got.cost.to_bits(), got.a, got.b), (w.cost.to_bits(), w.a, w.b), "step {step}");
+            }
+        }
+        while let Some(w) = want.pop() {
+            let got = q.pop().expect("as many entries");
+            assert_eq!((got.cost.to_bits(), got.a, got.b), (w.cost.to_bits(), w.a, w.b));
+        }
+        assert!(q.pop().is_none());
     }
-    *list = out;
 }
