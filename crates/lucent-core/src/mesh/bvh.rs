@@ -139,6 +139,13 @@ impl Bvh {
         wide::refit(&mut self.wide, &self.nodes);
     }
 
+    /// Every mesh face once, in the tree's leaf order: faces near each other in space are near
+    /// each other here, so rays cast from them in this order walk the same nodes while those
+    /// are in cache.
+    pub fn leaf_order(&self) -> &[u32] {
+        &self.faces
+    }
+
     /// The surface area heuristic cost of the tree: expected box and triangle tests for a random
     /// ray that hits the root, `Σ_inner A·c_trav + Σ_leaf A·n` over the root's area `A_root`.
     /// Grows as refitting stretches the boxes of a deforming mesh.

@@ -251,7 +251,13 @@ impl ThicknessRays {
     /// inside each face.
     pub fn trace(mesh: &Mesh, bvh: &Bvh, offset: f32) -> Self {
         let faces = mesh.triangles.len();
-        let hits = (0..faces).into_par_iter().map(|f| trace_face(mesh, bvh, offset, f)).collect();
+        // In the tree's leaf order, then back to face order: neighbours' rays share nodes.
+        let order = bvh.leaf_order();
+        let traced: Vec<_> = order.par_iter().map(|&f| trace_face(mesh, bvh, offset, f as usize)).collect();
+        let mut hits = vec![[None; 5]; faces];
+        for (&f, h) in order.iter().zip(traced) {
+            hits[f as usize] = h;
+        }
         let normals = (0..faces).map(|f| mesh.face_normal(f)).collect();
         ThicknessRays { hits, normals, pose: TracedPose::of(mesh) }
     }
