@@ -90,14 +90,16 @@ impl BounceRays {
         if let Some(p) = progress {
             p.start("bounce rays", faces);
         }
-        // Faces in runs of `RUN`: one progress count and one hit buffer per run, not per face.
+        // Faces in runs of `RUN`, in the BVH's leaf order (neighbours' rays walk the same
+        // nodes): one progress count and one hit buffer per run, not per face.
         const RUN: usize = 256;
-        let runs: Vec<Run> = (0..faces.div_ceil(RUN))
-            .into_par_iter()
+        let order = caster.bvh().leaf_order();
+        let runs: Vec<Run> = order
+            .par_chunks(RUN)
             .map(|run| {
-                let range = run * RUN..faces.min((run + 1) * RUN);
-                let (mut counts, mut hits) = (Vec::with_capacity(range.len()), Vec::new());
-                for f in range.clone() {
+                let (mut counts, mut hits) = (Vec::with_capacity(run.len()), Vec::new());
+                for &f in run {
+                    let f = f as usize;
                     let n = mesh.face_normal(f);
                     let origin = mesh.face_centroid(f) + n * eps;
                     let before = hits.len();
@@ -111,25 +113,38 @@ impl BounceRays {
                     counts.push((hits.len() - before) as u32);
                 }
                 if let Some(p) = progress {
-                    p.add(range.len());
+                    p.add(run.len());
                 }
                 (counts, hits)
             })
             .collect();
+        // Back to face order: offsets from each face's count, then each run's hits moved to
+        // their faces' places.
+        let mut count = vec![0u32; faces];
+        for (&f, &c) in order.iter().zip(runs.iter().flat_map(|(counts, _)| counts)) {
+            count[f as usize] = c;
+        }
         let mut offsets = Vec::with_capacity(faces + 1);
         offsets.push(0u32);
-        let total = runs.iter().map(|(_, h)| h.len()).sum();
-        let (mut hits, mut traced) = (Vec::with_capacity(total), Vec::with_capacity(total));
-        for (counts, run_hits) in runs {
-            for c in counts {
-                let end = offsets.last().expect("starts at 0").checked_add(c);
-                offsets.push(end.expect("fewer than 2^32 bounce hits"));
-            }
-            for (hit, at) in run_hits {
-                hits.push(hit);
-                traced.push(at);
+        for c in count {
+            let end = offsets.last().expect("starts at 0").checked_add(c);
+            offsets.push(end.expect("fewer than 2^32 bounce hits"));
+        }
+        let total = *offsets.last().expect("starts at 0") as usize;
+        let none = (
+            Hit { k: 0, cos: 0.0, mu_k: 0.0, weight: 0.0 },
+            TracedHit { uv: [0.0; 2], cos: 0.0, mu_k: 0.0, r2: 0.0 },
+        );
+        let mut placed = vec![none; total];
+        for (faces_of_run, (counts, run_hits)) in order.chunks(RUN).zip(&runs) {
+            let mut at = 0;
+            for (&f, &c) in faces_of_run.iter().zip(counts) {
+                let (start, c) = (offsets[f as usize] as usize, c as usize);
+                placed[start..start + c].copy_from_slice(&run_hits[at..at + c]);
+                at += c;
             }
         }
+        let (hits, traced) = placed.into_iter().unzip();
         BounceRays {
             strata,
             offsets,
