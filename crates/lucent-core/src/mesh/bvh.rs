@@ -146,6 +146,17 @@ impl Bvh {
         &self.faces
     }
 
+    /// `f` of every face, evaluated in parallel in the tree's [leaf order](Bvh::leaf_order) and
+    /// returned in face order: for work that casts rays from each face.
+    pub fn map_faces<T: Send + Clone + Default>(&self, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+        let in_leaf_order: Vec<T> = self.faces.par_iter().map(|&face| f(face as usize)).collect();
+        let mut out = vec![T::default(); self.faces.len()];
+        for (&face, v) in self.faces.iter().zip(in_leaf_order) {
+            out[face as usize] = v;
+        }
+        out
+    }
+
     /// The surface area heuristic cost of the tree: expected box and triangle tests for a random
     /// ray that hits the root, `Σ_inner A·c_trav + Σ_leaf A·n` over the root's area `A_root`.
     /// Grows as refitting stretches the boxes of a deforming mesh.

@@ -148,39 +148,39 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
     radiance
 }
 
-/// Single-scattered radiance along each view ray (`Rgb::ZERO` where there is none), before
-/// the exit Fresnel factor.
+/// Single-scattered radiance along each face's view ray (`Rgb::ZERO` where there is none),
+/// before the exit Fresnel factor.
 fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
     let d = scene.dipole;
     let eta = d.eta as f32;
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
-    rays.par_iter()
-        .map(|ray| {
-            let Some(ray) = ray else { return Rgb::ZERO };
-            let mut l = Rgb::ZERO;
-            if !scene.lights.is_empty() {
-                for c in 0..3 {
-                    let u_max = 1.0 - (-sigma_t[c] * ray.exit).exp();
-                    let mut sum = 0.0;
-                    for (node, weight) in GAUSS_4 {
-                        let t = -(-u_max * node).ln_1p() / sigma_t[c];
-                        let p = ray.origin + ray.w_t * t;
-                        for light in scene.lights {
-                            sum += weight * light_flux_at(scene, light, p, eta, c, sigma_t[c]);
-                        }
+    // Faces in the tree's leaf order: neighbours' shadow rays walk the same nodes.
+    debug_assert_eq!(rays.len(), scene.mesh.triangles.len(), "one view ray a face");
+    scene.bvh.map_faces(|f| {
+        let Some(ray) = &rays[f] else { return Rgb::ZERO };
+        let mut l = Rgb::ZERO;
+        if !scene.lights.is_empty() {
+            for c in 0..3 {
+                let u_max = 1.0 - (-sigma_t[c] * ray.exit).exp();
+                let mut sum = 0.0;
+                for (node, weight) in GAUSS_4 {
+                    let t = -(-u_max * node).ln_1p() / sigma_t[c];
+                    let p = ray.origin + ray.w_t * t;
+                    for light in scene.lights {
+                        sum += weight * light_flux_at(scene, light, p, eta, c, sigma_t[c]);
                     }
-                    l[c] = albedo[c] / (4.0 * PI) * sum * u_max;
                 }
+                l[c] = albedo[c] / (4.0 * PI) * sum * u_max;
             }
-            if let Some((e, kernel)) = &env {
-                l += kernel.radiance(e, ray.normal, ray.mu_o);
-                l += environment_through_body(scene, e, ray);
-            }
-            (l / (eta * eta)).max(Rgb::ZERO)
-        })
-        .collect()
+        }
+        if let Some((e, kernel)) = &env {
+            l += kernel.radiance(e, ray.normal, ray.mu_o);
+            l += environment_through_body(scene, e, ray);
+        }
+        (l / (eta * eta)).max(Rgb::ZERO)
+    })
 }
 
 /// Where the eye looks into the body at one point of the surface.

@@ -251,13 +251,8 @@ impl ThicknessRays {
     /// inside each face.
     pub fn trace(mesh: &Mesh, bvh: &Bvh, offset: f32) -> Self {
         let faces = mesh.triangles.len();
-        // In the tree's leaf order, then back to face order: neighbours' rays share nodes.
-        let order = bvh.leaf_order();
-        let traced: Vec<_> = order.par_iter().map(|&f| trace_face(mesh, bvh, offset, f as usize)).collect();
-        let mut hits = vec![[None; 5]; faces];
-        for (&f, h) in order.iter().zip(traced) {
-            hits[f as usize] = h;
-        }
+        // In the tree's leaf order: neighbours' rays walk the same nodes.
+        let hits = bvh.map_faces(|f| trace_face(mesh, bvh, offset, f));
         let normals = (0..faces).map(|f| mesh.face_normal(f)).collect();
         ThicknessRays { hits, normals, pose: TracedPose::of(mesh) }
     }
