@@ -140,8 +140,8 @@ pub struct FrameSettings {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timings {
     /// Irradiance at the leaves: lights, shadow rays, environment (and the BVH refit), the
-    /// body's thickness rays and, on a new mesh's first hierarchical solve, the hierarchy's
-    /// build, which runs beside them.
+    /// body's thickness rays and, on a new mesh's first hierarchical solve, the solver's
+    /// making (its hierarchy's build), which runs beside them.
     pub irradiance_ms: f64,
     /// Profile tables, link creation, refinement or incremental update.
     pub link_ms: f64,
@@ -249,8 +249,7 @@ pub struct FrameSession {
     settings: FrameSettings,
     lights: Vec<SceneLight>,
     environment: Option<Environment>,
-    /// The hierarchy a front end built (shrink-wrap), or the one [`FrameSession::solve`]
-    /// built beside the irradiance, until the solver takes it.
+    /// The hierarchy a front end built (shrink-wrap), until the solver takes it.
     hierarchy: Option<Hierarchy>,
     solver: Option<HierarchicalSolver>,
     caster: Option<ShadowCaster>,
@@ -482,15 +481,14 @@ impl FrameSession {
             self.last.fresh = true;
             return &self.last;
         }
-        // A new mesh's hierarchy is built on one core (a greedy contraction): build it beside
-        // the irradiance and the body's rays, which do not need it (871K dragon: 4.4 s alone).
-        let rest = (self.settings.method == Method::Hierarchical
-            && self.solver.is_none()
-            && self.hierarchy.is_none())
-        .then(|| Mesh::new(self.rest.clone(), self.mesh.triangles.clone()));
+        // A new mesh's solver needs its hierarchy, built on one core (a greedy contraction):
+        // make it beside the irradiance and the body's rays, which do not need it (871K
+        // dragon: 4.4 s alone).
+        let make = (self.settings.method == Method::Hierarchical && self.solver.is_none())
+            .then(|| self.solver_maker());
         let t = Instant::now();
-        let (hierarchy, ()) = rayon::join(
-            || rest.as_ref().map(face_cluster::build),
+        let (solver, ()) = rayon::join(
+            || make.map(|make| make()),
             || {
                 if changes.geometry || changes.light || changes.transport || self.irradiance.is_empty() {
                     self.irradiance = self.face_irradiance(changes.geometry);
@@ -500,8 +498,8 @@ impl FrameSession {
                 }
             },
         );
-        if hierarchy.is_some() {
-            self.hierarchy = hierarchy;
+        if solver.is_some() {
+            self.solver = solver;
         }
         timings.irradiance_ms = ms_since(t);
 
@@ -675,12 +673,22 @@ impl FrameSession {
     /// Makes the hierarchical solver on first use, on the rest pose.
     fn make_solver(&mut self) {
         if self.solver.is_none() {
-            let rest = Mesh::new(self.rest.clone(), self.mesh.triangles.clone());
-            let h = self.hierarchy.take().unwrap_or_else(|| face_cluster::build(&rest));
-            let mut s = HierarchicalSolver::new(rest, h, self.dipole.clone(), self.oracle());
+            self.solver = Some(self.solver_maker()());
+        }
+    }
+
+    /// What makes the hierarchical solver on the rest pose (building the hierarchy unless a
+    /// front end gave one), to run on any thread.
+    fn solver_maker(&mut self) -> impl FnOnce() -> HierarchicalSolver + Send + use<> {
+        let rest = Mesh::new(self.rest.clone(), self.mesh.triangles.clone());
+        let given = self.hierarchy.take();
+        let (dipole, oracle, progress) = (self.dipole.clone(), self.oracle(), self.progress.clone());
+        move || {
+            let h = given.unwrap_or_else(|| face_cluster::build(&rest));
+            let mut s = HierarchicalSolver::new(rest, h, dipole, oracle);
             s.ff_opts = FormFactorOptions::default();
-            s.progress = self.progress.clone();
-            self.solver = Some(s);
+            s.progress = progress;
+            s
         }
     }
 }
