@@ -54,10 +54,7 @@ pub const DEFAULT_BOUNCES: u32 = 3;
 /// on thin parts (a face of the bunny at 1 cm returns 15,504 times its light), and bounces
 /// carried that glow on (the 11K dragon's bias +9% at one bounce, +161% at three).
 pub fn default_bounces(profile: lucent_core::bssrdf::ProfileKind) -> u32 {
-    match profile {
-        lucent_core::bssrdf::ProfileKind::Mertens => 0,
-        _ => DEFAULT_BOUNCES,
-    }
+    if profile.bounces_by_default() { DEFAULT_BOUNCES } else { 0 }
 }
 
 /// The bounces after the profile changed from `before` to `after` (the viewer's profile
@@ -116,7 +113,7 @@ mod tests {
         use lucent_core::bssrdf::ProfileKind::{Dipole, Mertens, Pbd};
         assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Mertens), 0);
         assert_eq!(bounces_after_profile_change(0, Mertens, Pbd), DEFAULT_BOUNCES);
-        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Dipole), DEFAULT_BOUNCES);
+        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Profile), DEFAULT_BOUNCES);
         assert_eq!(bounces_after_profile_change(1, Pbd, Mertens), 1, "chosen by hand");
         assert_eq!(bounces_after_profile_change(2, Mertens, Pbd), 2, "chosen by hand");
     }
