@@ -19,13 +19,13 @@
 //! 2 = albedo map and sampler (a mesh's colour texture: the radiance is multiplied by its
 //! square root per pixel, the exit half of `lucent_core::mesh::texture`'s modulation).
 
-use crate::camera::CameraView;
 use crate::context::{DEPTH_FORMAT, GpuContext, GpuError};
 pub use crate::surface_maps::{AlbedoMap, EnvironmentMap};
 use crate::surface_maps::{albedo_bind_group, env_bind_group, texture_layout};
 use glam::{Vec2, Vec3};
 use lucent_core::Rgb;
 use lucent_core::bssrdf::ExitLobe;
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::Light;
 use wgpu::util::DeviceExt;
 
@@ -123,7 +123,7 @@ impl GpuMesh {
             contents: bytemuck::cast_slice(triangles),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let (center, radius) = crate::camera::bounding_sphere(positions);
+        let (center, radius) = lucent_core::camera::bounding_sphere(positions);
         Ok(GpuMesh {
             geometry,
             radiance,

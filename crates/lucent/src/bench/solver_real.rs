@@ -27,6 +27,7 @@ use anyhow::Context;
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
+use lucent_core::clock::ms_since;
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
@@ -263,10 +264,6 @@ fn peak_rss_mib() -> f64 {
                 .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
         })
         .map_or(0.0, |kib| kib / 1024.0)
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 fn measure(
