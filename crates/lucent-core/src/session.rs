@@ -30,6 +30,7 @@
 
 use crate::Rgb;
 use crate::bssrdf::Profile;
+use crate::clock::ms_since;
 use crate::hierarchy::Hierarchy;
 use crate::irradiance::{Environment, SceneLight};
 use crate::mesh::Mesh;
@@ -493,10 +494,6 @@ impl FrameSession {
         self.last.fresh = true;
         &self.last
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

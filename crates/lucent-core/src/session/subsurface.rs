@@ -2,8 +2,9 @@
 //! to radiosity `B` per face, by the hierarchical solver (its hierarchy and links kept across
 //! frames as the solve mode says, §5.5) or by the exact O(N²) sum.
 
-use super::{Changes, Frame, Method, SolveMode, Timings, ms_since};
+use super::{Changes, Frame, Method, SolveMode, Timings};
 use crate::Rgb;
+use crate::clock::ms_since;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::mesh::Mesh;
