@@ -17,7 +17,7 @@
 //!
 //! pbrt-v3 estimates both integrals with 100 stratified exponential samples and tabulates the
 //! result over albedo and radius. lucent evaluates them per channel at material set-up on the
-//! 1,025-point radial grid of [`super::RadialTable`] instead (about 10 ms for three channels):
+//! 1,025-point radial grid of [`super::RadialTable`] instead (once per material and scale):
 //! there is no interpolation across albedo, and the depth integrals use composite
 //! Gauss-Legendre on geometric panels, which resolves the `1/r` peak of single scattering near
 //! the entry point that 100 exponential samples miss.
@@ -197,7 +197,7 @@ impl EffectiveAlbedo {
     /// Rows of the table.
     pub const ROWS: usize = 100;
 
-    /// The table for `eta` (100 half-space albedos, in parallel: about 50 ms on two cores).
+    /// The table for `eta` (100 half-space albedos, computed in parallel; made once per `eta`).
     pub fn new(eta: f64) -> Self {
         use rayon::prelude::*;
         let rho: Vec<f64> = (0..Self::ROWS)
