@@ -32,7 +32,7 @@ fn on_the_fly_matches_the_solver_called_directly() {
     let mut s = session(SolveMode::OnTheFly);
     let b = s.solve().face_b.clone();
     let mesh = generate::icosphere(2);
-    let profile = marble().profile(mesh.extent());
+    let profile = marble().profile_at(mesh.extent());
     let entering = crate::irradiance::face_entering(&mesh, &key_light(), None, &profile.entry, None);
     let e: Vec<Rgb> = entering.iter().map(|e| e.carried).collect();
     let mut solver = HierarchicalSolver::new(
