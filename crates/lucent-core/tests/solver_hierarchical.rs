@@ -110,7 +110,7 @@ fn render_mode_equals_on_the_fly_with_curved_receivers() {
     let marble = Material::by_name("marble").unwrap();
     let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.05, ProfileKind::Pbd, true);
     let e = face_irradiance(&mesh, &point_light(), &d.entry);
-    let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::for_profile(d.profile));
+    let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::for_profile(d.kind));
     assert!(s.oracle.linear_receivers && s.oracle.curved_receivers);
     let otf = s.solve_on_the_fly(&e);
     s.link();
