@@ -39,7 +39,7 @@ fn on_the_fly_matches_the_solver_called_directly() {
         mesh.clone(),
         face_cluster::build(&mesh),
         profile.clone(),
-        Oracle::for_profile(profile.profile),
+        Oracle::for_profile(profile.kind),
     );
     // The session applies the finite-body gain of its pose with the energy bound.
     let caster = ShadowCaster::new(&mesh);
