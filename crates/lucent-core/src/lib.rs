@@ -22,6 +22,7 @@
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
 //! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes:
 //!   oracle, refinement, and each frame's pull, gather and push.
+//! * [`progress`]: a counter a front end polls to show a long solve's progress.
 //! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
 //!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
 //!   for what changed (§5.5).
@@ -40,6 +41,7 @@ pub mod hierarchy;
 pub mod irradiance;
 pub mod limits;
 pub mod mesh;
+pub mod progress;
 pub mod session;
 pub mod shading;
 pub mod simd;

@@ -24,7 +24,7 @@ use crate::Rgb;
 use crate::bssrdf::{Profile, fresnel_transmittance};
 use crate::mesh::Mesh;
 use crate::mesh::deform::TracedPose;
-use crate::solver::Progress;
+use crate::progress::Progress;
 use rayon::prelude::*;
 
 /// The rays of the bounce that hit the front of another face, per face: the geometry of

@@ -7,17 +7,13 @@
 
 use super::near_face::Nodes;
 use super::oracle::LinkKind;
-use super::point_sample::{PointBuf, ProfileF32, ReceiverSources, SmoothBound};
+use super::point_sample::{MAX_PIECES, PointBuf, ProfileF32, ReceiverSources, SmoothBound};
 use crate::bssrdf::Profile;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::Hierarchy;
 use glam::{DVec3, Vec3};
 
-/// Most pieces [`Evaluator::smooth_face`] cuts a face into for the cubature: 280 points,
-/// still cheaper than the edge integrals of a face that needs them (871K dragon: 1.2M such
-/// links took the edge integrals at 16 pieces, 0.17M at 40).
-pub(super) const MAX_PIECES: usize = 40;
 /// Deepest midpoint subdivision [`Evaluator::smooth_face`] tries (pieces of a quarter of
 /// the face's area, a sixteenth, ..., a 1024th).
 const MAX_DEPTH: u8 = 5;

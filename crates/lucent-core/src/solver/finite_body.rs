@@ -19,7 +19,7 @@
 //! The gain multiplies `B` as one factor for all channels (the table's per-channel gains
 //! weighted by the light each channel's half-space returns, so the profile keeps its hue), and
 //! the energy bound then keeps `B` under uniform light at most 1
-//! ([`super::energy::bound_with_gain`]): on a thin part, where the half-space profile already
+//! ([`super::bound::bound_with_gain`]): on a thin part, where the half-space profile already
 //! gathers from both sides, the bound takes the gain back. View-ray single scattering
 //! (`shading::single_scattering`) sees the real geometry and takes no gain.
 //!
@@ -135,7 +135,7 @@ impl FiniteBody {
     /// The gain of a face over a body `thickness` mesh units thick of slabness `s` (0..=1):
     /// the sphere's gain for that diameter as one factor (weighted by `R_d`), divided by
     /// `1 + s X(t) / R_d`, times each channel's reach factor over their weighted mean (module
-    /// docs). What [`super::energy::bound_with_gain`] applies.
+    /// docs). What [`super::bound::bound_with_gain`] applies.
     pub fn face_gain(&self, thickness: f32, s: f64) -> Rgb {
         let gain = self.weighted(self.gain(0.5 * thickness).to_array().map(f64::from));
         let reach = self.slab_reach(thickness);

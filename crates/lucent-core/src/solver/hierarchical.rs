@@ -18,17 +18,17 @@
 //! that every mode runs is in `solver::refine`, and a frame's pull, gather and push (render
 //! mode's over the stored links, on-the-fly mode's during the traversal) in `solver::gather`.
 
-use super::energy;
+use super::bound;
 use super::link_set::{ChunkPool, LinkSet};
 use super::local::Locality;
 use super::oracle::Oracle;
-use super::progress::Progress;
 use super::refine::Reuse;
 use crate::Rgb;
 use crate::bssrdf::Profile;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use glam::Vec3A;
 use std::sync::Arc;
 use std::sync::atomic::AtomicI64;
@@ -285,8 +285,8 @@ impl HierarchicalSolver {
     #[inline]
     pub(super) fn bound_factor(&self, f: usize, uniform: Rgb) -> Rgb {
         match &self.face_gain {
-            Some(g) => energy::bound_with_gain(uniform, g[f]),
-            None => energy::bound(uniform),
+            Some(g) => bound::bound_with_gain(uniform, g[f]),
+            None => bound::bound(uniform),
         }
     }
 

@@ -21,8 +21,8 @@
 //!   the receiver, for the tabulated profile (§4).
 //! * [`oracle`]: the refinement oracle (§5.2).
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
-//! * [`progress`]: a counter a front end polls to show a long solve's progress.
 
+pub mod bound;
 pub mod census;
 pub mod energy;
 mod evaluate;
@@ -36,14 +36,10 @@ pub mod link_set;
 pub mod local;
 mod near_face;
 pub mod oracle;
-mod point_kernel;
-#[cfg(target_arch = "x86_64")]
-mod point_kernel_avx512;
 pub mod point_sample;
-pub mod progress;
 mod refine;
 
+pub use crate::progress::Progress;
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};
-pub use progress::Progress;
