@@ -23,13 +23,10 @@
 //! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
 
 pub mod bound;
-pub mod census;
 pub mod energy;
 mod evaluate;
 pub mod exact;
 pub mod finite_body;
-mod gather;
-mod gather_linear;
 pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
@@ -37,9 +34,9 @@ pub mod local;
 mod near_face;
 pub mod oracle;
 pub mod point_sample;
-mod refine;
 
 pub use crate::progress::Progress;
+pub use hierarchical::census;
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};

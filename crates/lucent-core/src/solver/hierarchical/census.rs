@@ -3,10 +3,10 @@
 //! measurement behind "why do scanned meshes need so many links":
 //! `LUCENT_BENCH_CENSUS=1 lucent bench solver --real`). Diagnostic only: no solve reads it.
 
-use super::hierarchical::HierarchicalSolver;
-pub use super::oracle::Cause;
-use super::oracle::{Decision, LinkKind, ReceiverView, Samples};
-use super::point_sample::ProfileF32;
+use super::HierarchicalSolver;
+pub use crate::solver::oracle::Cause;
+use crate::solver::oracle::{Decision, LinkKind, ReceiverView, Samples};
+use crate::solver::point_sample::ProfileF32;
 use std::collections::BTreeMap;
 
 /// A candidate emitter with its one-point estimate at the receiver, if known.

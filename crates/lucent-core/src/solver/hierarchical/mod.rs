@@ -22,7 +22,6 @@ use super::bound;
 use super::link_set::{ChunkPool, LinkSet};
 use super::local::Locality;
 use super::oracle::Oracle;
-use super::refine::Reuse;
 use crate::Rgb;
 use crate::bssrdf::Profile;
 use crate::formfactor::FormFactorOptions;
@@ -30,9 +29,16 @@ use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::Vec3A;
+use link::Reuse;
 use std::sync::Arc;
 use std::sync::atomic::AtomicI64;
 use std::time::Instant;
+
+pub mod census;
+mod expansion;
+mod gather;
+mod gather_linear;
+mod link;
 
 /// Counters and timings of one solve or update. Times in milliseconds (wall clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -115,8 +121,8 @@ pub struct HierarchicalSolver {
     pub(super) frame: [Vec<Vec3A>; 2],
     /// What a frame's pull and gather read of the hierarchy, packed flat; made on first use,
     /// dropped wherever the hierarchy is refitted.
-    pub(super) frame_geom: std::sync::OnceLock<super::gather::FrameGeom>,
-    /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
+    pub(super) frame_geom: std::sync::OnceLock<gather::FrameGeom>,
+    /// Render mode's energy bound per face (see [`super::bound`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
     /// The profile's reach (see [`super::local`]).

@@ -7,13 +7,13 @@
 //! store the links ([`HierarchicalSolver::link`]; an incremental relink keeps what did not
 //! change, §5.5); on-the-fly mode gathers as it goes ([`super::gather`]).
 
-use super::evaluate::Evaluator;
-use super::hierarchical::{HierarchicalSolver, SolveStats};
-use super::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
-use super::local::Locality;
-use super::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
-use super::point_sample::ReceiverSources;
+use super::{HierarchicalSolver, SolveStats};
 use crate::hierarchy::{Hierarchy, PAR_LEAVES};
+use crate::solver::evaluate::Evaluator;
+use crate::solver::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
+use crate::solver::local::Locality;
+use crate::solver::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
+use crate::solver::point_sample::ReceiverSources;
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};

@@ -1,10 +1,10 @@
 //! Render mode's gather into an inner receiver with a linear or curved expansion (Mertens et
-//! al. 2003, §5.5, with the receiver expansion of [`super::gather`]): `B` at the receiver's
+//! al. 2003, §5.5, with the receiver expansion of [`super::expansion`]): `B` at the receiver's
 //! midpoint, its gradient and, for curved receivers, its Hessian, summed over the receiver's
 //! stored links. Each link adds its term `t = E_e F` (per channel) and, where it is steep
 //! (`s > 0`, its steepness across the receiver), `t k δ` to the gradient and `t w δδᵀ + t k I`
 //! to the Hessian, with `δ` the line from the emitter's midpoint to the receiver's,
-//! `k = -s / |δ|²` and `w = (s² + s + a) / |δ|⁴` ([`super::oracle::curvature_along`]).
+//! `k = -s / |δ|²` and `w = (s² + s + a) / |δ|⁴` ([`crate::solver::oracle::curvature_along`]).
 //!
 //! That is ten numbers a channel and link where the plain gather has one, so the portable
 //! path, one link at a time in 128-bit vectors, is bound by its arithmetic. The AVX-512 path
@@ -14,10 +14,10 @@
 //! 203K-triangle dragon (marble at 10 cm, one core of an Intel Xeon with AVX-512) a render
 //! frame takes 75-81 ms with the portable path and 56-57 ms with this one.
 
-use super::gather::{Hess, Linear};
-use super::link_coef::{self, FF_BIT, LinkCoef};
-use super::oracle::curvature_along;
+use super::expansion::{Hess, Linear};
 use crate::simd::Isa;
+use crate::solver::link_coef::{self, FF_BIT, LinkCoef};
+use crate::solver::oracle::curvature_along;
 use glam::Vec3A;
 
 /// One inner receiver's expansion `Σ` over its links (emitter words `emitter`, coefficients
@@ -274,7 +274,7 @@ mod wide {
     #[target_feature(enable = "avx512f")]
     fn half_lo(v: __m512i) -> __m512 {
         let bits = _mm512_slli_epi32::<13>(_mm512_and_si512(v, _mm512_set1_epi32(0xffff)));
-        _mm512_mul_ps(_mm512_castsi512_ps(bits), _mm512_set1_ps(super::link_coef::HALF_RESCALE))
+        _mm512_mul_ps(_mm512_castsi512_ps(bits), _mm512_set1_ps(crate::solver::link_coef::HALF_RESCALE))
     }
 
     /// [`half_lo`] of the high 16 bits of each lane.
