@@ -10,9 +10,8 @@
 //! path, one link at a time in 128-bit vectors, is bound by its arithmetic. The AVX-512 path
 //! takes sixteen links a step, one lane each (the emitter's `E` and midpoint by gathers, the
 //! coefficients' halves split by shifts), keeps the thirty sums per channel set in registers
-//! until the receiver is done, and takes `1 / |δ|²` from `vrcp14ps` and a Newton step. On the
-//! 203K-triangle dragon (marble at 10 cm, one core of an Intel Xeon with AVX-512) a render
-//! frame takes 75-81 ms with the portable path and 56-57 ms with this one.
+//! until the receiver is done, and takes `1 / |δ|²` from `vrcp14ps` and a Newton step rather
+//! than the divider.
 
 use super::expansion::{Hess, Linear};
 use crate::simd::Isa;
@@ -211,8 +210,22 @@ mod wide {
             }
             k += 16;
         }
-        // The sums' lanes added up, sixteen registers at a time.
-        let mut all = [zero; 48];
+        finish::<CURVED>(value, grad, diag, iso, off)
+    }
+
+    /// The expansion from [`sum_avx512`]'s per-lane sums of the value, the gradient and the
+    /// Hessian's diagonal, isotropic part and off-diagonal: their lanes added up, sixteen
+    /// registers at a time (the Hessian's only if `CURVED`).
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn finish<const CURVED: bool>(
+        value: [__m512; 3],
+        grad: [[__m512; 3]; 3],
+        diag: [[__m512; 3]; 3],
+        iso: [__m512; 3],
+        off: [[__m512; 3]; 3],
+    ) -> Linear {
+        let mut all = [_mm512_setzero_ps(); 48];
         all[..3].copy_from_slice(&value);
         all[21..24].copy_from_slice(&iso);
         for c in 0..3 {
@@ -232,8 +245,7 @@ mod wide {
 
     /// `out[i]` = the sum of `v[i]`'s lanes (sixteen registers): 45 shuffles and adds where
     /// sixteen horizontal sums take about 130. Each step adds halves of two registers into
-    /// one, so the last holds every sum. (203K dragon, one core: the frame's gather 51-52 →
-    /// 47-49 ms.)
+    /// one, so the last holds every sum.
     #[inline]
     #[target_feature(enable = "avx512f")]
     fn add_lanes(v: &[__m512], out: &mut [f32]) {
