@@ -99,8 +99,8 @@ impl<'a> Evaluator<'a> {
     /// [`MAX_DEPTH`] levels and [`MAX_PIECES`] pieces (a piece has half its parent's radius;
     /// faces past 32 times the limit, which no piece could meet, are not tried). Only the
     /// pieces near the receiver are cut again, so a face beside it takes 7 to 13 pieces,
-    /// 49 to 91 points, about half the cycles of its edge integrals (48K dragon: 1,400
-    /// against 3,000), which on dense scanned meshes were a quarter of the solve. Each
+    /// 49 to 91 points, cheaper than its edge integrals, which dominate the near links of
+    /// dense scanned meshes. Each
     /// level's [`SmoothBound`] is made once, so a piece's test is one squared distance.
     /// Returns the number of pieces; `None` (and no points added): too close to be cut
     /// smooth (the receiver's own face, which holds the profile's peak), so the polar rule

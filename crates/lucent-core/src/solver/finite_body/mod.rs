@@ -87,9 +87,9 @@ pub struct FiniteBody {
 const SLAB_STEPS: usize = 48;
 
 impl FiniteBody {
-    /// The table for the material and scale of `dipole`: 10-150 ms on two cores for a new
-    /// albedo and index (the random walks; most for albedos near 1 at `eta > 1`, whose paths
-    /// are long), microseconds for one seen before.
+    /// The table for the material and scale of `profile`: random walks for a new albedo and
+    /// index (longest for albedos near 1 at `eta > 1`, whose paths are long), a cache lookup
+    /// for one seen before.
     pub fn new(profile: &Profile) -> Self {
         let tables: Vec<Arc<OpticalGain>> = (0..3)
             .into_par_iter()

@@ -295,8 +295,8 @@ impl RenderFrame<'_> {
     }
 }
 
-/// What a frame reads of the hierarchy, one flat array a quantity (the pull read two
-/// 40-byte records a cluster: on the 203K dragon it was 8% of a render frame).
+/// What a frame reads of the hierarchy, one flat array a quantity (rather than two 40-byte
+/// records a cluster, most of which the pull does not read).
 #[derive(Clone, Debug)]
 pub(crate) struct FrameGeom {
     /// Every cluster's midpoint (mesh units), for linear receivers.
