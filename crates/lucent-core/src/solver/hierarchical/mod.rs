@@ -14,9 +14,11 @@
 //!   (coarsening) where the oracle's verdict changed, optionally within a budget of form factor
 //!   evaluations per frame; then render as above.
 //!
-//! This module holds the solver and its public entry points; the receiver-driven refinement
-//! that every mode runs is in `solver::refine`, and a frame's pull, gather and push (render
-//! mode's over the stored links, on-the-fly mode's during the traversal) in `solver::gather`.
+//! This module holds the solver and its public entry points. Its submodules hold the rest of
+//! its `impl`: the receiver-driven refinement that every mode runs and the incremental relink
+//! ([`link`]), a frame's pull, gather and push (render mode's over the stored links,
+//! on-the-fly mode's during the traversal: [`gather`], [`gather_linear`], with the receiver
+//! expansion of [`expansion`]), and the [`census`] of a solve's links.
 
 use super::bound;
 use super::link_set::{ChunkPool, LinkSet};
