@@ -268,6 +268,8 @@ def use_declarations(code, spans=None):
             continue
         if spans is not None:
             spans.append((m.start(), end))
+        if code.startswith("$", m.end()):
+            continue  # `use $crate::..` in a macro: the crate that expands it
         tokens = tokenize_use(code, m.end(), end)
         if tokens and tokens[0][0] == "::":
             continue  # `use ::ext::..`: another crate

@@ -1,5 +1,5 @@
 //! Stored links' transport coefficients, 16 bits per channel, and render mode's gather kernel
-//! over them (driven by `solver::gather`).
+//! over them (driven by `solver::hierarchical::gather`).
 //!
 //! Render mode (Mertens et al. 2003, §5.5) is a gather `Σ E_e F_re` over millions of stored
 //! links, every frame. A coefficient is kept as IEEE binary16 per channel ([`LinkCoef`]),

@@ -145,7 +145,7 @@ pub struct LinkSet {
     len: usize,
 }
 
-/// The arrays render mode's gather reads (see `solver::gather`'s `RenderFrame`).
+/// The arrays render mode's gather reads (see `solver::hierarchical::gather`'s `RenderFrame`).
 #[derive(Clone, Copy)]
 pub(crate) struct StoredLinks<'a> {
     links: &'a [Span],
