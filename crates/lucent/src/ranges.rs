@@ -113,7 +113,7 @@ mod tests {
         use lucent_core::bssrdf::ProfileKind::{Dipole, Mertens, Pbd};
         assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Mertens), 0);
         assert_eq!(bounces_after_profile_change(0, Mertens, Pbd), DEFAULT_BOUNCES);
-        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Profile), DEFAULT_BOUNCES);
+        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Dipole), DEFAULT_BOUNCES);
         assert_eq!(bounces_after_profile_change(1, Pbd, Mertens), 1, "chosen by hand");
         assert_eq!(bounces_after_profile_change(2, Mertens, Pbd), 2, "chosen by hand");
     }
