@@ -23,8 +23,10 @@
 //!   BVH for ray and closest-point queries.
 //! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
-//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes:
-//!   oracle, refinement, and each frame's pull, gather and push.
+//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes, as
+//!   stages: kernels, the oracle (§5.2), link evaluation (§4), the link set, and the solver's
+//!   linking and each frame's pull, gather and push (§3.2, §5.5).
+//! * [`progress`]: a counter a front end polls to show a long solve's progress.
 //! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
 //!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
 //!   for what changed (§5.5).
@@ -45,6 +47,7 @@ pub mod hierarchy;
 pub mod irradiance;
 pub mod limits;
 pub mod mesh;
+pub mod progress;
 pub mod session;
 pub mod shading;
 pub mod simd;
