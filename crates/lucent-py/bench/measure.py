@@ -5,7 +5,8 @@
    for every validation scene whose mesh is here: the largest per-pixel relative difference
    (|a - b| / max(|b|, 1e-3 of the image's peak)) and whether the two are bit for bit equal;
 2. speed: the same solve from Python (`Session.solve()`) and from the command line, runs
-   interleaved so both see the same machine load; medians of the solve's stage sum (what
+   interleaved so both see the same machine load, each solve in a fresh process (a fresh
+   interpreter for Python); medians of the solve's stage sum (what
    `FrameSession` times: irradiance, link, pull, gather, single scattering, push, bounces; the
    CLI logs it at RUST_LOG=info) and of each front end's own wall-clock solve time.
 
@@ -14,10 +15,12 @@
 
 import argparse
 import glob
+import json
 import os
 import re
 import statistics
 import subprocess
+import sys
 import tempfile
 
 import numpy as np
@@ -54,9 +57,26 @@ def agreement(binary, width, height):
         print(f"{os.path.basename(scene):28} {diff:12.2e} {str(bool(np.array_equal(ours, ref))):>9}")
 
 
+# One solve in a fresh interpreter, as the CLI solves in a fresh process: caches that live for
+# the process (the profile's tables) start empty in both.
+ONE_SOLVE = """
+import json, sys, lucent
+s = lucent.Session(scene=sys.argv[1], width=int(sys.argv[2]), height=int(sys.argv[3]), mode="render")
+print(json.dumps(s.solve().timings))
+"""
+
+
+def python_solve(scene, width, height):
+    p = subprocess.run([sys.executable, "-c", ONE_SOLVE, scene, str(width), str(height)],
+                       check=True, capture_output=True, text=True)
+    t = json.loads(p.stdout.strip().splitlines()[-1])
+    return t["total_ms"], t["wall_ms"]
+
+
 def speed(binary, scene, width, height, runs):
     args = ["--scene", scene, "--width", str(width), "--height", str(height)]
-    c_stage, c_wall, p_stage, p_wall = [], [], [], []
+    c_stage, c_wall, p_stage, p_wall, warm = [], [], [], [], []
+    session = None
     with tempfile.TemporaryDirectory() as d:
         for _ in range(runs):
             s, w = cli(binary, args, os.path.join(d, "x.exr"))
@@ -64,17 +84,20 @@ def speed(binary, scene, width, height, runs):
             c_wall.append(w)
             # As the CLI solves one image: a fresh session in its mode, solved once. (The CLI's
             # "solve" wall time also spans making the session, which Python's wall_ms does not.)
+            s, w = python_solve(scene, width, height)
+            p_stage.append(s)
+            p_wall.append(w)
+            # The same in one long-lived interpreter, as a notebook would solve again and again.
             session = lucent.Session(scene=scene, width=width, height=height, mode="render")
-            sol = session.solve()
-            p_stage.append(sol.timings["total_ms"])
-            p_wall.append(sol.timings["wall_ms"])
+            warm.append(session.solve().timings["total_ms"])
     med = statistics.median
+    rng = lambda v: f"{min(v):.0f}-{max(v):.0f}"
     print(f"{os.path.basename(scene)} at {width}x{height}, {runs} runs each, interleaved:")
-    print(f"  solve stage sum: CLI median {med(c_stage):.0f} ms (range {min(c_stage):.0f}-{max(c_stage):.0f}), "
-          f"Python median {med(p_stage):.0f} ms (range {min(p_stage):.0f}-{max(p_stage):.0f}): "
-          f"Python/CLI {med(p_stage) / med(c_stage):.3f}")
-    print(f"  wall-clock solve: CLI median {med(c_wall):.0f} ms, Python Session.solve() median {med(p_wall):.0f} ms: "
-          f"Python/CLI {med(p_wall) / med(c_wall):.3f}")
+    print(f"  solve stage sum: CLI median {med(c_stage):.0f} ms ({rng(c_stage)}), Python (fresh interpreter) "
+          f"median {med(p_stage):.0f} ms ({rng(p_stage)}): Python/CLI {med(p_stage) / med(c_stage):.3f}")
+    print(f"  wall-clock solve: CLI median {med(c_wall):.0f} ms ({rng(c_wall)}), Python Session.solve() "
+          f"median {med(p_wall):.0f} ms ({rng(p_wall)}): Python/CLI {med(p_wall) / med(c_wall):.3f}")
+    print(f"  Python, later sessions in one interpreter: stage sum median {med(warm):.0f} ms ({rng(warm)})")
 
 
 def main():
