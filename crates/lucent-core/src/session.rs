@@ -18,6 +18,7 @@
 
 use crate::Rgb;
 use crate::bssrdf::Profile;
+use crate::clock::ms_since;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering, interreflection};
@@ -691,10 +692,6 @@ impl FrameSession {
             s
         }
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

@@ -227,7 +227,7 @@ impl Session {
     /// ``dir:x,y,z``, mesh units; irradiance 1), casting shadows unless ``shadows`` is False.
     #[pyo3(signature = (lights, shadows = true))]
     fn set_lights(&mut self, lights: Vec<String>, shadows: bool) -> PyResult<()> {
-        let (center, _) = lucent_gpu::camera::bounding_sphere(&self.scene.mesh.positions);
+        let (center, _) = lucent_core::camera::bounding_sphere(&self.scene.mesh.positions);
         let mut parsed = Vec::with_capacity(lights.len());
         for spec in &lights {
             let light = lucent::scene::parse_light(spec, center).map_err(crate::to_py)?;
