@@ -450,11 +450,22 @@ def heat_map(path, ours, ref, mask):
     mi.util.write_bitmap(path, (np.clip(img, 0, 1) * 255).astype(np.uint8))
 
 
+def lucent_module():
+    """The `lucent` Python module if installed (it renders in-process), else None: the
+    `lucent` binary renders through a subprocess and an EXR file."""
+    try:
+        import lucent
+    except ImportError:
+        return None
+    return lucent if hasattr(lucent, "render") else None
+
+
 def cmd_compare(cfg, profiles, out_dir, as_json, write_bounds, reuse=False, extra=()):
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     os.makedirs(out_dir, exist_ok=True)
     lucent = os.path.join(ROOT, "target", "release", "lucent")
+    module = lucent_module()
     w, h = cfg["resolution"]
     rows = []
     for case in cfg["cases"]:
@@ -464,11 +475,18 @@ def cmd_compare(cfg, profiles, out_dir, as_json, write_bounds, reuse=False, extr
         a, b, single = reference_parts(case)
         for profile in profiles:
             out = os.path.join(out_dir, f"{case['name']}.{profile}.exr")
-            if not (reuse and os.path.exists(out)):
-                subprocess.run([lucent, "render", "--scene", os.path.join(SCENES, case["name"] + ".toml"), "--profile", profile,
+            scene = os.path.join(SCENES, case["name"] + ".toml")
+            if reuse and os.path.exists(out):
+                ours = read_exr(out)
+            elif module is not None and not extra:
+                # The Python module (pip install ./crates/lucent-py): the CLI's image, no file between.
+                ours = module.render(scene=scene, profile=profile, width=w, height=h, surface=False).astype(np.float64)
+                module.write_exr(out, ours)
+            else:
+                subprocess.run([lucent, "render", "--scene", scene, "--profile", profile,
                                 "--width", str(w), "--height", str(h), "--no-surface", "--out", out, *extra],
                                check=True, capture_output=True)
-            ours = read_exr(out)
+                ours = read_exr(out)
             # lucent's coverage decides: Mitsuba's alpha is 1 everywhere under a constant sky and
             # below 1 where a null boundary lets camera rays through a thin medium (ketchup).
             # Both agree to the edge pixels on the marble sphere (checked when the cases were set up).

@@ -259,6 +259,7 @@ impl RenderArgs {
             mode: self.mode,
             // Plain `transport` means the profile's own thresholds.
             oracle: (self.oracle != Oracle::default()).then_some(self.oracle),
+            ..Default::default()
         }
     }
 }

@@ -36,8 +36,14 @@ pub struct Overrides {
     pub scene: Option<PathBuf>,
     /// A mesh file (OBJ, PLY, OFF, glTF/GLB).
     pub mesh: Option<PathBuf>,
+    /// A mesh given in memory with its name for messages (the Python module's vertex and face
+    /// arrays): validated as a loaded file is, and wins over `mesh` and the scene file's.
+    pub mesh_data: Option<(String, Mesh)>,
     /// A material preset by name.
     pub material: Option<String>,
+    /// A material given in full (the Python module's `Material`): wins over `material`,
+    /// `colour` and the scene file's.
+    pub material_data: Option<Material>,
     /// A material by colour and distance: slab albedo (0.001..=0.999) and reduced mean free
     /// path (mm), per channel.
     pub colour: Option<([f64; 3], [f64; 3])>,
@@ -260,6 +266,10 @@ impl Scene {
 /// The mesh from `--mesh`, else the file's, else the embedded bunny, with its texture if any:
 /// `(source, (mesh, texture), path)`.
 fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, TexturedMesh, Option<PathBuf>)> {
+    if let Some((name, mesh)) = &o.mesh_data {
+        let (mesh, _) = lucent_core::mesh::validate::validate(mesh.clone(), name)?;
+        return Ok((name.clone(), (mesh, None), None));
+    }
     Ok(match (&o.mesh, file) {
         (Some(path), _) => {
             (path.display().to_string(), super::load_textured_mesh_file(path)?, Some(path.clone()))
@@ -287,11 +297,14 @@ fn transport(
 ) -> Result<Transport> {
     let scale_m = o.scale.or(file.map(|f| f.scale)).unwrap_or(DEFAULT_SCALE_M);
     let file_material = file.filter(|f| f.material.is_some());
-    let material = match (&o.material, o.colour, file_material) {
-        (Some(name), _, _) => Material::by_name(name)?,
-        (None, Some((albedo, mfp)), _) => Material::from_albedo_mfp("custom", albedo, mfp, DEFAULT_ETA)?,
-        (None, None, Some(f)) => f.material()?,
-        (None, None, None) => {
+    let material = match (&o.material_data, &o.material, o.colour, file_material) {
+        (Some(m), _, _, _) => m.validate().map(|()| m.clone())?,
+        (None, Some(name), _, _) => Material::by_name(name)?,
+        (None, None, Some((albedo, mfp)), _) => {
+            Material::from_albedo_mfp("custom", albedo, mfp, DEFAULT_ETA)?
+        }
+        (None, None, None, Some(f)) => f.material()?,
+        (None, None, None, None) => {
             let default = Material::by_name(DEFAULT_MATERIAL)?;
             match mesh_path.filter(|p| super::is_gltf(p)) {
                 Some(path) => gltf_material(path, mesh, scale_m, default)?,
@@ -299,9 +312,9 @@ fn transport(
             }
         }
     };
-    let by_colour = match &o.material {
-        Some(_) => None,
-        None => o.colour.or_else(|| file_material.and_then(|f| f.material.as_ref()?.by_colour())),
+    let by_colour = match (&o.material, &o.material_data) {
+        (Some(_), _) | (_, Some(_)) => None,
+        (None, None) => o.colour.or_else(|| file_material.and_then(|f| f.material.as_ref()?.by_colour())),
     };
     if let Some((albedo, mfp)) = by_colour {
         println!("lucent: {}", colour_material_line(albedo, mfp, &material));

@@ -173,7 +173,7 @@ impl Drawer {
         match self {
             Drawer::Mertens(g) => {
                 let mesh = moved.then_some(session.mesh());
-                g.draw(mesh, solved, session.lights(), format)
+                g.draw(mesh, solved, session.lights(), format == ImageFormat::Exr)
             }
             Drawer::Htsm(h) => h.draw(session, moved, format),
         }
@@ -232,6 +232,17 @@ mod tests {
         assert_eq!(frame_name(0, ImageFormat::Png), "frame_0001.png");
         assert_eq!(frame_name(41, ImageFormat::Exr), "frame_0042.exr");
         assert!(frame_name(8, ImageFormat::Png) < frame_name(9, ImageFormat::Png));
+    }
+
+    /// (Moved here with `output.rs` into the library, which has no `cli`.)
+    #[test]
+    fn format_from_flag_then_extension() {
+        let exr = Some(Path::new("a/b.EXR"));
+        assert_eq!(ImageFormat::resolve(None, exr, false), ImageFormat::Exr);
+        assert_eq!(ImageFormat::resolve(None, Some(Path::new("b.png")), false), ImageFormat::Png);
+        assert_eq!(ImageFormat::resolve(None, None, false), ImageFormat::Png);
+        assert_eq!(ImageFormat::resolve(None, exr, true), ImageFormat::Png, "a directory");
+        assert_eq!(ImageFormat::resolve(Some(ImageFormat::Exr), None, true), ImageFormat::Exr);
     }
 
     #[test]

@@ -13,15 +13,14 @@
 //! light-view maps and has no per-vertex solve.
 
 pub mod animation;
-pub mod frame;
 pub mod htsm;
-pub mod output;
+// The GPU frame and the image files live in the library, for the Python module.
+pub use lucent::{frame, output};
 
 pub use crate::scene::Scene;
 
-use crate::cli::{HierarchyChoice, ImageFormat, Method, RenderArgs, SolveMode, ToneCurve};
+use crate::cli::{HierarchyChoice, ImageFormat, Method, RenderArgs, ToneCurve};
 use anyhow::{Context, Result, bail};
-use frame::GpuFrame;
 use lucent_gpu::GpuContext;
 use lucent_gpu::tonemap::{ToneMap, ToneOperator};
 use output::{Frame, output_dir};
@@ -109,44 +108,6 @@ pub struct Timings {
     pub links: Option<usize>,
 }
 
-/// Bytes a stored link set takes per triangle, for the mode choice below: about 210 links a
-/// triangle on scanned meshes (the Stanford dragon, marble at 10 cm) at 13 bytes each, with
-/// room for denser materials and for the rest of a render-mode solve's peak (hierarchy,
-/// irradiance, bounce rays), which is per triangle too.
-const LINK_BYTES_PER_TRIANGLE: u64 = 4096;
-
-/// The solve mode of one image when `--mode` and the scene leave it open. With bounces
-/// between parts, `render`: the links are made once and each bounce is a gather over them
-/// (on the fly links every bounce anew, as costly as the first solve each time), unless
-/// the stored links would not fit in half the memory available; else `on-the-fly`, which
-/// stores none.
-fn one_image_mode(scene: &Scene, mesh: &lucent_core::mesh::Mesh) -> SolveMode {
-    if scene.settings.bounces == 0 {
-        return SolveMode::OnTheFly;
-    }
-    let need = mesh.triangles.len() as u64 * LINK_BYTES_PER_TRIANGLE;
-    match available_memory() {
-        Some(avail) if need > avail / 2 => {
-            println!(
-                "lucent: solving on the fly: the links of {} triangles (about {} MiB) would not fit in half the {} MiB available, so each bounce links anew",
-                mesh.triangles.len(),
-                need >> 20,
-                avail >> 20
-            );
-            SolveMode::OnTheFly
-        }
-        _ => SolveMode::Render,
-    }
-}
-
-/// `MemAvailable` of `/proc/meminfo`, bytes (`None` where there is none: not Linux).
-fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
 /// Says so when transport reaches less far than faces are wide: those faces took the local
 /// limit `B = R_d E` (one link each) instead of a refinement.
 fn local_limit_note(mesh: &lucent_core::mesh::Mesh, profile: &lucent_core::bssrdf::Profile) {
@@ -207,12 +168,10 @@ fn render_mertens(
 ) -> Result<(Frame, Timings)> {
     // The adapter first: without one, fail before the (possibly long) solve.
     let ctx = GpuContext::new()?;
-    let mesh = scene.deformed(1.0);
+    let size = (args.width, args.height);
     let t = Instant::now();
     debug_assert_eq!(scene.settings.method, method);
-    let mut session = scene.session(one_image_mode(scene, &mesh));
-    session.set_positions(&mesh.positions);
-    session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
+    let (mesh, mut session) = lucent::still::session(scene, size);
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
     let profile = session.profile().clone();
@@ -235,19 +194,12 @@ fn render_mertens(
     );
 
     let t = Instant::now();
-    let size = (args.width, args.height);
-    let mut gpu = GpuFrame::new(
-        ctx,
-        scene,
-        size,
-        tone_map(args, scene.exposure),
-        &mesh,
-        &solved.vertex_radiance,
-        !args.no_env_background,
-    )?;
-    let image = gpu.draw(None, solved, &scene.lights, format)?;
+    let tone = tone_map(args, scene.exposure);
+    let hdr = format == ImageFormat::Exr;
+    let (image, adapter) =
+        lucent::still::draw(ctx, scene, size, tone, &mesh, solved, !args.no_env_background, hdr)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok((image, Timings { solve_ms, render_ms, adapter: gpu.adapter(), links: solved.links }))
+    Ok((image, Timings { solve_ms, render_ms, adapter, links: solved.links }))
 }
 
 /// Shopf 2007: Heterogeneous Translucent Shadow Maps, rendered entirely on the GPU.

@@ -107,17 +107,6 @@ fn write_atomically(bytes: &[u8], out: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cli::ImageFormat;
-
-    #[test]
-    fn format_from_flag_then_extension() {
-        let exr = Some(Path::new("a/b.EXR"));
-        assert_eq!(ImageFormat::resolve(None, exr, false), ImageFormat::Exr);
-        assert_eq!(ImageFormat::resolve(None, Some(Path::new("b.png")), false), ImageFormat::Png);
-        assert_eq!(ImageFormat::resolve(None, None, false), ImageFormat::Png);
-        assert_eq!(ImageFormat::resolve(None, exr, true), ImageFormat::Png, "a directory");
-        assert_eq!(ImageFormat::resolve(Some(ImageFormat::Exr), None, true), ImageFormat::Exr);
-    }
 
     /// The encoded file reads back bit for bit through the `exr` crate's reader.
     #[test]

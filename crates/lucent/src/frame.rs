@@ -1,9 +1,8 @@
-//! The GPU side of a Mertens 2003 frame across frames: [`GpuFrame`] keeps the device, targets,
-//! mesh buffers and environment map, and uploads only what changed. The CPU side is
-//! `lucent_core::session::FrameSession`.
+//! The GPU side of a Mertens 2003 frame across frames (§5.4): [`GpuFrame`] keeps the device,
+//! targets, mesh buffers and environment map, and uploads only what changed. The CPU side is
+//! `lucent_core::session::FrameSession`. `lucent render` and the Python module draw through it.
 
-use super::output::{Frame, HdrImage};
-use crate::cli::ImageFormat;
+use crate::output::{Frame, HdrImage};
 use crate::scene::Scene;
 use anyhow::Result;
 use lucent_core::Rgb;
@@ -96,14 +95,15 @@ impl GpuFrame {
     }
 
     /// Draws the mesh with the per-vertex radiance of `solved`, new geometry (`mesh`, when it moved) and
-    /// `lights` for the highlight, and reads the frame back: the tone-mapped image, or for
-    /// [`ImageFormat::Exr`] the HDR radiance and coverage with nothing behind the object.
+    /// `lights` for the highlight, and reads the frame back: the tone-mapped image, or with
+    /// `hdr` (what `--format exr` writes) the HDR radiance and coverage with nothing behind the
+    /// object.
     pub fn draw(
         &mut self,
         mesh: Option<&Mesh>,
         solved: &Solved,
         lights: &[SceneLight],
-        format: ImageFormat,
+        hdr: bool,
     ) -> Result<Frame> {
         let split = self.split.as_ref();
         if let Some(m) = mesh {
@@ -115,7 +115,7 @@ impl GpuFrame {
         self.mesh.update_radiance(&self.ctx, &radiance, &UvSplit::through(split, &solved.vertex_single))?;
         self.shading.lights = lights.iter().map(|l| l.light).collect();
         self.shading.exit_lobe = solved.exit_lobe.clone();
-        if format == ImageFormat::Exr {
+        if hdr {
             // The background would cover alpha and bleed into the object's edge pixels.
             let shading = Shading { background: 0.0, ..self.shading.clone() };
             self.renderer.render(&self.ctx, &self.mesh, &self.camera, &shading, &self.tone)?;
