@@ -54,14 +54,16 @@ fn inside_out_bunny_renders_as_the_right_one_with_one_warning() {
     write_off(&wrong, &bunny, true);
     let (want, right_lines) = render(&right, &dir.join("right.png"));
     let (got, wrong_lines) = render(&wrong, &dir.join("inside_out.png"));
-    let flips = |lines: &[String]| lines.iter().filter(|l| l.contains("inside out")).cloned().collect::<Vec<_>>();
+    let flips =
+        |lines: &[String]| lines.iter().filter(|l| l.contains("inside out")).cloned().collect::<Vec<_>>();
     assert!(flips(&right_lines).is_empty(), "{right_lines:?}");
     let warned = flips(&wrong_lines);
     assert_eq!(warned.len(), 1, "one warning line: {wrong_lines:?}");
     assert!(warned[0].starts_with("lucent: warning:"), "{}", warned[0]);
     assert!(warned[0].contains("inside_out.off"), "the line names the file: {}", warned[0]);
     // The same mesh after the flip: the same image, to the rounding of 8-bit output.
-    let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(move |k| a[k].abs_diff(b[k]))).max();
+    let worst =
+        want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(move |k| a[k].abs_diff(b[k]))).max();
     assert!(worst <= Some(1), "largest channel difference {worst:?}");
     // And the object is there (not the near-black render an inside-out mesh gave).
     let lit = got.pixels().filter(|p| p[0] as u32 + p[1] as u32 + p[2] as u32 > 150).count();

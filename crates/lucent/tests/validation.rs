@@ -141,7 +141,8 @@ fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
         }
         let f = figures(w, h, &ours, &a, &b, &interior(w, h, &ours));
         let bound = &bounds[section][name];
-        let limit = |k: &str| bound[k].as_f64().unwrap_or_else(|| panic!("bounds.json: {section}.{name}.{k}"));
+        let limit =
+            |k: &str| bound[k].as_f64().unwrap_or_else(|| panic!("bounds.json: {section}.{name}.{k}"));
         println!(
             "{name} ({section}): median {:+.1}% (bound {:.1}%), bias {:+.1}% ({:.1}%), worst 8x8 {:.1}% ({:.1}%)",
             100.0 * f.median,
