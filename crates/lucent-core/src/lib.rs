@@ -31,7 +31,7 @@
 //!
 //! Units: material coefficients are in mm^-1 as measured; a mesh is given a *model scale* (the
 //! largest side of its bounding box in metres) and every length inside the solver is in mesh
-//! units, with coefficients converted by [`bssrdf::Dipole::new`].
+//! units, with coefficients converted by [`bssrdf::Profile::new`].
 
 pub mod bssrdf;
 pub mod fastexp;

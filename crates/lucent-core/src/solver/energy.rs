@@ -66,20 +66,20 @@ pub struct UniformReport {
 /// reports the largest `B` with and without the bound (`lucent bench energy`).
 pub fn uniform_report(
     mesh: &crate::mesh::Mesh,
-    dipole: &crate::bssrdf::Dipole,
+    profile: &crate::bssrdf::Profile,
     oracle: super::Oracle,
 ) -> UniformReport {
     let h = crate::hierarchy::face_cluster::build(mesh);
-    let mut unbounded = dipole.clone();
+    let mut unbounded = profile.clone();
     unbounded.energy_bound = false;
     let ones = vec![Rgb::ONE; mesh.triangles.len()];
     let solver = super::HierarchicalSolver::new(mesh.clone(), h, unbounded, oracle);
     let raw = solver.solve_on_the_fly(&ones);
     let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
     // As a render does: the finite-body gain of each face, applied with the bound.
-    let gain = dipole.bounds_energy().then(|| {
+    let gain = profile.bounds_energy().then(|| {
         let caster = crate::irradiance::ShadowCaster::new(mesh);
-        super::finite_body::FiniteBody::new(dipole).face_gains(mesh, caster.bvh(), caster.offset())
+        super::finite_body::FiniteBody::new(profile).face_gains(mesh, caster.bvh(), caster.offset())
     });
     let bounded: Vec<Rgb> = raw
         .face_b
@@ -133,7 +133,7 @@ pub enum SlabSolver {
 /// one-point estimate `A R(d)` of a convex, decaying profile, which is always low (Jensen's
 /// inequality): -0.3% at worst with 48² squares a side, less on coarser slabs.
 pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32, solver: SlabSolver) -> SlabAlbedo {
-    use crate::bssrdf::{Dipole, ProfileKind};
+    use crate::bssrdf::{Profile, ProfileKind};
     let mut mesh = crate::mesh::generate::cube(subdivisions);
     for p in &mut mesh.positions {
         p.y *= 0.25;
@@ -146,21 +146,21 @@ pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32, solver
         })
         .fold(0.0, f64::max);
     let kind = ProfileKind::default();
-    let dipole = Dipole::profile_for_model_scale(
+    let profile = Profile::at_model_scale(
         material,
         mesh.extent() as f64,
         reach_mm / 1000.0,
         kind,
-        kind.single_scattering_by_default(),
+        kind.has_single_scattering(),
     );
     let top: Vec<bool> = (0..mesh.triangles.len()).map(|f| mesh.face_normal(f).y > 0.99).collect();
     let irradiance: Vec<Rgb> = top.iter().map(|&t| if t { Rgb::ONE } else { Rgb::ZERO }).collect();
     let b = match solver {
-        SlabSolver::Exact => super::exact::solve(&mesh, &dipole, &irradiance, &Default::default()),
+        SlabSolver::Exact => super::exact::solve(&mesh, &profile, &irradiance, &Default::default()),
         SlabSolver::Hierarchical => {
             let h = crate::hierarchy::face_cluster::build(&mesh);
             let oracle = super::Oracle::for_profile(kind);
-            super::HierarchicalSolver::new(mesh.clone(), h, dipole, oracle)
+            super::HierarchicalSolver::new(mesh.clone(), h, profile, oracle)
                 .solve_on_the_fly(&irradiance)
                 .face_b
         }

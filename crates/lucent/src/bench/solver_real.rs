@@ -173,9 +173,9 @@ pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
             continue;
         }
         let transport = Transport::new(Material::by_name("marble").context("material preset")?, 0.1);
-        let dipole = transport.dipole(mesh.extent());
-        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
-        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), dipole, oracle);
+        let profile = transport.profile_at(mesh.extent());
+        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(profile.kind));
+        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), profile, oracle);
         let c = solver.census();
         let t = mesh.triangles.len() as f64;
         if json {
@@ -281,16 +281,16 @@ fn measure(
     let rss_reset = reset_peak_rss();
     let big = mesh.triangles.len() > 100_000;
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
-    let dipole = transport.dipole(mesh.extent());
-    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
+    let profile = transport.profile_at(mesh.extent());
+    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(profile.kind));
     let (lights, light_at) = lights(mesh);
     let caster = ShadowCaster::new(mesh);
-    let e = face_irradiance_shadowed(mesh, &lights, None, &dipole.entry, Some(&caster));
+    let e = face_irradiance_shadowed(mesh, &lights, None, &profile.entry, Some(&caster));
 
     let t = Instant::now();
     let h = face_cluster::build(mesh);
     let hierarchy_ms = ms_since(t);
-    let mut solver = HierarchicalSolver::new(mesh.clone(), h, dipole.clone(), oracle);
+    let mut solver = HierarchicalSolver::new(mesh.clone(), h, profile.clone(), oracle);
     solver.progress = Some(watch.progress());
 
     let otf_runs = if std::env::var_os("LUCENT_BENCH_NO_ON_THE_FLY").is_some() {
@@ -334,7 +334,7 @@ fn measure(
     let faces = sample_faces(mesh.triangles.len(), samples);
     let t = Instant::now();
     let opts = FormFactorOptions::default();
-    let want = exact::solve_receivers(mesh, &dipole, &e, &opts, &faces, Some(&watch.progress()));
+    let want = exact::solve_receivers(mesh, &profile, &e, &opts, &faces, Some(&watch.progress()));
     let exact_ms = ms_since(t);
     let sum = |b: Rgb| (b[0] + b[1] + b[2]) as f64;
     let signed: Vec<f64> = faces

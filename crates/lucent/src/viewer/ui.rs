@@ -340,7 +340,7 @@ fn solver(ui: &mut Ui, state: &mut ViewState) {
     });
     // As on the command line: `mertens` takes no bounces unless asked.
     p.bounces = crate::ranges::bounces_after_profile_change(p.bounces, before, p.profile);
-    if p.profile != lucent_core::bssrdf::ProfileKind::Mertens {
+    if p.profile.has_single_scattering() {
         ui.horizontal(|ui| {
             use lucent_core::shading::SingleScattering as S;
             ui.label("single scattering");
