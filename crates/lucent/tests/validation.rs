@@ -94,11 +94,11 @@ fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
     let root = root();
     let cases: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(root.join("validation/cases.json")).unwrap()).unwrap();
-    let bounds: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(root.join("validation/bounds.json"))
-            .expect("validation/bounds.json: run `lucent_validation.py compare --write-bounds`"),
-    )
-    .unwrap();
+    let bounds: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("validation/bounds.json")).expect(
+            "validation/bounds.json: run `lucent_validation.py compare --split fit --write-bounds fit`",
+        ))
+        .unwrap();
     let [w, h] = [0, 1].map(|k| cases["resolution"][k].as_u64().unwrap());
     let out = std::env::temp_dir().join(format!("lucent-validation-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
