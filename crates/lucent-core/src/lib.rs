@@ -12,6 +12,9 @@
 //!
 //! * [`bssrdf`]: the dipole diffusion model (Jensen et al. 2001; Mertens table 1), the measured
 //!   materials and the dielectric Fresnel terms.
+//! * [`camera`]: the orbit camera that frames an object by its bounding sphere (pure math; the
+//!   GPU passes, the scene files and the viewer share it).
+//! * [`clock`]: wall-clock milliseconds for the stage timings.
 //! * [`fastexp`]: inlined, vectorisable exponentials for the hot loops.
 //! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
 //!   reference for the same integral.
@@ -20,8 +23,10 @@
 //!   BVH for ray and closest-point queries.
 //! * [`hierarchy`]: face-cluster and subdivision hierarchies (Mertens §5.1).
 //! * [`irradiance`]: lights, shadows and spherical-harmonic environment light at the leaves (§5.3).
-//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes:
-//!   oracle, refinement, and each frame's pull, gather and push.
+//! * [`solver`]: the exact O(N^2) reference and the hierarchical solve in its three modes, as
+//!   stages: kernels, the oracle (§5.2), link evaluation (§4), the link set, and the solver's
+//!   linking and each frame's pull, gather and push (§3.2, §5.5).
+//! * [`progress`]: a counter a front end polls to show a long solve's progress.
 //! * [`session`]: the frame session the CLI, the benches and the viewer drive: it owns the
 //!   mesh pose, hierarchy, links, shadow BVH, lights and environment and does the least work
 //!   for what changed (§5.5).
@@ -34,12 +39,15 @@
 //! units, with coefficients converted by [`bssrdf::Profile::new`].
 
 pub mod bssrdf;
+pub mod camera;
+pub mod clock;
 pub mod fastexp;
 pub mod formfactor;
 pub mod hierarchy;
 pub mod irradiance;
 pub mod limits;
 pub mod mesh;
+pub mod progress;
 pub mod session;
 pub mod shading;
 pub mod simd;

@@ -9,8 +9,8 @@
 mod common;
 
 use glam::Vec3;
+use lucent_core::camera::OrbitCamera;
 use lucent_core::irradiance::Light;
-use lucent_gpu::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::{GpuMesh, Shading};
 use lucent_gpu::offscreen::{RenderSettings, render_image};
 use lucent_gpu::test_support::adapter_or_skip;
@@ -133,6 +133,7 @@ mod solved {
     use glam::Vec3;
     use lucent_core::Rgb;
     use lucent_core::bssrdf::{Material, Profile};
+    use lucent_core::camera::{CameraView, OrbitCamera};
     use lucent_core::formfactor::FormFactorOptions;
     use lucent_core::irradiance::{
         BandWeights, EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed,
@@ -140,7 +141,6 @@ mod solved {
     use lucent_core::mesh::{Mesh, generate};
     use lucent_core::{shading, solver};
     use lucent_gpu::GpuContext;
-    use lucent_gpu::camera::{CameraView, OrbitCamera};
     use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, Shading};
     use lucent_gpu::offscreen::OffscreenRenderer;
     use lucent_gpu::test_support::adapter_or_skip;

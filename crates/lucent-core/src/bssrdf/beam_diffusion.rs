@@ -17,7 +17,7 @@
 //!
 //! pbrt-v3 estimates both integrals with 100 stratified exponential samples and tabulates the
 //! result over albedo and radius. lucent evaluates them per channel at material set-up on the
-//! 1,025-point radial grid of [`super::RadialTable`] instead (about 10 ms for three channels):
+//! 1,025-point radial grid of [`super::RadialTable`] instead (once per material and scale):
 //! there is no interpolation across albedo, and the depth integrals use composite
 //! Gauss-Legendre on geometric panels, which resolves the `1/r` peak of single scattering near
 //! the entry point that 100 exponential samples miss.
@@ -27,6 +27,7 @@
 //! the calibrated total over albedo, for materials given by colour.
 
 use super::fresnel::{fresnel_dielectric, fresnel_moment1, fresnel_moment2};
+use super::quadrature::integrate_geometric;
 use std::f64::consts::PI;
 
 /// The two parts of a profile value.
@@ -43,35 +44,6 @@ impl Split {
     pub fn total(&self) -> f64 {
         self.multiple + self.single
     }
-}
-
-/// 8-point Gauss-Legendre nodes on `[-1, 1]` (positive half) and weights.
-const GL8_X: [f64; 4] =
-    [0.183_434_642_495_649_8, 0.525_532_409_916_329, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
-const GL8_W: [f64; 4] =
-    [0.362_683_783_378_362, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
-
-/// `∫_a^b f` on geometric panels from `a > 0` (each `ratio` times the last) up to `b`, 8-point
-/// Gauss-Legendre per panel, plus one panel on `[0, a]` when `from_zero`.
-pub(crate) fn integrate_geometric(
-    a: f64,
-    b: f64,
-    ratio: f64,
-    from_zero: bool,
-    f: impl Fn(f64) -> f64,
-) -> f64 {
-    let panel = |lo: f64, hi: f64| {
-        let (m, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
-        (0..4).map(|k| GL8_W[k] * (f(m - h * GL8_X[k]) + f(m + h * GL8_X[k]))).sum::<f64>() * h
-    };
-    let mut sum = if from_zero { panel(0.0, a) } else { 0.0 };
-    let mut lo = a;
-    while lo < b {
-        let hi = (lo * ratio).min(b);
-        sum += panel(lo, hi);
-        lo = hi;
-    }
-    sum
 }
 
 /// Photon beam diffusion's dipole for one point source (Habel et al. 2013, as pbrt-v3): Grosjean's
@@ -197,7 +169,7 @@ impl EffectiveAlbedo {
     /// Rows of the table.
     pub const ROWS: usize = 100;
 
-    /// The table for `eta` (100 half-space albedos, in parallel: about 50 ms on two cores).
+    /// The table for `eta` (100 half-space albedos, computed in parallel; made once per `eta`).
     pub fn new(eta: f64) -> Self {
         use rayon::prelude::*;
         let rho: Vec<f64> = (0..Self::ROWS)

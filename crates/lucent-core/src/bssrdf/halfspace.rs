@@ -66,7 +66,7 @@ pub fn chandrasekhar_h(omega: f64, mu: f64) -> f64 {
     };
     // Near v = 0 the integrand has a log singularity (omega = 1) or a dip of width
     // ~ √(1 - omega): panels grow geometrically from there.
-    let integral = super::beam_diffusion::integrate_geometric(1e-7, 0.5 * PI, 1.6, true, f);
+    let integral = super::quadrature::integrate_geometric(1e-7, 0.5 * PI, 1.6, true, f);
     (-integral / PI).exp()
 }
 

@@ -13,6 +13,7 @@ mod fresnel;
 pub mod halfspace;
 mod material;
 pub mod profile;
+mod quadrature;
 pub mod tables;
 pub mod walk;
 

@@ -52,16 +52,17 @@
 //! * A profile of tables alone (photon beam diffusion) has its three channels' sources at one
 //!   point and height, so one pass over the edges serves all three: the segments are laid out
 //!   for the channel that needs the shortest, and each node's distance and square root are
-//!   shared (a fifth to a quarter less time a form factor; `benches/formfactor.rs`).
+//!   shared (`benches/formfactor.rs` compares the two).
 //!
 //! Everything is `f64`, allocation free and deterministic.
 
-use crate::bssrdf::{Profile, RadialTable};
-use crate::fastexp::exp_neg_f64;
+use crate::bssrdf::Profile;
+use edge::{ChannelTails, PoleTail, Segmenter, TableTail, TailFn, edge_i2};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
 pub mod cubature;
+mod edge;
 pub mod montecarlo;
 
 /// Smallest height of a dipole source above the polygon's plane, relative to its `z`
@@ -74,11 +75,6 @@ const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Angle sums within this distance (radians) of a multiple of `2π` are snapped to it.
 const WINDING_SNAP: f64 = 1e-7;
-
-/// 3-point Gauss-Legendre nodes on `[-1, 1]` (±√(3/5) and 0) and their weights.
-const GL_X: f64 = 0.774_596_669_241_483_4;
-const GL_W_OUTER: f64 = 5.0 / 9.0;
-const GL_W_CENTER: f64 = 8.0 / 9.0;
 
 /// Options of the semi-analytic integration (the segment conditions of Mertens eq. 19).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -148,29 +144,9 @@ pub fn form_factor_counted(
         return ([0.0; 3], 0);
     }
 
-    // Plane of the polygon: origin at the vertex average, normal from Newell's formula (the
-    // plain cross product for triangles), so a slightly non-planar polygon is projected.
-    let (origin, twice_area_vec, max_edge2) = if n == 3 {
-        let (a, b, c) = (polygon[0], polygon[1], polygon[2]);
-        let m = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
-        ((a + b + c) / 3.0, (b - a).cross(c - a), m)
-    } else {
-        let origin = polygon.iter().copied().sum::<DVec3>() / n as f64;
-        let mut nv = DVec3::ZERO;
-        let mut m = 0.0f64;
-        for i in 0..n {
-            let a = polygon[i] - origin;
-            let b = polygon[(i + 1) % n] - origin;
-            nv += a.cross(b);
-            m = m.max((b - a).length_squared());
-        }
-        (origin, nv, m)
-    };
-    let twice_area = twice_area_vec.length();
-    if !twice_area.is_finite() || !origin.is_finite() || twice_area <= DEGENERATE_AREA * max_edge2 {
+    let Some((origin, n_p)) = plane(polygon) else {
         return ([0.0; 3], 0);
-    }
-    let n_p = twice_area_vec / twice_area;
+    };
     if opts.cubature_max_k_rho > 0.0 {
         let radius = polygon.iter().map(|p| p.distance_squared(origin)).fold(0.0, f64::max).sqrt();
         if cubature::k_rho(profile, x_o, n_o, origin, radius) <= opts.cubature_max_k_rho {
@@ -192,6 +168,71 @@ pub fn form_factor_counted(
         Some(t) if !profile.has_analytic() => Some(ChannelTails::new(&t.channels, profile.sigma_t)),
         _ => None,
     };
+    let segments = integrate_edges(polygon, &to_2d, src, channels.as_ref(), profile, &seg);
+    if channels.is_some() {
+        // The other channels' sources share the first's point, so its winding and edges.
+        let (winding, on_line) = (src[0].winding, src[0].on_line);
+        for s in src.iter_mut() {
+            (s.winding, s.on_line) = (winding, on_line);
+        }
+    }
+
+    let mut f = [0.0; 3];
+    for s in src.iter() {
+        let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
+        let q_h = match s.tail {
+            Tail::Pole => PoleTail { sigma: s.sigma, h: s.h }.q(s.h)[0],
+            Tail::Table(c) => profile.tables.as_ref().expect("tables").channels[c].tail(s.h),
+        };
+        f[s.channel] += s.weight * (theta * q_h - s.i2);
+    }
+    let f = f.map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 });
+    (f, segments)
+}
+
+/// The plane of `polygon` (at least 3 vertices): its origin at the vertex average and its unit
+/// normal from Newell's formula (the plain cross product for triangles), so a slightly
+/// non-planar polygon is projected. `None` for a degenerate or non-finite polygon.
+#[inline]
+fn plane(polygon: &[DVec3]) -> Option<(DVec3, DVec3)> {
+    let n = polygon.len();
+    let (origin, twice_area_vec, max_edge2) = if n == 3 {
+        let (a, b, c) = (polygon[0], polygon[1], polygon[2]);
+        let m = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+        ((a + b + c) / 3.0, (b - a).cross(c - a), m)
+    } else {
+        let origin = polygon.iter().copied().sum::<DVec3>() / n as f64;
+        let mut nv = DVec3::ZERO;
+        let mut m = 0.0f64;
+        for i in 0..n {
+            let a = polygon[i] - origin;
+            let b = polygon[(i + 1) % n] - origin;
+            nv += a.cross(b);
+            m = m.max((b - a).length_squared());
+        }
+        (origin, nv, m)
+    };
+    let twice_area = twice_area_vec.length();
+    if !twice_area.is_finite() || !origin.is_finite() || twice_area <= DEGENERATE_AREA * max_edge2 {
+        return None;
+    }
+    Some((origin, twice_area_vec / twice_area))
+}
+
+/// Adds each edge's signed I2 term to the sources `src` in the polygon's 2D frame (`to_2d`)
+/// and counts the polygon's winding about each source's `d'`; with `channels`, the first
+/// source's pass serves all three channels' tables. Returns the segments integrated (per
+/// source, as the paper counts them).
+#[inline]
+fn integrate_edges(
+    polygon: &[DVec3],
+    to_2d: &impl Fn(DVec3) -> DVec2,
+    src: &mut [Source],
+    channels: Option<&ChannelTails>,
+    profile: &Profile,
+    seg: &Segmenter,
+) -> usize {
+    let n = polygon.len();
     let passes = if channels.is_some() { 1 } else { src.len() };
     let mut segments = 0usize;
     let mut b2 = to_2d(polygon[0]);
@@ -228,8 +269,8 @@ pub fn form_factor_counted(
             let t_a = w.dot(u);
             let t_b = t_a + len;
             let s2 = r_s * r_s + s.h2;
-            if let Some(tails) = &channels {
-                let (i2, segs) = edge_i2(r_s.abs(), s2, tails, t_a, t_b, &seg);
+            if let Some(tails) = channels {
+                let (i2, segs) = edge_i2(r_s.abs(), s2, tails, t_a, t_b, seg);
                 for (c, i2) in i2.into_iter().enumerate() {
                     src[c].i2 += i2.copysign(r_s);
                 }
@@ -238,35 +279,17 @@ pub fn form_factor_counted(
                 continue;
             }
             let ([i2], segs) = match s.tail {
-                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, &seg),
+                Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, seg),
                 Tail::Table(c) => {
                     let table = &profile.tables.as_ref().expect("table source without tables").channels[c];
-                    edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg)
+                    edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, seg)
                 }
             };
             s.i2 += i2.copysign(r_s);
             segments += segs;
         }
     }
-    if channels.is_some() {
-        // The other channels' sources share the first's point, so its winding and edges.
-        let (winding, on_line) = (src[0].winding, src[0].on_line);
-        for s in src.iter_mut() {
-            (s.winding, s.on_line) = (winding, on_line);
-        }
-    }
-
-    let mut f = [0.0; 3];
-    for s in src.iter() {
-        let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
-        let q_h = match s.tail {
-            Tail::Pole => PoleTail { sigma: s.sigma, h: s.h }.q(s.h)[0],
-            Tail::Table(c) => profile.tables.as_ref().expect("tables").channels[c].tail(s.h),
-        };
-        f[s.channel] += s.weight * (theta * q_h - s.i2);
-    }
-    let f = f.map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 });
-    (f, segments)
+    segments
 }
 
 /// Which radial tail `Q(s)` a source integrates.
@@ -353,103 +376,6 @@ fn sources(
     (src, n)
 }
 
-/// A radial tail `Q(s)` as the edge integrals see it, for `N` sources that share their
-/// position and height (so every segment and distance): one pole or table (`N = 1`), or the
-/// three channels' tables of a tabulated profile (`N = 3`).
-trait TailFn<const N: usize> {
-    /// `Q(s)` at distance `s` (mesh units), per source.
-    fn q(&self, s: f64) -> [f64; N];
-    /// The rate (per mesh unit) for the `σ L` segment condition (the largest of the sources').
-    fn sigma(&self) -> f64;
-    /// Whether everything at distance `s` and beyond is negligible (with `s_min` the least
-    /// distance along the edge).
-    fn negligible(&self, s: f64, s_min: f64) -> bool;
-}
-
-/// One analytic pole, `e^{-σs} / s`, at height `h` over the polygon's plane.
-struct PoleTail {
-    sigma: f64,
-    h: f64,
-}
-
-impl TailFn<1> for PoleTail {
-    #[inline(always)]
-    fn q(&self, s: f64) -> [f64; 1] {
-        [exp_neg_f64(-self.sigma * s) / s]
-    }
-    #[inline(always)]
-    fn sigma(&self) -> f64 {
-        self.sigma
-    }
-    #[inline(always)]
-    fn negligible(&self, s: f64, s_min: f64) -> bool {
-        // Stop once e^{-σ(s - S)} < e^{-40}: nothing further along the edge can matter; and
-        // once below e^{-50} of the pole's own peak `e^{-σh}/h`, however the edge runs (an
-        // edge far out of an opaque material's reach costs no segments).
-        self.sigma * (s - s_min) > 40.0 || self.sigma * (s - self.h) > 50.0
-    }
-}
-
-/// A tabulated channel.
-struct TableTail<'a> {
-    table: &'a RadialTable,
-    sigma: f64,
-}
-
-impl TailFn<1> for TableTail<'_> {
-    #[inline(always)]
-    fn q(&self, s: f64) -> [f64; 1] {
-        [self.table.tail(s)]
-    }
-    #[inline(always)]
-    fn sigma(&self) -> f64 {
-        self.sigma
-    }
-    #[inline(always)]
-    fn negligible(&self, s: f64, _s_min: f64) -> bool {
-        s >= self.table.r_max
-    }
-}
-
-/// The three channels' tables of a profile with no analytic part (photon beam diffusion): its
-/// three sources sit at the receiver with one height, so they share every segment, distance
-/// and square root, and one pass integrates all three (the segments are those of the channel
-/// that needs the shortest, so no channel is integrated more coarsely than alone).
-struct ChannelTails<'a> {
-    tables: &'a [RadialTable; 3],
-    /// [`RadialTable::root_scale`] per channel.
-    scale: [f64; 3],
-    sigma: f64,
-    r_max: f64,
-}
-
-impl<'a> ChannelTails<'a> {
-    fn new(tables: &'a [RadialTable; 3], sigma_t: [f64; 3]) -> Self {
-        ChannelTails {
-            tables,
-            scale: tables.each_ref().map(RadialTable::root_scale),
-            sigma: sigma_t.into_iter().fold(0.0, f64::max),
-            r_max: tables.iter().map(|t| t.r_max).fold(0.0, f64::max),
-        }
-    }
-}
-
-impl TailFn<3> for ChannelTails<'_> {
-    #[inline(always)]
-    fn q(&self, s: f64) -> [f64; 3] {
-        let root = s.max(0.0).sqrt();
-        std::array::from_fn(|c| self.tables[c].tail_at_root(root, self.scale[c]))
-    }
-    #[inline(always)]
-    fn sigma(&self) -> f64 {
-        self.sigma
-    }
-    #[inline(always)]
-    fn negligible(&self, s: f64, _s_min: f64) -> bool {
-        s >= self.r_max
-    }
-}
-
 /// `Σ_e Δθ_e`, the signed angle the polygon's edges subtend at `d'` (2D), for the rare case
 /// that `d'` lies on an edge's supporting line, where it may be a fraction of `2π` (`π` on an
 /// edge, the interior angle at a vertex). Edges whose line holds `d'` subtend nothing.
@@ -476,135 +402,6 @@ fn boundary_angle(polygon: &[DVec3], to_2d: &impl Fn(DVec3) -> DVec2, d: DVec2) 
     // (removes the round-off of ~1e-16 · z/h that would otherwise survive when h is tiny).
     let k = (theta / TAU).round();
     if (theta - k * TAU).abs() < WINDING_SNAP { k * TAU } else { theta }
-}
-
-/// `∫_{t_a}^{t_b} R e^{-σ√(S²+t²)} / (√(S²+t²) (R²+t²)) dt` (Mertens eq. 13 without `z`) for
-/// `R > 0`, with `s2 = S²`. Returns the integral and the number of segments.
-///
-/// The integrand is even in `t`, so the edge is split at the foot point `t = 0` and each half
-/// integrated over `|t|`.
-#[inline]
-fn edge_i2<const N: usize>(
-    r: f64,
-    s2: f64,
-    tail: &impl TailFn<N>,
-    t_a: f64,
-    t_b: f64,
-    seg: &Segmenter,
-) -> ([f64; N], usize) {
-    if t_a >= 0.0 {
-        half_edge_i2(r, s2, tail, t_a, t_b, seg)
-    } else if t_b <= 0.0 {
-        half_edge_i2(r, s2, tail, -t_b, -t_a, seg)
-    } else {
-        let (i1, n1) = half_edge_i2(r, s2, tail, 0.0, -t_a, seg);
-        let (i2, n2) = half_edge_i2(r, s2, tail, 0.0, t_b, seg);
-        (std::array::from_fn(|k| i1[k] + i2[k]), n1 + n2)
-    }
-}
-
-/// Three-point Gauss-Legendre over a segment of half-length `half`, from the values at its
-/// centre and at its two outer nodes.
-#[inline(always)]
-fn gauss3<const N: usize>(half: f64, centre: [f64; N], lo: [f64; N], hi: [f64; N]) -> [f64; N] {
-    std::array::from_fn(|k| half * (GL_W_CENTER * centre[k] + GL_W_OUTER * (lo[k] + hi[k])))
-}
-
-/// The segment conditions, prepared once per call.
-struct Segmenter {
-    /// `ρ²` and `1 - ρ²/4` for `ρ = max_segment_ratio`; `kappa ≤ 0` means "no limit".
-    ratio2: f64,
-    kappa: f64,
-    /// Largest `σ L`.
-    sigma_limit: f64,
-}
-
-impl Segmenter {
-    fn new(opts: &FormFactorOptions) -> Self {
-        // Guard against zero, negative or NaN options: they would mean endless subdivision.
-        let ratio = if opts.max_segment_ratio > 1e-3 { opts.max_segment_ratio } else { 1e-3 };
-        let sigma_limit = if opts.max_segment_sigma > 1e-3 { opts.max_segment_sigma } else { 1e-3 };
-        let ratio2 = ratio * ratio;
-        Segmenter { ratio2, kappa: 1.0 - 0.25 * ratio2, sigma_limit }
-    }
-}
-
-/// The part of [`edge_i2`] over `0 ≤ a ≤ t ≤ b`.
-///
-/// Segments are laid out greedily from the foot point outwards, each as long as condition (19)
-/// allows: `L = ρ r_0` with `r_0 = √(R² + (a + L/2)²)` solved for `L`, and `σ L ≤` the σ limit.
-/// They grow geometrically (by `(2+ρ)/(2-ρ)`), so an edge whose line passes at distance `R`
-/// from `d'` needs `O(log(L/R))` segments; below `|t| < 10⁻³ S` (only reached when
-/// `R < 10⁻³ S`) one segment in `φ = atan(t/R)` absorbs the `1/(R²+t²)` spike, which bounds the
-/// count by `O(log(L/S))` even for `R → 0`. Beyond `σ(s - S) > 40` the integrand is below
-/// `e^{-40}` of its peak and the rest of the edge is dropped.
-#[inline]
-fn half_edge_i2<const N: usize>(
-    r: f64,
-    s2: f64,
-    tail: &impl TailFn<N>,
-    a: f64,
-    b: f64,
-    seg: &Segmenter,
-) -> ([f64; N], usize) {
-    let r2 = r * r;
-    let s = s2.sqrt();
-    let sigma = tail.sigma();
-    let f = |t: f64| {
-        let inv = 1.0 / (r2 + t * t);
-        tail.q((s2 + t * t).sqrt()).map(|q| q * inv)
-    };
-    let mut sum = [0.0; N];
-    let mut segments = 0;
-    let mut pos = a;
-    let phi_zone = 1e-3 * s;
-    if pos < phi_zone && r < phi_zone {
-        let end = phi_zone.min(b);
-        let p1 = (pos / r).atan();
-        let p2 = (end / r).atan();
-        let hp = 0.5 * (p2 - p1);
-        let p0 = p1 + hp;
-        let g = |p: f64| {
-            let t = r * p.tan();
-            tail.q((s2 + t * t).sqrt())
-        };
-        let dp = hp * GL_X;
-        sum = gauss3(hp, g(p0), g(p0 - dp), g(p0 + dp));
-        segments += 1;
-        pos = end;
-    }
-    let sigma_len = if sigma > 0.0 { seg.sigma_limit / sigma } else { f64::INFINITY };
-    let mut t_sum = [0.0; N];
-    while pos < b {
-        if tail.negligible((s2 + pos * pos).sqrt(), s) {
-            break;
-        }
-        let l_ratio = if seg.kappa > 0.0 {
-            let q = seg.ratio2 * pos;
-            (q + (q * q + 4.0 * seg.kappa * seg.ratio2 * (r2 + pos * pos)).sqrt()) / (2.0 * seg.kappa)
-        } else {
-            f64::INFINITY
-        };
-        let l = l_ratio.min(sigma_len);
-        // Take the rest of the edge in one go when it is (nearly) within reach, and halve the
-        // last two segments' leftover otherwise, so no sliver segment is left at the end.
-        let rest = b - pos;
-        let l = if rest <= l {
-            rest
-        } else if rest < 2.0 * l {
-            0.5 * rest
-        } else {
-            l
-        };
-        let half = 0.5 * l;
-        let t0 = pos + half;
-        let dt = half * GL_X;
-        let part = gauss3(half, f(t0), f(t0 - dt), f(t0 + dt));
-        t_sum.iter_mut().zip(part).for_each(|(s, p)| *s += p);
-        segments += 1;
-        pos = if rest <= l { b } else { pos + l };
-    }
-    (std::array::from_fn(|k| sum[k] + r * t_sum[k]), segments)
 }
 
 /// One-sample estimate: `R_d` from the polygon's centroid times its area (the far-field

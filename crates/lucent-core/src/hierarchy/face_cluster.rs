@@ -29,7 +29,7 @@ use std::collections::BinaryHeap;
 /// (the order is total: the same tree). Each entry is one 128-bit key that orders as `Merge`
 /// does. The heap holds millions of entries, and a pop waits on memory at every level: four
 /// children share a 64-byte line, which halves the levels, and integer keys compare in one
-/// step (the 871K dragon's hierarchy 5.9 -> 4.6 s; eight children gave no more).
+/// step (eight children a node gave no more; docs/speed.md has the figures).
 #[derive(Debug, Default)]
 struct MergeQueue(Vec<u128>);
 

@@ -24,14 +24,14 @@ use crate::Rgb;
 use crate::bssrdf::{Profile, fresnel_transmittance};
 use crate::mesh::Mesh;
 use crate::mesh::deform::TracedPose;
-use crate::solver::Progress;
+use crate::progress::Progress;
 use rayon::prelude::*;
 
 /// The rays of the bounce that hit the front of another face, per face: the geometry of
 /// [`bounced_irradiance`], traced once and reused by every bounce and every solve until the
 /// mesh moves or the profile asks for another ray count (a moving light, a new material with
-/// the same reach). Tracing them was most of a bounce: 0.8 s a bounce on the 48K Stanford
-/// dragon against a 10 ms gather over stored links.
+/// the same reach). Tracing them is most of a bounce: far more than a gather over stored
+/// links.
 #[derive(Clone, Debug, Default)]
 pub struct BounceRays {
     /// Strata per side the rays were cast with ([`strata_for`]).
@@ -81,8 +81,8 @@ struct TracedHit {
 
 impl BounceRays {
     /// Traces the bounce rays of every face of `mesh` (`caster` built on it) at the ray count
-    /// the profile `dipole` asks for, counting faces done on `progress` (stage "bounce rays";
-    /// the 871K Stanford dragon's 3.5M rays and its three bounces took 4.4 s in all).
+    /// the profile `profile` asks for, counting faces done on `progress` (stage "bounce
+    /// rays").
     pub fn trace(mesh: &Mesh, caster: &ShadowCaster, profile: &Profile, progress: Option<&Progress>) -> Self {
         let eps = caster.offset();
         let strata = strata_for(mesh, profile);
@@ -250,9 +250,9 @@ const FACES_PER_DISC: f64 = 64.0;
 /// within a diffusion length `1/σ_tr` (the shortest channel's); where that disc holds more
 /// than [`FACES_PER_DISC`] faces, their rays together sample it, so each face casts 64 times
 /// that over their number (at least 4). The bunny in marble at 10 cm holds about 60 faces a
-/// disc (all 64 rays), the 203K Stanford dragon hundreds: its bounce took a third of the time,
-/// and the image moved by 0.24% at the median pixel, 2.1% at the 99th percentile (low-frequency
-/// blotches, not speckle: the profile smooths them).
+/// disc (all 64 rays), the 203K Stanford dragon hundreds: fewer rays there moved the image by
+/// 0.24% at the median pixel, 2.1% at the 99th percentile (low-frequency blotches, not
+/// speckle: the profile smooths them).
 fn strata_for(mesh: &Mesh, profile: &Profile) -> usize {
     let sigma_tr = profile.sigma_tr.into_iter().fold(0.0f64, f64::max);
     let faces = mesh.triangles.len().max(1);

@@ -11,7 +11,7 @@
 //! holding one is not valid JSON and fails as such.
 
 use super::MeshError;
-use super::io::guard;
+use super::error::guard;
 use gltf::json::Value;
 use std::path::Path;
 

@@ -24,43 +24,12 @@
 //!   of defence, so their panic text never reaches the user.
 
 use super::Mesh;
+use super::error::{MeshError, guard};
 use super::texture::{MeshTexture, TextureSource};
 use super::validate::{MeshReport, validate_keeping, weld_exact_duplicates};
 use glam::{Vec2, Vec3};
 use std::io::{BufReader, Cursor};
 use std::path::Path;
-
-/// Why a mesh could not be loaded. Its `Display` is one line: the file, then the reason.
-#[derive(Debug, thiserror::Error)]
-pub enum MeshError {
-    /// The file could not be loaded or its content is not an acceptable mesh.
-    #[error("{path}: {reason}")]
-    Invalid {
-        /// The file (or source name, for in-memory data) as given by the caller.
-        path: String,
-        /// What is wrong, in words (no trailing period).
-        reason: String,
-    },
-}
-
-impl MeshError {
-    /// An [`MeshError::Invalid`] for `path` with `reason`.
-    /// Line breaks in the reason (some parsers' messages have them) become spaces.
-    pub fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
-        let reason: String = reason.into();
-        MeshError::Invalid {
-            path: path.into(),
-            reason: reason.split_whitespace().collect::<Vec<_>>().join(" "),
-        }
-    }
-
-    /// The reason alone, without the file name.
-    pub fn reason(&self) -> &str {
-        match self {
-            MeshError::Invalid { reason, .. } => reason,
-        }
-    }
-}
 
 /// A mesh file format, chosen from the file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -179,12 +148,6 @@ fn parse_mesh_inner(
     report.unterminated_last_line = text && last_line.iter().any(|b| !b.is_ascii_whitespace());
     let texture = texture.filter(|t| t.corner_uvs.len() == mesh.triangles.len());
     Ok((mesh, report, texture))
-}
-
-/// Runs a third-party parser and turns a panic into an error naming the file.
-pub(super) fn guard<T>(name: &str, f: impl FnOnce() -> T) -> Result<T, MeshError> {
-    crate::limits::catch_quietly(f)
-        .map_err(|what| MeshError::invalid(name, format!("malformed file (parser failed: {what})")))
 }
 
 /// Appends a polygon as a triangle fan `(v0, v_i, v_i+1)`.

@@ -5,7 +5,7 @@
 //! forbids) touches it.
 
 use super::Mesh;
-use super::io::{MeshError, guard};
+use super::error::{MeshError, guard};
 use super::texture::{MeshTexture, TextureSource};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;

@@ -7,6 +7,7 @@ use glam::Vec3;
 pub mod bvh;
 pub mod deform;
 pub mod embedded;
+mod error;
 pub mod generate;
 pub mod gltf_material;
 pub mod io;
@@ -17,8 +18,9 @@ pub mod unfold;
 pub mod validate;
 
 pub use bvh::Bvh;
+pub use error::MeshError;
 pub use gltf_material::{GltfMaterial, load_gltf_material, parse_gltf_material};
-pub use io::{MeshError, MeshFormat, load_mesh, load_mesh_with_report, load_textured_mesh};
+pub use io::{MeshFormat, load_mesh, load_mesh_with_report, load_textured_mesh};
 pub use io_gltf::load_gltf_volume_params;
 pub use validate::MeshReport;
 

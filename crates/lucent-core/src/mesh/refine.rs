@@ -4,13 +4,11 @@
 //! The solve keeps one radiosity `B` per face and the renderer interpolates it, and single
 //! scattering, between vertices. Near a shadow edge both change over about a mean free path
 //! `1 / sigma_t'`; a face many mean free paths wide averages the lit side into the dark one and
-//! its vertices miss the single scattering's fall-off. Measured against Mitsuba (worst 8x8
-//! block, `validation/`): the 10 cm marble bunny (edges 3.9 mm, 12 mean free paths) 32.9% as it
-//! is, 16.7% split once, 17.5% twice; the 10 cm marble sphere (5.7) 14.9% -> 6.2% split once;
-//! the 11K dragon at 10 cm (6.2) 12.9 -> 12.6%, its median +2.7 -> +1.5%. [`auto_levels`]
-//! splits until the mean edge is at most [`EDGE_PER_MEAN_FREE_PATH`] mean free paths: the
-//! bunny and the dragon once, the sphere (split by hand: `--refine 1`) not, as its gain costs
-//! four times the solve.
+//! its vertices miss the single scattering's fall-off. Against Mitsuba (worst 8x8 block,
+//! `docs/validation.md`) one split halves the error of a mesh whose edges are 12 mean free
+//! paths (the 10 cm marble bunny) and a second gains nothing. [`auto_levels`] splits until the
+//! mean edge is at most [`EDGE_PER_MEAN_FREE_PATH`] mean free paths: the bunny and the dragon
+//! once, the sphere (split by hand: `--refine 1`) not, as its gain costs four times the solve.
 
 use super::Mesh;
 use glam::{Vec2, Vec3};

@@ -1,8 +1,11 @@
 use super::*;
 use crate::bssrdf::Material;
+use crate::hierarchy::face_cluster;
 use crate::irradiance::Light;
+use crate::irradiance::ShadowCaster;
 use crate::mesh::deform::{self, Deformer as _};
 use crate::mesh::generate;
+use crate::shading;
 use crate::solver::finite_body::FiniteBody;
 
 fn marble() -> Transport {
@@ -185,7 +188,7 @@ fn moving_the_eye_redoes_only_single_scattering() {
     s.set_eye(None);
     let c = s.solve().clone();
     assert!(c.vertex_single.is_empty());
-    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&c.face_b), &s.profile);
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&c.face_b), s.profile());
     assert_eq!(c.vertex_radiance, diffuse);
     // A 5 cm marble sphere is a half-space to the chord but where it is seen edge-on.
     for seen in [&a, &b] {
@@ -211,11 +214,11 @@ fn a_small_sphere_sends_its_diffuse_light_along_its_chords() {
     let eye = Vec3::new(0.0, 0.0, 6.0);
     s.set_eye(Some(eye));
     let solved = s.solve().clone();
-    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&solved.face_b), &s.profile);
-    let chord = shading::exit_chord::ExitChord::new(&s.profile).unwrap();
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&solved.face_b), s.profile());
+    let chord = shading::exit_chord::ExitChord::new(s.profile()).unwrap();
     // Unit sphere: thickness 2 along the normal, slabness 0.
     let mean = chord.mean(2.0, 0.0);
-    let sigma_t = s.profile.sigma_t.map(|v| v as f32);
+    let sigma_t = s.profile().sigma_t.map(|v| v as f32);
     let mut checked = 0;
     for (v, p) in s.mesh().positions.iter().enumerate() {
         let mu_o = p.normalize().dot((eye - *p).normalize());

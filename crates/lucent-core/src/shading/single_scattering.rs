@@ -37,9 +37,10 @@
 //! The result is a per-vertex radiance *before* the exit Fresnel factor, which the mesh pass
 //! applies per pixel to it and to `B / (c π)` alike ([`super`]). The mesh pass blends it across
 //! a face geometrically, which follows its exponential fall past the terminator where a linear
-//! blend overstates it (the 10 cm marble sphere's worst 8x8 block 31% -> 16% off Mitsuba on a
-//! 1.6 mm mesh); so that a vertex with none (every point on its view ray in shadow) does not
-//! blacken its faces, each vertex keeps at least [`NEIGHBOUR_FLOOR`] of its brightest neighbour.
+//! blend overstates it (about twice the error against Mitsuba on a coarse mesh,
+//! `docs/validation.md`); so that a vertex with none (every point on its view ray in shadow)
+//! does not blacken its faces, each vertex keeps at least [`NEIGHBOUR_FLOOR`] of its brightest
+//! neighbour.
 
 use crate::Rgb;
 use crate::bssrdf::{Profile, fresnel_transmittance, zonal_band_weights};

@@ -1,49 +1,9 @@
-//! The energy bound on thin and touching parts (not in Mertens et al. 2003; issue "physically
-//! right").
-//!
-//! Diffusion profiles are fitted to a flat, semi-infinite medium. On a thin part, or where two
-//! parts nearly touch, a receiver gathers from surfaces on more than one side and the sum of its
-//! form factors can exceed what light entering there could possibly give back. Under uniform
-//! irradiance 1 on every face, reciprocity makes a face's `B` the share of light entering there
-//! that leaves anywhere, which cannot exceed 1. Each face's `B` is therefore scaled by
-//! `min(1, 1 / max U)`, where `U` is its `B` under uniform irradiance 1 and the maximum is over
-//! the channels: where the profile keeps energy (any thick, convex region: `U` is the flat
-//! total reflectance there, below 1) nothing changes. `U` is gathered beside `B` (on the fly),
-//! or once per link set (render and incremental modes), so the bound costs one extra add per
-//! link.
-//!
-//! One factor for all three channels, not `min(1, 1/U)` per channel: the excess is the far
-//! field gathered through the part, which is redder than the light a lit face gathers near
-//! itself, so a per-channel bound took most from red and tinted lit thin parts blue (the
-//! 48K Stanford dragon's jaw and claws: 4,209 pixels of 800x600 with green or blue 5% above
-//! red, against 1 with one factor). Under uniform light a thin part then keeps the hue its
-//! profile gives (the worst channel at 1) rather than turning white.
+//! Measurements of the energy bound ([`super::bound`]) on whole meshes, on top of the solvers:
+//! the largest `B` under uniform irradiance ([`uniform_report`], `lucent bench energy`) and the
+//! albedo rendered on a flat slab ([`slab_albedo`], `lucent bench albedo`).
 
+pub use super::bound::{bound, bound_with_gain};
 use crate::Rgb;
-
-/// The factor applied to a face's `B` whose `B` under uniform irradiance 1 is `uniform`:
-/// `min(1, 1/U)` for the largest finite channel of `U`, the same in all three channels.
-#[inline]
-pub fn bound(uniform: Rgb) -> Rgb {
-    let worst = uniform.to_array().into_iter().filter(|u| u.is_finite()).fold(0.0, f32::max);
-    Rgb::splat(if worst > 1.0 { 1.0 / worst } else { 1.0 })
-}
-
-/// [`bound`] for a face whose `B` is multiplied by the finite-body gain `gain`
-/// ([`super::finite_body::FiniteBody::face_gain`]): `gain min(1, 1/max_c(U_c gain_c))`, so
-/// that `B` under uniform irradiance still does not exceed 1.
-///
-/// The gain is one factor for all channels but for the hue a small part's cut takes from the
-/// farthest-reaching channel (the reach factor, which leaves the light alone): the walked gain
-/// differs between channels only where the sphere is a few mean free paths across, and per
-/// channel diffusion's gain had run blue above red there (marble at 10 cm, 1-2 mm thick: 1.08
-/// red, 1.13 blue), tinting the lit thin parts of the 48K Stanford dragon blue (2,626 pixels of
-/// 800x600 with green or blue 5% above red, against 0 with one factor); the walked gain per
-/// channel took the 11K dragon's green-above-red pixels from 28 to 209.
-#[inline]
-pub fn bound_with_gain(uniform: Rgb, gain: Rgb) -> Rgb {
-    gain * bound(uniform * gain)
-}
 
 /// What [`uniform_report`] measures on one mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -174,20 +134,4 @@ pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32, solver
         }
     }
     SlabAlbedo { rendered: sum / n.max(1) as f32, side_mm: reach_mm, triangles: mesh.triangles.len() }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bound_is_one_factor_set_by_the_worst_finite_channel() {
-        assert_eq!(bound(Rgb::new(1.5, 1.2, 0.9)), Rgb::splat(1.0 / 1.5));
-        assert_eq!(bound(Rgb::new(0.9, 0.99, 1.0)), Rgb::ONE);
-        assert_eq!(bound(Rgb::new(f32::INFINITY, 2.0, 0.5)), Rgb::splat(0.5));
-        assert_eq!(bound(Rgb::new(f32::NAN, 0.5, 0.0)), Rgb::ONE);
-        // The hue a face gathers survives: every channel scales alike.
-        let b = Rgb::new(0.3, 0.2, 0.1) * bound(Rgb::new(1.6, 1.1, 0.8));
-        assert!((b.x / b.z - 3.0).abs() < 1e-6 && b.max_element() <= 0.3 / 1.6 + 1e-7);
-    }
 }

@@ -7,17 +7,13 @@
 
 use super::near_face::Nodes;
 use super::oracle::LinkKind;
-use super::point_sample::{PointBuf, ProfileF32, ReceiverSources, SmoothBound};
+use super::point_sample::{MAX_PIECES, PointBuf, ProfileF32, ReceiverSources, SmoothBound};
 use crate::bssrdf::Profile;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::Hierarchy;
 use glam::{DVec3, Vec3};
 
-/// Most pieces [`Evaluator::smooth_face`] cuts a face into for the cubature: 280 points,
-/// still cheaper than the edge integrals of a face that needs them (871K dragon: 1.2M such
-/// links took the edge integrals at 16 pieces, 0.17M at 40).
-pub(super) const MAX_PIECES: usize = 40;
 /// Deepest midpoint subdivision [`Evaluator::smooth_face`] tries (pieces of a quarter of
 /// the face's area, a sixteenth, ..., a 1024th).
 const MAX_DEPTH: u8 = 5;
@@ -103,8 +99,8 @@ impl<'a> Evaluator<'a> {
     /// [`MAX_DEPTH`] levels and [`MAX_PIECES`] pieces (a piece has half its parent's radius;
     /// faces past 32 times the limit, which no piece could meet, are not tried). Only the
     /// pieces near the receiver are cut again, so a face beside it takes 7 to 13 pieces,
-    /// 49 to 91 points, about half the cycles of its edge integrals (48K dragon: 1,400
-    /// against 3,000), which on dense scanned meshes were a quarter of the solve. Each
+    /// 49 to 91 points, cheaper than its edge integrals, which dominate the near links of
+    /// dense scanned meshes. Each
     /// level's [`SmoothBound`] is made once, so a piece's test is one squared distance.
     /// Returns the number of pieces; `None` (and no points added): too close to be cut
     /// smooth (the receiver's own face, which holds the profile's peak), so the polar rule

@@ -8,12 +8,12 @@
 //! parts past `e^{-40}`. This matters only for opaque materials at large scales (a face then sees a few
 //! hundred neighbours), and leaves every result unchanged to well below `f32` precision.
 
-use super::energy;
-use super::progress::Progress;
+use super::bound;
 use crate::Rgb;
 use crate::bssrdf::Profile;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -106,8 +106,8 @@ pub fn solve_receivers_with_gain(
             let u = Rgb::new(u[0] as f32, u[1] as f32, u[2] as f32);
             match (bound, gain) {
                 (false, _) => b,
-                (true, Some(g)) => b * energy::bound_with_gain(u, g[o]),
-                (true, None) => b * energy::bound(u),
+                (true, Some(g)) => b * bound::bound_with_gain(u, g[o]),
+                (true, None) => b * bound::bound(u),
             }
         })
         .collect()

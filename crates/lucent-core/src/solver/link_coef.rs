@@ -1,5 +1,5 @@
 //! Stored links' transport coefficients, 16 bits per channel, and render mode's gather kernel
-//! over them (driven by `solver::gather`).
+//! over them (driven by `solver::hierarchical::gather`).
 //!
 //! Render mode (Mertens et al. 2003, §5.5) is a gather `Σ E_e F_re` over millions of stored
 //! links, every frame. A coefficient is kept as IEEE binary16 per channel ([`LinkCoef`]),
@@ -21,15 +21,11 @@
 //! shifts (exact, as the hardware conversion), one link per 128-bit operation. Each keeps two
 //! running sums, as one is bound by the add's latency. A link is 12 bytes streamed (emitter
 //! word and coefficients) plus a 16-byte fetch of the emitter's `E` at an index read from the
-//! stream. On a Zen 4 machine (`benches/kernel.rs`, one core) all three paths ran at
-//! 0.4-0.65 links per ns, while streaming the same bytes alone ran at 1.3-1.7: there the
-//! gather was bound by the dependent fetch of `E`. On an Intel Xeon guest with AVX-512 the
-//! loads of the streams themselves waited: a receiver's run is short (47 links at 131K
-//! triangles), and the hardware prefetchers start over at each. Asking for the lines 256
-//! links ahead (`PREFETCH_LINKS`) took the 131K blob's frame from 5.7 to 4.3 ms on two
-//! cores (the portable path 5.2 to 4.7), its 100 MB of links close to the rate at which that
-//! guest sums 100 MB. The wider paths gain little; fewer links (or fewer bytes a link) are
-//! what would speed render mode up further.
+//! stream. The gather is bound by memory, not arithmetic: by the dependent fetch of `E`, and
+//! by the loads of the streams themselves, as a receiver's run is short (tens of links) and
+//! the hardware prefetchers start over at each; so the gathers ask for the lines
+//! [`PREFETCH_LINKS`] links ahead (`benches/kernel.rs` measures the paths). The wider paths gain
+//! little; fewer links (or fewer bytes a link) are what would speed render mode up further.
 
 use crate::simd::Isa;
 use glam::Vec3A;
@@ -139,11 +135,8 @@ fn half_bits(y: f32) -> u16 {
 }
 
 /// How many links ahead of the one being gathered the gathers ask for the streams' cache
-/// lines. The hardware prefetchers lose the streams at every receiver's start (a run is 47
-/// links on average at 131K triangles): on an Intel Xeon guest with AVX-512, one core
-/// gathered the 131K blob's 8.3M links in 11.6 ms with the loads waiting on memory, 7.4 ms
-/// asking 256 links (2 KiB of coefficients) ahead; 32 links ahead gained a tenth, 512 no
-/// more than 256.
+/// lines (2 KiB of coefficients): the hardware prefetchers lose the streams at every
+/// receiver's start, as a run is short. Far fewer gains little; more gains nothing.
 pub(super) const PREFETCH_LINKS: usize = 256;
 
 /// Asks for the cache lines of link `k + PREFETCH_LINKS` of both streams; `k` may run past
@@ -168,7 +161,7 @@ pub(super) fn prefetch_links(emitter: &[u32], coef: &[LinkCoef], k: usize) {
 
 /// One receiver's `Σ E F` before its scale (`emitter` and `coef` its links), on
 /// [`Isa::best`]'s instruction set: render mode's gather. Unlike [`gather_sum`] it asks the CPU
-/// nothing per call (five feature tests a receiver cost 7% of the 131K blob's frame).
+/// nothing per call (feature tests per receiver are a measurable share of a frame).
 #[inline]
 pub(crate) fn gather_sum_best(e_node: &[Vec3A], emitter: &[u32], coef: &[LinkCoef]) -> Vec3A {
     match Isa::best() {

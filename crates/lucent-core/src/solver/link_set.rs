@@ -3,8 +3,8 @@
 //! ancestors handed it, which an incremental update needs to tell which links it may keep.
 //!
 //! An incremental update decides again only the links near what moved, a few percent of them
-//! for a local deformation; copying the rest into new arrays every frame took 15 ms for 10.7M
-//! kept links at 131K triangles, twice render mode's gather. So the links live in two stores: a
+//! for a local deformation; copying the rest into new arrays every frame would cost more than
+//! render mode's gather over them. So the links live in two stores: a
 //! *base*, shared from update to update, and a *delta* holding what changed since the base was
 //! built. Each receiver's `Span` says which store holds its run. An update writes a new delta
 //! and shares the base; the base is built anew when nothing in it is live any more (the delta
@@ -145,7 +145,7 @@ pub struct LinkSet {
     len: usize,
 }
 
-/// The arrays render mode's gather reads (see `solver::gather`'s `RenderFrame`).
+/// The arrays render mode's gather reads (see `solver::hierarchical::gather`'s `RenderFrame`).
 #[derive(Clone, Copy)]
 pub(crate) struct StoredLinks<'a> {
     links: &'a [Span],

@@ -1,49 +1,53 @@
-//! Solving `B(x_o) = Σ_k E_k F(A_k, x_o)` (Mertens eq. 6).
+//! Solving `B(x_o) = Σ_k E_k F(A_k, x_o)` (Mertens et al. 2003, eq. 6), as stages whose imports
+//! point one way, from the kernels up (`scripts/check_layout.py` checks that no two modules
+//! import each other, at any depth):
 //!
-//! * [`census`]: counts of the oracle's decisions by cause and of the links by kind, level and
-//!   geometry (diagnostic).
-//! * [`energy`]: the energy bound that keeps thin and touching parts from glowing.
-//! * [`exact`]: every face against every other face, O(N^2): the reference.
-//! * [`hierarchical`]: the hierarchical boundary element solve over a mesh hierarchy (§3.2,
-//!   §5.5) in on-the-fly, render and incremental modes.
-//! * `refine`: its receiver-driven refinement, storing links or handing them to the gather,
-//!   and the incremental relink that keeps what did not change (§3.2, §5.5).
-//! * `gather`: a frame's pull, gather `Σ E F` and push, over the stored links or during the
-//!   on-the-fly traversal (§3.2, §5.5).
-//! * `evaluate`: the transport coefficient of an accepted link: one-point estimate, form
-//!   factor or cubature (§3.1, §4).
-//! * [`link_coef`]: stored link coefficients, 16 bits per channel, and render mode's gather
-//!   kernel over them.
-//! * [`link_set`]: the stored links, a run per receiver in a shared base or a per-update
-//!   delta, so that an incremental update writes only what changed (§5.5).
-//! * [`local`]: the profile's reach and the local limit `B = R_d E` where it is below a face.
-//! * `near_face`: the receiver's own face and those beside it, in polar coordinates about
-//!   the receiver, for the tabulated profile (§4).
-//! * [`oracle`]: the refinement oracle (§5.2).
-//! * [`point_sample`]: one-point transport estimates, four at a time (§4.2).
-//! * [`progress`]: a counter a front end polls to show a long solve's progress.
+//! 1. **Kernels**, which know nothing of the hierarchy's links:
+//!    * [`point_sample`]: one-point transport estimates `A R_d`, four at a time, and the
+//!      seven-point cubature, on the widest instruction set the CPU has (§4.2).
+//!    * `near_face`: the receiver's own face and those beside it, in polar coordinates about
+//!      the receiver, for tabulated profiles (§4).
+//!    * [`link_coef`]: a link's coefficient packed in 16 bits a channel, and render mode's
+//!      gather kernel over packed links (§5.5).
+//!    * [`local`]: the profile's reach and the local limit `B = R_d E` where it is below a
+//!      face; [`bound`]: the energy bound that keeps thin and touching parts from glowing;
+//!      [`finite_body`]: the gain of a finite body over the half-space profile, with the rays
+//!      that measure the body under each face.
+//! 2. **The oracle decides** ([`oracle`], §5.2): for a candidate pair, link it (and how:
+//!    [`LinkKind`]) or open the receiver or the emitter.
+//! 3. **Evaluation** (`evaluate`, §3.1, §4): the transport coefficient of an accepted link:
+//!    one-point estimate, the semi-analytic form factor of [`crate::formfactor`], cubature over
+//!    pieces, or the polar rule.
+//! 4. **The link set stores** ([`link_set`], §5.5): a run of links per receiver, in a base
+//!    shared between updates and a per-update delta, so an incremental update writes only what
+//!    changed.
+//! 5. **The solver** ([`hierarchical`], §3.2, §5.5), its `impl` in one folder: the
+//!    [`HierarchicalSolver`] and its entry points in on-the-fly, render and incremental modes;
+//!    linking (`hierarchical::link`: the receiver-driven refinement and the incremental relink
+//!    that keeps what did not change); a frame's pull, gather `Σ E F` and push
+//!    (`hierarchical::gather`, with the receiver expansion of `hierarchical::expansion`); and
+//!    the [`census`] of the oracle's decisions and the links (diagnostic).
+//! 6. **On top**: [`exact`], every face against every other face, O(N²), the reference; and
+//!    [`energy`], the energy bound measured on whole meshes (`lucent bench energy`, `albedo`).
+//!
+//! [`Progress`] (a counter a front end polls) lives in [`crate::progress`] and is re-exported
+//! here.
 
-pub mod census;
+pub mod bound;
 pub mod energy;
 mod evaluate;
 pub mod exact;
 pub mod finite_body;
-mod gather;
-mod gather_linear;
 pub mod hierarchical;
 pub mod link_coef;
 pub mod link_set;
 pub mod local;
 mod near_face;
 pub mod oracle;
-mod point_kernel;
-#[cfg(target_arch = "x86_64")]
-mod point_kernel_avx512;
 pub mod point_sample;
-pub mod progress;
-mod refine;
 
+pub use crate::progress::Progress;
+pub use hierarchical::census;
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};
-pub use progress::Progress;

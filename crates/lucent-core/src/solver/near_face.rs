@@ -11,7 +11,7 @@
 //! The semi-analytic form factor takes the same integral as `2π Q(h) - Σ_e ∫ Q dφ` (`Q` the
 //! tail, `Q(0) - P`): where the face is small against the profile's length the two terms
 //! nearly cancel and the edges' quadrature error is multiplied by their ratio, so it needs
-//! many short segments (about 4,400 cycles for a receiver's own face). Here each ray's value
+//! many short segments (most for a receiver's own face). Here each ray's value
 //! is read from the table, and in `u` it is smooth: single scattering's `R ~ 1/ρ` leaves a
 //! constant, `R`'s smooth part `cosh u`, so four Gauss-Legendre nodes per unit of `u` hold.
 //! The fans of a face off to one side of `x_o` cancel in part, and the table's kinks with

@@ -178,8 +178,14 @@ pub fn run(json: bool) -> anyhow::Result<()> {
 
     if json {
         println!("{}", serde_json::to_string(&report).context("bench formfactor: JSON")?);
-        return Ok(());
+    } else {
+        print_table(&report);
     }
+    Ok(())
+}
+
+/// The report as a table with a summary, for a reader.
+fn print_table(report: &Report) {
     println!("Form factor, Mertens 2003 fig. 3 set-up ({})", report.setup);
     println!("reference: {}", report.reference);
     println!(
@@ -212,5 +218,4 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         "form_factor: {:.0} ns/call (median, {:.1} segments/call); point_sample: {:.1} ns/call",
         report.ns_per_form_factor, report.mean_segments, report.ns_per_point_sample
     );
-    Ok(())
 }

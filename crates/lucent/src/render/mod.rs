@@ -111,12 +111,13 @@ pub struct Timings {
 
 /// Bytes a stored link set takes per triangle, for the mode choice below: about 210 links a
 /// triangle on scanned meshes (the Stanford dragon, marble at 10 cm) at 13 bytes each, with
-/// room for denser materials (the 871K dragon's render mode peaked at 2.94 GiB in all).
+/// room for denser materials and for the rest of a render-mode solve's peak (hierarchy,
+/// irradiance, bounce rays), which is per triangle too.
 const LINK_BYTES_PER_TRIANGLE: u64 = 4096;
 
 /// The solve mode of one image when `--mode` and the scene leave it open. With bounces
 /// between parts, `render`: the links are made once and each bounce is a gather over them
-/// (on the fly links every bounce anew: the 871K dragon took 25 s for its one bounce), unless
+/// (on the fly links every bounce anew, as costly as the first solve each time), unless
 /// the stored links would not fit in half the memory available; else `on-the-fly`, which
 /// stores none.
 fn one_image_mode(scene: &Scene, mesh: &lucent_core::mesh::Mesh) -> SolveMode {

@@ -11,7 +11,7 @@
 //! the view ray sees), for the sphere whose diameter is the body's thickness under the face (a
 //! ray along the inward normal). Depending only on albedo and index in optical units, the table
 //! is walked once per pair up to 24 mean free paths and extended beyond by diffusion's excess
-//! over 1, scaled to meet the walk. Diffusion's own gain (used until 2026-11-26) overstated it
+//! over 1, scaled to meet the walk. Diffusion's own gain overstates it
 //! everywhere (1.59 for ketchup's red where transport gives 1.44; 1.06 against 1.04 for a 2 cm
 //! marble sphere) and never fell below 1, while a sphere a few mean free paths across keeps less
 //! multiple scattering than a half-space.
@@ -19,7 +19,7 @@
 //! The gain multiplies `B` as one factor for all channels (the table's per-channel gains
 //! weighted by the light each channel's half-space returns, so the profile keeps its hue), and
 //! the energy bound then keeps `B` under uniform light at most 1
-//! ([`super::energy::bound_with_gain`]): on a thin part, where the half-space profile already
+//! ([`super::bound::bound_with_gain`]): on a thin part, where the half-space profile already
 //! gathers from both sides, the bound takes the gain back. View-ray single scattering
 //! (`shading::single_scattering`) sees the real geometry and takes no gain.
 //!
@@ -50,10 +50,12 @@ use crate::bssrdf::walk;
 use crate::bssrdf::{Profile, boundary_a};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
-use crate::mesh::deform::TracedPose;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
+
+mod rays;
+pub use rays::{MAX_TURN, ThicknessRays};
 
 /// Sphere radii of the table per channel.
 const RADII: usize = 32;
@@ -85,9 +87,9 @@ pub struct FiniteBody {
 const SLAB_STEPS: usize = 48;
 
 impl FiniteBody {
-    /// The table for the material and scale of `dipole`: 10-150 ms on two cores for a new
-    /// albedo and index (the random walks; most for albedos near 1 at `eta > 1`, whose paths
-    /// are long), microseconds for one seen before.
+    /// The table for the material and scale of `profile`: random walks for a new albedo and
+    /// index (longest for albedos near 1 at `eta > 1`, whose paths are long), a cache lookup
+    /// for one seen before.
     pub fn new(profile: &Profile) -> Self {
         let tables: Vec<Arc<OpticalGain>> = (0..3)
             .into_par_iter()
@@ -135,7 +137,7 @@ impl FiniteBody {
     /// The gain of a face over a body `thickness` mesh units thick of slabness `s` (0..=1):
     /// the sphere's gain for that diameter as one factor (weighted by `R_d`), divided by
     /// `1 + s X(t) / R_d`, times each channel's reach factor over their weighted mean (module
-    /// docs). What [`super::energy::bound_with_gain`] applies.
+    /// docs). What [`super::bound::bound_with_gain`] applies.
     pub fn face_gain(&self, thickness: f32, s: f64) -> Rgb {
         let gain = self.weighted(self.gain(0.5 * thickness).to_array().map(f64::from));
         let reach = self.slab_reach(thickness);
@@ -168,7 +170,7 @@ impl FiniteBody {
     /// and slabness under the face. 1 where the face has no normal or its inward ray leaves
     /// the mesh.
     pub fn gains_along(&self, mesh: &Mesh, rays: &ThicknessRays, offset: f32) -> Vec<Rgb> {
-        assert_eq!(rays.hits.len(), mesh.triangles.len(), "thickness rays of another mesh");
+        assert_eq!(rays.faces(), mesh.triangles.len(), "thickness rays of another mesh");
         (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
@@ -191,132 +193,6 @@ fn ln_interpolate(xs: &[f64], ys: &[f64], x: f64, beyond: f64) -> f64 {
     let k = xs.partition_point(|&v| v <= x) - 1;
     let f = (x / xs[k]).ln() / (xs[k + 1] / xs[k]).ln();
     ys[k] + (ys[k + 1] - ys[k]) * f
-}
-
-/// How far the part under a face is a slab (1) rather than a sphere (0) of its thickness `t`
-/// along the inward normal, from the `chords` of the four rays tilted 45° from it (`offset`
-/// inside the face): the mean of where each falls between a sphere's `t cos 45°` and a slab's
-/// `t / cos 45°`. A ray that left the mesh (`None`) counts as a slab.
-fn slabness(chords: [Option<f32>; 4], t: f32, offset: f32) -> f64 {
-    let cos = std::f32::consts::FRAC_1_SQRT_2;
-    let s: f32 = chords
-        .iter()
-        .map(|c| c.map_or(1.0, |c| (((c + offset) / t - cos) / (1.0 / cos - cos)).clamp(0.0, 1.0)))
-        .sum();
-    s as f64 / 4.0
-}
-
-/// Where a ray under a face hit the mesh: the face, and the place on it (barycentric), which a
-/// deformation carries along.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct RayHit {
-    k: u32,
-    uv: [f32; 2],
-}
-
-/// The rays that measure the body under each face for its gain: one along the inward normal
-/// (the thickness) and four tilted 45° from it (the slabness). Traced once and kept; a deformed
-/// mesh moves their hits with it while the traced pose holds ([`TracedPose::holds`]), and
-/// traces again only the faces that turned more than [`MAX_TURN`] ([`Self::refresh`]), so an
-/// animation does not trace them every frame (10 of the 11 ms of a deforming bunny frame's
-/// irradiance did).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ThicknessRays {
-    /// Per face: the inward ray's hit, then the four tilted rays' (`None`: it left the mesh).
-    hits: Vec<[Option<RayHit>; 5]>,
-    /// Per face: its unit normal when its rays were traced.
-    normals: Vec<glam::Vec3>,
-    pose: TracedPose,
-}
-
-/// Largest turn of a face's normal (radians) since its rays were traced up to which they are
-/// moved with the mesh; past it they are traced again. On a thin part a turning face's rays
-/// find the far side elsewhere: under a bump growing on the bunny's ear the worst face's `B`
-/// was 31% off a new trace's without this limit, 13% with it (as with the bounce rays alone).
-pub const MAX_TURN: f32 = 0.05;
-
-/// Face `f`'s rays traced against `bvh` (over `mesh`) from `offset` inside it.
-fn trace_face(mesh: &Mesh, bvh: &Bvh, offset: f32, f: usize) -> [Option<RayHit>; 5] {
-    let n = mesh.face_normal(f);
-    if n == glam::Vec3::ZERO {
-        return [None; 5];
-    }
-    let origin = mesh.face_centroid(f) - n * offset;
-    ray_directions(n).map(|d| {
-        let (t, k) = bvh.closest_hit(origin, d, 0.0, f32::INFINITY)?;
-        Some(RayHit { k, uv: mesh.barycentric(k as usize, origin + d * t) })
-    })
-}
-
-impl ThicknessRays {
-    /// Traces the rays of every face of `mesh` against `bvh` (over `mesh`) from `offset`
-    /// inside each face.
-    pub fn trace(mesh: &Mesh, bvh: &Bvh, offset: f32) -> Self {
-        let faces = mesh.triangles.len();
-        // In the tree's leaf order: neighbours' rays walk the same nodes.
-        let hits = bvh.map_faces(|f| trace_face(mesh, bvh, offset, f));
-        let normals = (0..faces).map(|f| mesh.face_normal(f)).collect();
-        ThicknessRays { hits, normals, pose: TracedPose::of(mesh) }
-    }
-
-    /// Whether these rays serve `mesh`: the same faces, and the pose traced still holds.
-    pub fn fits(&self, mesh: &Mesh) -> bool {
-        self.hits.len() == mesh.triangles.len() && self.pose.holds(mesh)
-    }
-
-    /// Traces again, against `bvh` (over `mesh`, which these rays fit), the rays of the faces
-    /// whose normal turned more than [`MAX_TURN`] since they were traced.
-    pub fn refresh(&mut self, mesh: &Mesh, bvh: &Bvh, offset: f32) {
-        let min_cos = MAX_TURN.cos();
-        self.hits.par_iter_mut().zip(self.normals.par_iter_mut()).enumerate().for_each(|(f, (hits, n0))| {
-            let n = mesh.face_normal(f);
-            if n.dot(*n0) < min_cos {
-                *hits = trace_face(mesh, bvh, offset, f);
-                *n0 = n;
-            }
-        });
-    }
-
-    /// The body under face `f` of `mesh` as it is now: its thickness along the inward normal
-    /// (mesh units, from the face) and its [`slabness`] (0..=1); `None` where the inward ray
-    /// left the mesh or the face has no normal. What the gain and the exit chord read.
-    pub(crate) fn body(&self, mesh: &Mesh, f: usize, offset: f32) -> Option<(f32, f64)> {
-        let [inward, tilted @ ..] = self.chords(mesh, f, offset);
-        let t = inward? + offset;
-        Some((t, slabness(tilted, t, offset)))
-    }
-
-    /// Face `f`'s five chords on `mesh` as it is now (mesh units): from the rays' origin,
-    /// `offset` inside the face's centroid, along the rays as [`Self::trace`] casts them from
-    /// the face's normal now, to the plane of the face each hit (to the place it hit on that
-    /// face where the ray runs nearly along it). The inward ray first; `None` where a ray left
-    /// the mesh or the face has no normal. A thin part's thickness along the normal changes
-    /// faster than the distance to a point on its far side as its faces tilt (the bunny's ear
-    /// under a growing bump: 0.11 -> 0.20 along the normal, 0.14 to the point).
-    fn chords(&self, mesh: &Mesh, f: usize, offset: f32) -> [Option<f32>; 5] {
-        let n = mesh.face_normal(f);
-        if n == glam::Vec3::ZERO {
-            return [None; 5];
-        }
-        let origin = mesh.face_centroid(f) - n * offset;
-        let dirs = ray_directions(n);
-        std::array::from_fn(|i| {
-            let h = self.hits[f][i]?;
-            let at = mesh.point_at(h.k as usize, h.uv);
-            let nk = mesh.face_normal(h.k as usize);
-            let along = dirs[i].dot(nk);
-            let t = (at - origin).dot(nk) / along;
-            Some(if along.abs() > 0.1 && t > 0.0 { t } else { at.distance(origin) })
-        })
-    }
-}
-
-/// The five rays under a face of unit normal `n`: along the inward normal, then tilted 45°
-/// from it four ways.
-fn ray_directions(n: glam::Vec3) -> [glam::Vec3; 5] {
-    let cos = std::f32::consts::FRAC_1_SQRT_2;
-    let (u, v) = n.any_orthonormal_pair();
-    [-n, (u - n) * cos, (-u - n) * cos, (v - n) * cos, (-v - n) * cos]
 }
 
 /// Largest sphere (mean free paths) whose gain is walked; beyond it diffusion's shape is
@@ -448,6 +324,7 @@ fn diffuse_albedo(radius: f64, sigma_s: f64, sigma_a: f64, a_boundary: f64, sphe
 
 #[cfg(test)]
 mod tests {
+    use super::rays::slabness;
     use super::*;
     use crate::bssrdf::{Material, ProfileKind};
 

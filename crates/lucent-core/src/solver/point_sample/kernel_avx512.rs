@@ -1,4 +1,4 @@
-//! The one-point estimate kernel of [`super::point_kernel`] written out for AVX-512: the same
+//! The one-point estimate kernel of [`super::kernel`] written out for AVX-512: the same
 //! sixteen lanes (four points × three channels, lane `4 c + j`, four padding lanes), one
 //! `zmm` register per quantity, but without the divider. The portable path's two square roots
 //! and division per pole become one `vrsqrt14ps` and a Newton step (`s` and `1 / s³` from it),
@@ -9,8 +9,8 @@
 //! 8e-6 measured); lanes do not interact, so a single estimate, a batch of four points and a
 //! batch of four receivers agree bit for bit, as the oracle needs.
 
-use super::point_kernel::{Lanes, ProfileLanes, TABLE_LEN, WIDTH};
-use super::point_sample::ReceiverSources;
+use super::ReceiverSources;
+use super::kernel::{Lanes, ProfileLanes, TABLE_LEN, WIDTH};
 use crate::bssrdf::tables::TABLE_SIZE;
 use glam::Vec3;
 use std::arch::x86_64::*;

@@ -1,23 +1,22 @@
 //! Render mode's gather into an inner receiver with a linear or curved expansion (Mertens et
-//! al. 2003, §5.5, with the receiver expansion of [`super::gather`]): `B` at the receiver's
+//! al. 2003, §5.5, with the receiver expansion of [`super::expansion`]): `B` at the receiver's
 //! midpoint, its gradient and, for curved receivers, its Hessian, summed over the receiver's
 //! stored links. Each link adds its term `t = E_e F` (per channel) and, where it is steep
 //! (`s > 0`, its steepness across the receiver), `t k δ` to the gradient and `t w δδᵀ + t k I`
 //! to the Hessian, with `δ` the line from the emitter's midpoint to the receiver's,
-//! `k = -s / |δ|²` and `w = (s² + s + a) / |δ|⁴` ([`super::oracle::curvature_along`]).
+//! `k = -s / |δ|²` and `w = (s² + s + a) / |δ|⁴` ([`crate::solver::oracle::curvature_along`]).
 //!
 //! That is ten numbers a channel and link where the plain gather has one, so the portable
 //! path, one link at a time in 128-bit vectors, is bound by its arithmetic. The AVX-512 path
 //! takes sixteen links a step, one lane each (the emitter's `E` and midpoint by gathers, the
 //! coefficients' halves split by shifts), keeps the thirty sums per channel set in registers
-//! until the receiver is done, and takes `1 / |δ|²` from `vrcp14ps` and a Newton step. On the
-//! 203K-triangle dragon (marble at 10 cm, one core of an Intel Xeon with AVX-512) a render
-//! frame takes 75-81 ms with the portable path and 56-57 ms with this one.
+//! until the receiver is done, and takes `1 / |δ|²` from `vrcp14ps` and a Newton step rather
+//! than the divider.
 
-use super::gather::{Hess, Linear};
-use super::link_coef::{self, FF_BIT, LinkCoef};
-use super::oracle::curvature_along;
+use super::expansion::{Hess, Linear};
 use crate::simd::Isa;
+use crate::solver::link_coef::{self, FF_BIT, LinkCoef};
+use crate::solver::oracle::curvature_along;
 use glam::Vec3A;
 
 /// One inner receiver's expansion `Σ` over its links (emitter words `emitter`, coefficients
@@ -211,8 +210,22 @@ mod wide {
             }
             k += 16;
         }
-        // The sums' lanes added up, sixteen registers at a time.
-        let mut all = [zero; 48];
+        finish::<CURVED>(value, grad, diag, iso, off)
+    }
+
+    /// The expansion from [`sum_avx512`]'s per-lane sums of the value, the gradient and the
+    /// Hessian's diagonal, isotropic part and off-diagonal: their lanes added up, sixteen
+    /// registers at a time (the Hessian's only if `CURVED`).
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn finish<const CURVED: bool>(
+        value: [__m512; 3],
+        grad: [[__m512; 3]; 3],
+        diag: [[__m512; 3]; 3],
+        iso: [__m512; 3],
+        off: [[__m512; 3]; 3],
+    ) -> Linear {
+        let mut all = [_mm512_setzero_ps(); 48];
         all[..3].copy_from_slice(&value);
         all[21..24].copy_from_slice(&iso);
         for c in 0..3 {
@@ -232,8 +245,7 @@ mod wide {
 
     /// `out[i]` = the sum of `v[i]`'s lanes (sixteen registers): 45 shuffles and adds where
     /// sixteen horizontal sums take about 130. Each step adds halves of two registers into
-    /// one, so the last holds every sum. (203K dragon, one core: the frame's gather 51-52 →
-    /// 47-49 ms.)
+    /// one, so the last holds every sum.
     #[inline]
     #[target_feature(enable = "avx512f")]
     fn add_lanes(v: &[__m512], out: &mut [f32]) {
@@ -274,7 +286,7 @@ mod wide {
     #[target_feature(enable = "avx512f")]
     fn half_lo(v: __m512i) -> __m512 {
         let bits = _mm512_slli_epi32::<13>(_mm512_and_si512(v, _mm512_set1_epi32(0xffff)));
-        _mm512_mul_ps(_mm512_castsi512_ps(bits), _mm512_set1_ps(super::link_coef::HALF_RESCALE))
+        _mm512_mul_ps(_mm512_castsi512_ps(bits), _mm512_set1_ps(crate::solver::link_coef::HALF_RESCALE))
     }
 
     /// [`half_lo`] of the high 16 bits of each lane.

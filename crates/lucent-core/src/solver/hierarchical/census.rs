@@ -3,33 +3,11 @@
 //! measurement behind "why do scanned meshes need so many links":
 //! `LUCENT_BENCH_CENSUS=1 lucent bench solver --real`). Diagnostic only: no solve reads it.
 
-use super::hierarchical::HierarchicalSolver;
-use super::oracle::{Decision, LinkKind, ReceiverView, Samples};
-use super::point_sample::ProfileF32;
+use super::HierarchicalSolver;
+pub use crate::solver::oracle::Cause;
+use crate::solver::oracle::{Decision, LinkKind, ReceiverView, Samples};
+use crate::solver::point_sample::ProfileF32;
 use std::collections::BTreeMap;
-
-/// Why one of the oracle's two tests decided as it did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Cause {
-    /// The test did not run.
-    #[default]
-    None,
-    /// Passed: the receiver stays whole, or the emitter is far.
-    Pass,
-    /// The receiver has no normal, or lies (or a child lies) inside the emitter's bounding
-    /// sphere.
-    Degenerate,
-    /// The two bounding spheres overlap.
-    NotSeparated,
-    /// The emitter is seen under more than `MAX_FAR_SOLID_ANGLE`.
-    WideAngle,
-    /// A dipole pole lies within the margin of the emitter.
-    Poles,
-    /// The distance-form receiver test: the profile varies too much over the receiver's radius.
-    Size,
-    /// The one-point estimates disagree beyond `eps1` (receiver) or `eps2` (emitter).
-    Variation,
-}
 
 /// A candidate emitter with its one-point estimate at the receiver, if known.
 type Candidate = (u32, Option<[f32; 3]>);

@@ -7,13 +7,13 @@
 //! store the links ([`HierarchicalSolver::link`]; an incremental relink keeps what did not
 //! change, §5.5); on-the-fly mode gathers as it goes ([`super::gather`]).
 
-use super::evaluate::Evaluator;
-use super::hierarchical::{HierarchicalSolver, SolveStats};
-use super::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
-use super::local::Locality;
-use super::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
-use super::point_sample::ReceiverSources;
+use super::{HierarchicalSolver, SolveStats};
 use crate::hierarchy::{Hierarchy, PAR_LEAVES};
+use crate::solver::evaluate::Evaluator;
+use crate::solver::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
+use crate::solver::local::Locality;
+use crate::solver::oracle::{Decision, LinkKind, Oracle, ReceiverView, Samples};
+use crate::solver::point_sample::ReceiverSources;
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -338,6 +338,12 @@ pub(super) struct Reuse<'a> {
     pub(super) remaining: &'a AtomicI64,
 }
 
+/// A candidate emitter with its one-point estimate at the receiver, if known.
+type Candidate = (u32, Option<[f32; 3]>);
+
+/// A preorder range of clusters: the first and one past the last.
+type PreorderRange = (u32, u32);
+
 impl HierarchicalSolver {
     /// Runs the receiver-driven refinement from the root and stores the resulting links. With
     /// `reuse`, receiver subtrees whose candidates and own geometry are unchanged take their old
@@ -390,68 +396,11 @@ impl HierarchicalSolver {
         chunks: &mut Vec<LinkChunk>,
         reuse: Option<&Reuse>,
     ) {
-        let h = &self.hierarchy;
-        let n = h.nodes[r];
-        let range = |e: u32| (e, h.nodes[e as usize].subtree_end);
-        let mut fresh = Vec::new();
-        let mut kept_here = Vec::new();
+        let n = self.hierarchy.nodes[r];
         let chunk = chunks.last_mut().expect("a chunk");
-        match reuse {
-            Some(u) if !u.changed[r] && !u.stale[r] => {
-                // Stored candidate lists are sorted.
-                let old_cands = u.old.cands_of(r);
-                // Of the ancestors' kept ranges only those holding an old candidate of `r`
-                // matter below (the old candidates of the subtree lie inside those of `r`),
-                // which keeps the list as short as `r`'s candidates.
-                let mut last = None;
-                for &c in old_cands {
-                    if let Some(i) = find_range(kept, c)
-                        && last != Some(i)
-                    {
-                        kept_here.push(kept[i]);
-                        last = Some(i);
-                    }
-                }
-                for (e, f) in cands.iter() {
-                    if !u.changed[e as usize] && old_cands.binary_search(&e).is_ok() {
-                        kept_here.push(range(e));
-                    } else {
-                        fresh.push((e, f));
-                    }
-                }
-                kept_here.sort_unstable();
-                let old = u.old;
-                if fresh.is_empty() && old_cands.iter().all(|&c| find_range(&kept_here, c).is_some()) {
-                    // Everything here refines as before: the subtree's links wholesale.
-                    chunk.kept.push((r as u32, n.subtree_end));
-                    return;
-                }
-                // This receiver's candidates: the ones handed down now, plus those that the
-                // kept ranges of ancestors handed down before (and would again).
-                let start = chunk.cands.len();
-                chunk.cands.extend_from_slice(cands.emitters);
-                chunk.cands.extend(old_cands.iter().filter(|&&c| find_range(kept, c).is_some()));
-                chunk.cands[start..].sort_unstable();
-                chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
-                for (j, e) in old.emitters_of(r) {
-                    if find_range(&kept_here, e).is_some() {
-                        chunk.push_old(old, r, j);
-                    }
-                }
-            }
-            _ => {
-                // Something below moved (or is stale): every candidate is decided again (an
-                // ancestor cannot have kept a range, as it would be unmoved and clean too).
-                debug_assert!(kept.is_empty());
-                fresh.extend(cands.iter());
-                if self.keep_candidates {
-                    let start = chunk.cands.len();
-                    chunk.cands.extend_from_slice(cands.emitters);
-                    chunk.cands[start..].sort_unstable();
-                    chunk.cand_count.push((r as u32, cands.emitters.len() as u32));
-                }
-            }
-        }
+        let Some((fresh, kept_here)) = self.sort_candidates(r, cands, kept, chunk, reuse) else {
+            return;
+        };
         let mut defer = Deferred::default();
         match reuse {
             None => ctx.receive(
@@ -494,5 +443,81 @@ impl HierarchicalSolver {
                 self.tick_progress(Some(r), c as usize);
             }
         }
+    }
+
+    /// Sorts the candidates `cands` handed to receiver `r` into the *fresh* ones, decided
+    /// again, and the preorder ranges *kept* from the old links (see [`Self::link_rec`]), and
+    /// records `r`'s candidates in `chunk` where they are stored. `None` when the whole subtree
+    /// takes over its old links.
+    fn sort_candidates(
+        &self,
+        r: usize,
+        cands: Cands,
+        kept: &[(u32, u32)],
+        chunk: &mut LinkChunk,
+        reuse: Option<&Reuse>,
+    ) -> Option<(Vec<Candidate>, Vec<PreorderRange>)> {
+        let h = &self.hierarchy;
+        let n = h.nodes[r];
+        let range = |e: u32| (e, h.nodes[e as usize].subtree_end);
+        let mut fresh = Vec::new();
+        let mut kept_here = Vec::new();
+        match reuse {
+            Some(u) if !u.changed[r] && !u.stale[r] => {
+                // Stored candidate lists are sorted.
+                let old_cands = u.old.cands_of(r);
+                // Of the ancestors' kept ranges only those holding an old candidate of `r`
+                // matter below (the old candidates of the subtree lie inside those of `r`),
+                // which keeps the list as short as `r`'s candidates.
+                let mut last = None;
+                for &c in old_cands {
+                    if let Some(i) = find_range(kept, c)
+                        && last != Some(i)
+                    {
+                        kept_here.push(kept[i]);
+                        last = Some(i);
+                    }
+                }
+                for (e, f) in cands.iter() {
+                    if !u.changed[e as usize] && old_cands.binary_search(&e).is_ok() {
+                        kept_here.push(range(e));
+                    } else {
+                        fresh.push((e, f));
+                    }
+                }
+                kept_here.sort_unstable();
+                let old = u.old;
+                if fresh.is_empty() && old_cands.iter().all(|&c| find_range(&kept_here, c).is_some()) {
+                    // Everything here refines as before: the subtree's links wholesale.
+                    chunk.kept.push((r as u32, n.subtree_end));
+                    return None;
+                }
+                // This receiver's candidates: the ones handed down now, plus those that the
+                // kept ranges of ancestors handed down before (and would again).
+                let start = chunk.cands.len();
+                chunk.cands.extend_from_slice(cands.emitters);
+                chunk.cands.extend(old_cands.iter().filter(|&&c| find_range(kept, c).is_some()));
+                chunk.cands[start..].sort_unstable();
+                chunk.cand_count.push((r as u32, (chunk.cands.len() - start) as u32));
+                for (j, e) in old.emitters_of(r) {
+                    if find_range(&kept_here, e).is_some() {
+                        chunk.push_old(old, r, j);
+                    }
+                }
+            }
+            _ => {
+                // Something below moved (or is stale): every candidate is decided again (an
+                // ancestor cannot have kept a range, as it would be unmoved and clean too).
+                debug_assert!(kept.is_empty());
+                fresh.extend(cands.iter());
+                if self.keep_candidates {
+                    let start = chunk.cands.len();
+                    chunk.cands.extend_from_slice(cands.emitters);
+                    chunk.cands[start..].sort_unstable();
+                    chunk.cand_count.push((r as u32, cands.emitters.len() as u32));
+                }
+            }
+        }
+        Some((fresh, kept_here))
     }
 }

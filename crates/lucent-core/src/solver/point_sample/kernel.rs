@@ -16,9 +16,9 @@
 //! Lanes do not interact, so a single estimate, a batch of four points and a batch of four
 //! receivers give one channel the same bits on one path; the portable and AVX2 paths differ
 //! only by fused multiply-adds (see [`crate::simd`]). AVX-512 has its own hand-written copy
-//! without square roots and divisions ([`super::point_kernel_avx512`]).
+//! without square roots and divisions ([`super::kernel_avx512`]).
 
-use super::point_sample::ReceiverSources;
+use super::ReceiverSources;
 use crate::bssrdf::tables::TABLE_SIZE;
 use crate::fastexp::exp_neg_with;
 use crate::simd::Madd;
@@ -139,7 +139,7 @@ pub(super) struct ProfileLanes {
     /// Lanes of a single estimate.
     pub single: Lanes<4>,
     /// Sixteen lanes of one channel each, for sums over sixteen points at a time
-    /// ([`super::point_kernel_avx512::weighted_sum`]).
+    /// ([`super::kernel_avx512::weighted_sum`]).
     pub channel: [Lanes<WIDTH>; 3],
     /// Whether the analytic poles are part of the profile (all but PBD).
     pub analytic: bool,
@@ -318,5 +318,3 @@ macro_rules! isa_kernels {
 }
 
 isa_kernels!(avx2, "avx2,fma,f16c");
-#[cfg(target_arch = "x86_64")]
-pub(super) use super::point_kernel_avx512 as avx512;

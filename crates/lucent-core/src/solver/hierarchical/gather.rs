@@ -1,28 +1,28 @@
 //! A frame of the hierarchical solve (Mertens et al. 2003, §3.2, §5.5): *pull* (area-weighted
 //! irradiance up the tree), *gather* (`B_R = Σ_E E_E F_ER` along the links into each receiver)
 //! and *push* (a receiver's `B` added to all its leaves). Render mode gathers over the stored
-//! links ([`HierarchicalSolver::solve_render`], with the packed kernels of [`super::link_coef`]
+//! links ([`HierarchicalSolver::solve_render`], with the packed kernels of [`crate::solver::link_coef`]
 //! and [`super::gather_linear`]) and pushes in the same pass down the tree; on-the-fly mode
 //! gathers each link as the refinement accepts it and pushes down the traversal
 //! ([`HierarchicalSolver::solve_on_the_fly`]). Where the profile asks for it, `B` is scaled by
-//! the energy bound of [`super::energy`].
+//! the energy bound of [`crate::solver::energy`].
 //!
-//! With linear receivers ([`super::Oracle::linear_receivers`]) a receiver cluster gathers its
+//! With linear receivers ([`crate::solver::Oracle::linear_receivers`]) a receiver cluster gathers its
 //! `B` at its midpoint *and* the gradient of `B` there (each link's steepness along the line
 //! from its emitter), and the push hands each child the parent's value moved to the child's
 //! midpoint: first-order (linear-basis) hierarchical radiosity at the receiver, which lets
 //! receivers stay whole as far as emitters do. With curved receivers
-//! ([`super::Oracle::curved_receivers`], the default) each link also adds its curvature, and
+//! ([`crate::solver::Oracle::curved_receivers`], the default) each link also adds its curvature, and
 //! the receiver carries a quadratic (value, gradient, Hessian) down to its leaves.
 
+use super::expansion::Linear;
 use super::gather_linear::sum_linear;
-use super::hierarchical::{HierarchicalSolver, Solution, SolveStats, ms};
-use super::link_coef;
-use super::link_set::StoredLinks;
-use super::oracle::curvature_along;
-use super::refine::{Cands, Ctx, Deferred, Evaluate};
+use super::link::{Cands, Ctx, Deferred, Evaluate};
+use super::{HierarchicalSolver, Solution, SolveStats, ms};
 use crate::Rgb;
 use crate::hierarchy::{Hierarchy, NO_NODE, PAR_LEAVES, split_leaves, split_subtrees};
+use crate::solver::link_coef;
+use crate::solver::link_set::StoredLinks;
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -220,144 +220,6 @@ impl HierarchicalSolver {
     }
 }
 
-/// Per channel, the gradient of `B` (per mesh unit of length) at a receiver's midpoint.
-pub(crate) type Grad = [Vec3A; 3];
-
-/// Per channel, the Hessian of `B` (per mesh unit of length squared) at a receiver's
-/// midpoint, symmetric: its diagonal (xx, yy, zz) and its off-diagonal (yz, xz, xy).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Hess {
-    pub(super) diag: Grad,
-    pub(super) off: Grad,
-}
-
-impl Hess {
-    /// `self += o`, channel by channel.
-    #[inline]
-    fn add(&mut self, o: &Hess) {
-        add_grad(&mut self.diag, &o.diag);
-        add_grad(&mut self.off, &o.off);
-    }
-
-    /// Adds `w[c] dv dvᵀ + iso[c] I` to channel `c`.
-    #[inline]
-    fn add_link(&mut self, w: Vec3A, iso: Vec3A, dv: Vec3A) {
-        let (dd, dx) = (dv * dv, Vec3A::new(dv.y * dv.z, dv.x * dv.z, dv.x * dv.y));
-        for c in 0..3 {
-            self.diag[c] += dd * w[c] + Vec3A::splat(iso[c]);
-            self.off[c] += dx * w[c];
-        }
-    }
-
-    /// Per channel `½ oᵀ H o`.
-    #[inline]
-    fn half_quad(&self, o: Vec3A) -> Vec3A {
-        let (oo, ox) = (o * o, Vec3A::new(o.y * o.z, o.x * o.z, o.x * o.y));
-        Vec3A::new(
-            0.5 * self.diag[0].dot(oo) + self.off[0].dot(ox),
-            0.5 * self.diag[1].dot(oo) + self.off[1].dot(ox),
-            0.5 * self.diag[2].dot(oo) + self.off[2].dot(ox),
-        )
-    }
-
-    /// Per channel `H o`.
-    #[inline]
-    fn apply(&self, o: Vec3A) -> Grad {
-        std::array::from_fn(|c| {
-            let (d, f) = (self.diag[c], self.off[c]);
-            Vec3A::new(
-                d.x * o.x + f.z * o.y + f.y * o.z,
-                f.z * o.x + d.y * o.y + f.x * o.z,
-                f.y * o.x + f.x * o.y + d.z * o.z,
-            )
-        })
-    }
-}
-
-/// A receiver's gathered `B` as a local expansion about its midpoint: its value, its
-/// gradient and (with curved receivers) its Hessian there.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Linear {
-    pub(super) value: Vec3A,
-    pub(super) grad: Grad,
-    pub(super) hess: Hess,
-}
-
-impl Linear {
-    /// Adds one link's `t = E F` with steepness `slope` from an emitter at `-dv` from the
-    /// receiver's midpoint (`dv = m_R - m_E`): its gradient and, if `curved`, its Hessian.
-    #[inline]
-    pub(super) fn add_link(&mut self, t: Vec3A, slope: f32, dv: Vec3A, curved: bool) {
-        let (k, w) = steepness(dv, slope, curved);
-        let tk = t * k;
-        self.grad[0] += dv * tk.x;
-        self.grad[1] += dv * tk.y;
-        self.grad[2] += dv * tk.z;
-        if curved {
-            self.hess.add_link(t * w, tk, dv);
-        }
-    }
-
-    /// Every term times `s`.
-    #[inline]
-    fn scaled(self, s: f32) -> Self {
-        let g = |g: Grad| g.map(|v| v * s);
-        Linear {
-            value: self.value * s,
-            grad: g(self.grad),
-            hess: Hess { diag: g(self.hess.diag), off: g(self.hess.off) },
-        }
-    }
-
-    /// `self += o`.
-    #[inline]
-    pub(super) fn add(&mut self, o: &Linear) {
-        self.value += o.value;
-        add_grad(&mut self.grad, &o.grad);
-        self.hess.add(&o.hess);
-    }
-
-    /// The value at a point `offset` from the midpoint.
-    #[inline]
-    fn value_at(&self, offset: Vec3A) -> Vec3A {
-        self.value + along(&self.grad, offset) + self.hess.half_quad(offset)
-    }
-
-    /// The same function about a point `offset` from the midpoint.
-    #[inline]
-    fn moved(self, offset: Vec3A) -> Self {
-        let mut grad = self.grad;
-        add_grad(&mut grad, &self.hess.apply(offset));
-        Linear { value: self.value_at(offset), grad, hess: self.hess }
-    }
-}
-
-/// `g += h`, channel by channel.
-#[inline]
-fn add_grad(g: &mut Grad, h: &Grad) {
-    g.iter_mut().zip(h).for_each(|(g, h)| *g += *h);
-}
-
-/// Each channel's gradient of `g` dotted with `offset`.
-#[inline]
-fn along(g: &Grad, offset: Vec3A) -> Vec3A {
-    Vec3A::new(g[0].dot(offset), g[1].dot(offset), g[2].dot(offset))
-}
-
-/// For a link of steepness `s = slope` along `D = dv = m_R - m_E`, `|D| = ρ`: the factors
-/// `k` and `w` such that the link's `E F` contributes `k E F D` to the receiver's gradient
-/// and, with a curved receiver, `E F (w D Dᵀ + k I)` to its Hessian: `F (1 - s t + ½ ((q +
-/// s) t² - s |δ|² / ρ²))` with `t = δ.D / ρ²` at an offset `δ`, for a profile of distance
-/// alone whose log-curvature `q = ρ² F'' / F` is `s² + a` ([`FALLOFF_POWER`](super::oracle::FALLOFF_POWER):
-/// `F ~ ρ^-a e^(-σ ρ)`). A link without steepness gives `k = w = 0`, whatever `D`.
-#[inline]
-fn steepness(dv: Vec3A, slope: f32, curved: bool) -> (f32, f32) {
-    let inv_d2 = 1.0 / dv.length_squared().max(f32::MIN_POSITIVE);
-    let k = -slope * inv_d2;
-    let w = if curved && slope > 0.0 { curvature_along(slope) * inv_d2 * inv_d2 } else { 0.0 };
-    (k, w)
-}
-
 /// Render mode's gather and push over the stored links, in one pass down the tree.
 struct RenderFrame<'a> {
     h: &'a Hierarchy,
@@ -366,9 +228,9 @@ struct RenderFrame<'a> {
     e_node: &'a [Vec3A],
     /// Every cluster's midpoint (with linear receivers; else empty).
     mid: &'a [Vec3A],
-    /// Whether inner receivers carry an expansion ([`super::Oracle::linear_receivers`]).
+    /// Whether inner receivers carry an expansion ([`crate::solver::Oracle::linear_receivers`]).
     linear: bool,
-    /// Whether the expansion has a Hessian ([`super::Oracle::curved_receivers`]).
+    /// Whether the expansion has a Hessian ([`crate::solver::Oracle::curved_receivers`]).
     curved: bool,
 }
 
@@ -433,8 +295,8 @@ impl RenderFrame<'_> {
     }
 }
 
-/// What a frame reads of the hierarchy, one flat array a quantity (the pull read two
-/// 40-byte records a cluster: on the 203K dragon it was 8% of a render frame).
+/// What a frame reads of the hierarchy, one flat array a quantity (rather than two 40-byte
+/// records a cluster, most of which the pull does not read).
 #[derive(Clone, Debug)]
 pub(crate) struct FrameGeom {
     /// Every cluster's midpoint (mesh units), for linear receivers.
@@ -519,8 +381,8 @@ fn pull_subtree(h: &Hierarchy, g: &FrameGeom, face_irradiance: &[Rgb], r: usize,
 
 #[cfg(test)]
 mod tests {
-    use super::super::oracle::FALLOFF_POWER;
     use super::*;
+    use crate::solver::oracle::FALLOFF_POWER;
 
     /// The pull gives every cluster the area-weighted mean irradiance of its faces, on a
     /// binary face-cluster tree and a four-way subdivision tree, both past [`PAR_LEAVES`]

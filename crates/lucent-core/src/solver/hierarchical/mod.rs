@@ -14,25 +14,33 @@
 //!   (coarsening) where the oracle's verdict changed, optionally within a budget of form factor
 //!   evaluations per frame; then render as above.
 //!
-//! This module holds the solver and its public entry points; the receiver-driven refinement
-//! that every mode runs is in `solver::refine`, and a frame's pull, gather and push (render
-//! mode's over the stored links, on-the-fly mode's during the traversal) in `solver::gather`.
+//! This module holds the solver and its public entry points. Its submodules hold the rest of
+//! its `impl`: the receiver-driven refinement that every mode runs and the incremental relink
+//! ([`link`]), a frame's pull, gather and push (render mode's over the stored links,
+//! on-the-fly mode's during the traversal: [`gather`], [`gather_linear`], with the receiver
+//! expansion of [`expansion`]), and the [`census`] of a solve's links.
 
-use super::energy;
+use super::bound;
 use super::link_set::{ChunkPool, LinkSet};
 use super::local::Locality;
 use super::oracle::Oracle;
-use super::progress::Progress;
-use super::refine::Reuse;
 use crate::Rgb;
 use crate::bssrdf::Profile;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use glam::Vec3A;
+use link::Reuse;
 use std::sync::Arc;
 use std::sync::atomic::AtomicI64;
 use std::time::Instant;
+
+pub mod census;
+mod expansion;
+mod gather;
+mod gather_linear;
+mod link;
 
 /// Counters and timings of one solve or update. Times in milliseconds (wall clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -115,8 +123,8 @@ pub struct HierarchicalSolver {
     pub(super) frame: [Vec<Vec3A>; 2],
     /// What a frame's pull and gather read of the hierarchy, packed flat; made on first use,
     /// dropped wherever the hierarchy is refitted.
-    pub(super) frame_geom: std::sync::OnceLock<super::gather::FrameGeom>,
-    /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
+    pub(super) frame_geom: std::sync::OnceLock<gather::FrameGeom>,
+    /// Render mode's energy bound per face (see [`super::bound`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
     /// The profile's reach (see [`super::local`]).
@@ -285,8 +293,8 @@ impl HierarchicalSolver {
     #[inline]
     pub(super) fn bound_factor(&self, f: usize, uniform: Rgb) -> Rgb {
         match &self.face_gain {
-            Some(g) => energy::bound_with_gain(uniform, g[f]),
-            None => energy::bound(uniform),
+            Some(g) => bound::bound_with_gain(uniform, g[f]),
+            None => bound::bound(uniform),
         }
     }
 

@@ -5,17 +5,21 @@
 //! The oracle asks for the estimate between a receiver and an emitter, then between the
 //! receiver and the emitter's children, then between the receiver's children and the emitter:
 //! twelve profile evaluations (four points × three channels) per question. The arithmetic is
-//! `point_kernel`'s, run on the widest instruction set the CPU has ([`Isa::best`]);
+//! `kernel`'s, run on the widest instruction set the CPU has ([`Isa::best`]);
 //! every estimate of one [`ProfileF32`] takes the same path, so that the oracle may hand an
 //! estimate from one form on as another's.
 
 use super::near_face::CumulativeTables;
-use super::point_kernel::{self as kernel, ProfileLanes};
 use crate::bssrdf::Profile;
 use crate::bssrdf::tables::TABLE_SIZE;
 use crate::formfactor::cubature;
 use crate::simd::{Isa, Separate};
 use glam::{Vec3, Vec3A};
+use kernel::ProfileLanes;
+
+mod kernel;
+#[cfg(target_arch = "x86_64")]
+mod kernel_avx512;
 
 /// The profile's coefficients in `f32` for the hot loops (see [`Profile`] for their meaning;
 /// lengths in mesh units).
@@ -177,7 +181,7 @@ impl ReceiverSources {
             // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
             // `ProfileF32::with_isa` check `is_available`).
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { kernel::avx512::to_point(k, self, p, area) },
+            Isa::Avx512 => unsafe { kernel_avx512::to_point(k, self, p, area) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { kernel::avx2::to_point(k, self, p, area) },
@@ -193,7 +197,7 @@ impl ReceiverSources {
             // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
             // `ProfileF32::with_isa` check `is_available`).
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { kernel::avx512::to_points(k, self, p, area) },
+            Isa::Avx512 => unsafe { kernel_avx512::to_points(k, self, p, area) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { kernel::avx2::to_points(k, self, p, area) },
@@ -223,7 +227,7 @@ impl ReceiverSources {
     }
 
     /// `Σ_i w_i R(p_i)` per channel over the points in `buf`, which it empties. On AVX-512
-    /// the points go sixteen to a register (`point_kernel_avx512::weighted_sum`), elsewhere
+    /// the points go sixteen to a register (`kernel_avx512::weighted_sum`), elsewhere
     /// four to a batch.
     pub(crate) fn weighted_sum(&self, d: &ProfileF32, buf: &mut PointBuf) -> [f32; 3] {
         let used = std::mem::take(&mut buf.used);
@@ -234,7 +238,7 @@ impl ReceiverSources {
             buf.w[used..n].fill(0.0);
             // SAFETY: `d.isa` is only ever an instruction set this CPU has.
             return unsafe {
-                kernel::avx512::weighted_sum(
+                kernel_avx512::weighted_sum(
                     &d.kernel,
                     self,
                     &buf.x[..n],
@@ -331,9 +335,14 @@ impl PoleDistances {
     }
 }
 
+/// Most pieces [`super::evaluate::Evaluator::smooth_face`] cuts a face into for the cubature:
+/// 280 points, still cheaper than the edge integrals of a face that needs them (more pieces
+/// let more near links take the cubature instead of the edge integrals).
+pub(crate) const MAX_PIECES: usize = 40;
+
 /// Most points one [`PointBuf`] holds: Radon's seven points on each of the most pieces a
 /// face is cut into, plus the padding lane of the last piece, in whole registers of sixteen.
-pub(crate) const POINT_BUF: usize = (7 * super::evaluate::MAX_PIECES + 1).next_multiple_of(16);
+pub(crate) const POINT_BUF: usize = (7 * MAX_PIECES + 1).next_multiple_of(16);
 
 /// Radon's seven points as barycentric weights of a triangle's vertices `a`, `b`, `c` (rows
 /// 0-2) and their rule weights (row 3), padded to eight lanes with a point of weight 0.
@@ -409,7 +418,7 @@ pub fn point_samples_from(src: &[ReceiverSources; 4], d: &ProfileF32, p: Vec3, a
         // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
         // `ProfileF32::with_isa` check `is_available`).
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { kernel::avx512::from_point(k, src, p, area) },
+        Isa::Avx512 => unsafe { kernel_avx512::from_point(k, src, p, area) },
         // SAFETY: as above.
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 => unsafe { kernel::avx2::from_point(k, src, p, area) },

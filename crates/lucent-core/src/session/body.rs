@@ -1,0 +1,77 @@
+//! The body measure of a [`super::FrameSession`]: rays under every face measure how far the
+//! body reaches behind it, which gives the finite-body gain of each face
+//! (`solver::finite_body`) and the mean chord factor `N` of each vertex
+//! (`shading::exit_chord`), both for the profiles that bound energy.
+
+use super::{Changes, Frame};
+use crate::Rgb;
+use crate::irradiance::ShadowCaster;
+use crate::shading::exit_chord::ExitChord;
+use crate::solver::finite_body::{FiniteBody, ThicknessRays};
+use std::sync::Arc;
+
+/// The thickness rays and what they measure, remade when the mesh moves or the transport
+/// changes.
+#[derive(Default)]
+pub(super) struct Body {
+    /// The rays under each face that the gain measures the body with, traced once, followed
+    /// through small deformations (`ThicknessRays::fits`).
+    thickness_rays: Option<ThicknessRays>,
+    /// The finite-body gain's table for the current profile.
+    finite_body: Option<FiniteBody>,
+    /// The finite-body gain per face, for the profiles that bound energy.
+    face_gain: Option<Arc<Vec<Rgb>>>,
+    /// The exit lobe's weights and the mean chord factor `N` per vertex, made with the gain
+    /// from the same rays; `None` for a flat exit lobe.
+    exit_chord: Option<(ExitChord, Vec<Rgb>)>,
+}
+
+impl Body {
+    /// The finite-body gain per face (`None`: the profile does not bound energy).
+    pub(super) fn face_gain(&self) -> Option<&Arc<Vec<Rgb>>> {
+        self.face_gain.as_ref()
+    }
+
+    /// The exit lobe's weights and the mean chord factor per vertex (`None`: a flat lobe).
+    pub(super) fn exit_chord(&self) -> Option<&(ExitChord, Vec<Rgb>)> {
+        self.exit_chord.as_ref()
+    }
+
+    /// Makes the measure current after `changes` with the shadow BVH `caster` (current for
+    /// the pose): a new profile drops the gain's table; the body is measured again when the
+    /// mesh or the transport changed, or no gain was measured yet.
+    pub(super) fn update(&mut self, f: &Frame, caster: Option<&ShadowCaster>, changes: &Changes) {
+        if changes.transport {
+            self.finite_body = None;
+        }
+        if changes.geometry || changes.transport || self.face_gain.is_none() {
+            self.measure(f, caster);
+        }
+    }
+
+    /// Measures the body under the faces for the current pose and profile, with one set of
+    /// rays: the finite-body gain of every face, and the mean chord factor `N` of every vertex.
+    /// Both `None` where the profile does not bound energy (Mertens'); no `N` where its exit
+    /// lobe is flat.
+    fn measure(&mut self, f: &Frame, caster: Option<&ShadowCaster>) {
+        self.face_gain = None;
+        self.exit_chord = None;
+        let Some(caster) = caster.filter(|_| f.profile.bounds_energy()) else { return };
+        let (mesh, profile) = (&f.mesh, &f.profile);
+        let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(profile));
+        // Traced once; a small deformation moves the hits with the mesh.
+        let rays = match self.thickness_rays.take() {
+            Some(mut rays) if rays.fits(mesh) => {
+                rays.refresh(mesh, caster.bvh(), caster.offset());
+                rays
+            }
+            _ => ThicknessRays::trace(mesh, caster.bvh(), caster.offset()),
+        };
+        self.face_gain = Some(Arc::new(fb.gains_along(mesh, &rays, caster.offset())));
+        self.exit_chord = ExitChord::new(profile).map(|chord| {
+            let means = mesh.face_to_vertex(&chord.face_means(mesh, &rays, caster.offset()));
+            (chord, means)
+        });
+        self.thickness_rays = Some(rays);
+    }
+}

@@ -1,0 +1,82 @@
+//! The view terms of a [`super::FrameSession`]: what depends on the eye. The diffuse radiance
+//! `B / (c π)` per vertex as it leaves towards the eye, times the body's chord factor where the
+//! profile has one (`shading::exit_chord`), and single scattering along the view ray where the
+//! transport asks for it (`shading::single_scattering`). An eye-only change redoes only these.
+
+use super::Frame;
+use super::irradiance::Irradiance;
+use crate::Rgb;
+use crate::mesh::Mesh;
+use crate::shading::diffuse_radiance;
+use crate::shading::exit_chord::ExitChord;
+use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use glam::Vec3;
+
+/// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
+#[derive(Default)]
+pub(super) struct View {
+    /// The eye, mesh units, for view-ray single scattering (`None`: not added).
+    eye: Option<Vec3>,
+    /// The last solve's diffuse radiance `B / (c π)` per vertex, before the chord factor.
+    diffuse: Vec<Rgb>,
+}
+
+impl View {
+    /// Sets the eye; whether it moved.
+    pub(super) fn set_eye(&mut self, eye: Option<Vec3>) -> bool {
+        let changed = self.eye != eye;
+        if changed {
+            self.eye = eye;
+        }
+        changed
+    }
+
+    /// Whether a solve's diffuse radiance is kept for every vertex of `mesh` (HTSM keeps none).
+    pub(super) fn has_solve(&self, mesh: &Mesh) -> bool {
+        self.diffuse.len() == mesh.positions.len()
+    }
+
+    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`.
+    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb]) {
+        self.diffuse = diffuse_radiance(&f.mesh.face_to_vertex(face_b), &f.profile);
+    }
+
+    /// `(radiance, single)` per vertex as seen from the eye (the shadow BVH of `irradiance` is
+    /// current: the solve refits it first): the kept diffuse radiance times the chord factor
+    /// of `exit_chord` (the lobe's weights and mean factors, if the lobe is not flat), and
+    /// view-ray single scattering where the transport asks for it (else empty). Without an
+    /// eye: `B / (c π)` as solved, and no single scattering.
+    pub(super) fn seen(
+        &self,
+        f: &Frame,
+        irradiance: &Irradiance,
+        exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
+    ) -> (Vec<Rgb>, Vec<Rgb>) {
+        let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
+            return (self.diffuse.clone(), Vec::new());
+        };
+        let single = f.transport.single_scattering_along_view();
+        if exit_chord.is_none() && !single {
+            return (self.diffuse.clone(), Vec::new());
+        }
+        let normals = f.mesh.vertex_normals();
+        let scene = ViewRayScene {
+            mesh: &f.mesh,
+            normals: &normals,
+            bvh: caster.bvh(),
+            offset: caster.offset(),
+            profile: &f.profile,
+            lights: irradiance.lights(),
+            environment: irradiance.environment(),
+        };
+        let diffuse = match exit_chord {
+            Some((chord, means)) => {
+                let factors = chord.vertex_factors(&view_rays(&scene, eye), means);
+                self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
+            }
+            None => self.diffuse.clone(),
+        };
+        let single = if single { view_ray_radiance(&scene, eye) } else { Vec::new() };
+        (diffuse, single)
+    }
+}
