@@ -2,8 +2,13 @@
 //! every case of `validation/cases.json` is rendered with the default profile at the case's
 //! resolution, and its median per-pixel error, bias of means and worst 8x8 block against the
 //! mean of the two reference halves must stay within `validation/bounds.json` (the figures
-//! measured by `validation/lucent_validation.py compare --write-bounds`, plus margins). A change
-//! that moves lucent away from the path tracer fails here.
+//! measured by `validation/lucent_validation.py compare --write-bounds fit`, plus margins). A
+//! change that moves lucent away from the path tracer fails here.
+//!
+//! The `test` cases (lights and cameras the fit cases do not have, issue 50) are held to
+//! `bounds.json`'s `test_guard`: their figures when they were added, plus the same margins
+//! (`compare --split test --write-bounds test`). That is a regression guard, not the issue's
+//! targets (many test cases are 20-60% off there); a test case without a guard entry is not run.
 
 mod common;
 
@@ -89,17 +94,22 @@ fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
     let root = root();
     let cases: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(root.join("validation/cases.json")).unwrap()).unwrap();
-    let bounds: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(root.join("validation/bounds.json"))
-            .expect("validation/bounds.json: run `lucent_validation.py compare --write-bounds`"),
-    )
-    .unwrap();
+    let bounds: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("validation/bounds.json")).expect(
+            "validation/bounds.json: run `lucent_validation.py compare --split fit --write-bounds fit`",
+        ))
+        .unwrap();
     let [w, h] = [0, 1].map(|k| cases["resolution"][k].as_u64().unwrap());
     let out = std::env::temp_dir().join(format!("lucent-validation-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let mut failures = Vec::new();
     for case in cases["cases"].as_array().unwrap() {
         let name = case["name"].as_str().unwrap();
+        let section = if case["split"].as_str() == Some("test") { "test_guard" } else { "cases" };
+        if section == "test_guard" && bounds[section][name].is_null() {
+            println!("{name}: a test case with no regression guard in bounds.json; not run");
+            continue;
+        }
         // A scanned mesh that is fetched, not committed (the Stanford dragon's terms): measured
         // where it has been fetched, as `compare` does; the committed cases run everywhere.
         if let Some(how) = case["fetched"].as_str() {
@@ -130,10 +140,11 @@ fn every_case_stays_within_its_recorded_bound_against_the_path_tracer() {
             }
         }
         let f = figures(w, h, &ours, &a, &b, &interior(w, h, &ours));
-        let bound = &bounds["cases"][name];
-        let limit = |k: &str| bound[k].as_f64().unwrap_or_else(|| panic!("bounds.json: {name}.{k}"));
+        let bound = &bounds[section][name];
+        let limit =
+            |k: &str| bound[k].as_f64().unwrap_or_else(|| panic!("bounds.json: {section}.{name}.{k}"));
         println!(
-            "{name}: median {:+.1}% (bound {:.1}%), bias {:+.1}% ({:.1}%), worst 8x8 {:.1}% ({:.1}%)",
+            "{name} ({section}): median {:+.1}% (bound {:.1}%), bias {:+.1}% ({:.1}%), worst 8x8 {:.1}% ({:.1}%)",
             100.0 * f.median,
             100.0 * limit("median"),
             100.0 * f.bias,

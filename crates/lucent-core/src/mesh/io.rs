@@ -134,6 +134,10 @@ fn parse_mesh_inner(
     let mut no_uvs = Vec::new();
     let uvs = texture.as_mut().map_or(&mut no_uvs, |t| &mut t.corner_uvs);
     let (mesh, mut report) = validate_keeping(mesh, name, uvs)?;
+    if report.flipped_inside_out {
+        // The faces' second and third corners were swapped; their UVs go with them.
+        uvs.iter_mut().for_each(|c| c.swap(1, 2));
+    }
     report.welded_vertices = welded;
     let text = match format {
         MeshFormat::Obj | MeshFormat::Off => true,

@@ -13,6 +13,10 @@
 //! - repaired and reported: faces folded over their neighbours, whose vertices move to the
 //!   mean of their neighbours ([`super::unfold`]: decimation fold-overs, dark dots on the
 //!   decimated dragons);
+//! - repaired and reported: a closed mesh wound inside out (every face's normal pointing in,
+//!   so its signed volume is negative) has every face flipped ([`flip_if_inside_out`]); the
+//!   profile integral and the light's entry both take the winding as outward, and such a mesh
+//!   rendered nearly black. An open mesh keeps its winding (its signed volume means nothing);
 //! - reported only: boundary edges (one face), non-manifold edges (more than two faces),
 //!   inconsistently oriented edges, unreferenced vertices, connected components.
 
@@ -61,6 +65,9 @@ pub struct MeshReport {
     /// Euler characteristic `V - E + F` over referenced vertices: 2 per closed genus-0
     /// component.
     pub euler_characteristic: i64,
+    /// The mesh was closed and wound inside out (negative signed volume), and every face was
+    /// flipped (its second and third corners swapped) so that normals point outward.
+    pub flipped_inside_out: bool,
     /// A text file (OBJ, OFF, ASCII PLY) whose last line has no line end: it may have been cut
     /// short, and the mesh may be missing its last faces.
     pub unterminated_last_line: bool,
@@ -88,6 +95,12 @@ impl MeshReport {
         let mut w = Vec::new();
         if self.unterminated_last_line {
             w.push("the last line has no line end: the file may be cut short".to_string());
+        }
+        if self.flipped_inside_out {
+            w.push(
+                "closed mesh wound inside out (negative signed volume): every face flipped to point outward"
+                    .to_string(),
+            );
         }
         if self.unfolded_vertices > 0 {
             w.push(format!(
@@ -136,6 +149,9 @@ impl fmt::Display for MeshReport {
         if self.unfolded_vertices > 0 {
             write!(f, ", moved {} vertices of folded faces", self.unfolded_vertices)?;
         }
+        if self.flipped_inside_out {
+            write!(f, ", flipped inside out")?;
+        }
         if self.is_closed_manifold() {
             write!(f, ", closed manifold")?;
         }
@@ -162,6 +178,8 @@ pub fn validate(mesh: Mesh, source: &str) -> Result<(Mesh, MeshReport), MeshErro
 
 /// [`validate`], also dropping from `per_face` (one entry per face of `mesh`, e.g. texture
 /// coordinates; left alone unless its length is the face count) the entries of removed faces.
+/// Where the report says `flipped_inside_out`, each face's second and third corners were
+/// swapped: per-corner data in `per_face` must be swapped the same way by the caller.
 pub fn validate_keeping<T>(
     mut mesh: Mesh,
     source: &str,
@@ -207,6 +225,7 @@ pub fn validate_keeping<T>(
     report.folded_before = unfolded.folded_before;
     report.unfolded_vertices = unfolded.moved_vertices;
     report.folded_faces = unfolded.folded_after;
+    report.flipped_inside_out = flip_if_inside_out(&mut mesh, &report);
     Ok((mesh, report))
 }
 
@@ -323,8 +342,23 @@ pub fn analyze(mesh: &Mesh) -> MeshReport {
         unreferenced_vertices: n - used,
         components,
         euler_characteristic: used as i64 - unique as i64 + mesh.triangles.len() as i64,
+        flipped_inside_out: false,
         unterminated_last_line: false,
     }
+}
+
+/// Flips every face of `mesh` (swaps its second and third corners) when `report` says it is a
+/// closed, consistently oriented manifold and its signed volume is negative, i.e. every normal
+/// points in; returns whether it flipped. An open or non-manifold mesh keeps its winding: its
+/// signed volume depends on where the holes are and does not tell inside from outside.
+pub fn flip_if_inside_out(mesh: &mut Mesh, report: &MeshReport) -> bool {
+    if !report.is_closed_manifold() || mesh.signed_volume() >= 0.0 {
+        return false;
+    }
+    for t in &mut mesh.triangles {
+        t.swap(1, 2);
+    }
+    true
 }
 
 /// Merges vertices at bitwise-equal positions (`-0.0` and `0.0` count as equal) into the
