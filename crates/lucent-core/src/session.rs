@@ -277,6 +277,12 @@ pub struct FrameSession {
     /// The rays under each face that the gain measures the body with, traced once, followed
     /// through small deformations (`ThicknessRays::fits`).
     thickness_rays: Option<crate::solver::finite_body::ThicknessRays>,
+    /// The slab transmission of every face across the body (`solver::transmission`), made
+    /// with the gain from the same rays; `None` for [`Transmission::HalfSpace`] or without a gain.
+    cross_body: Option<Arc<crate::solver::transmission::CrossBody>>,
+    /// The last solve's `B` per face and the transmitted light it holds (`cross_body`), for
+    /// the transmitted light's exit lobe; empty without `cross_body`.
+    transmitted: (Vec<Rgb>, Vec<Rgb>),
     changes: Changes,
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
@@ -319,6 +325,8 @@ impl FrameSession {
             exit_chord: None,
             diffuse: Vec::new(),
             thickness_rays: None,
+            cross_body: None,
+            transmitted: Default::default(),
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
@@ -505,9 +513,11 @@ impl FrameSession {
 
         let e = std::mem::take(&mut self.irradiance);
         let oracle = self.oracle();
-        let (mut face_b, links) =
-            self.transport_once(&self.entered_carried(&e), &changes, oracle, &mut timings);
+        let carried = self.entered_carried(&e);
+        let (mut face_b, links) = self.transport_once(&carried, &changes, oracle, &mut timings);
         let t = Instant::now();
+        let mut sent = Vec::new();
+        self.add_transmission(&mut face_b, &mut sent, &carried);
         self.add_local(&mut face_b, &e);
         // Each bounce: the light the last solve sent out, caught by facing parts, solved again
         // (the solve is linear in the irradiance; stored links are reused).
@@ -548,6 +558,7 @@ impl FrameSession {
             }
             let carried = self.entered_carried(&e2);
             last = self.transport_once(&carried, &unchanged, bounce_oracle, &mut Timings::default()).0;
+            self.add_transmission(&mut last, &mut sent, &carried);
             self.add_local(&mut last, &e2);
             // No view ray follows the bounced light: its single scattering joins `B`.
             self.add_single(&mut last, &e2);
@@ -555,6 +566,7 @@ impl FrameSession {
         }
         timings.bounces_ms = ms_since(t_bounces);
         self.irradiance = e;
+        self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.clone(), sent) };
         self.diffuse = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();

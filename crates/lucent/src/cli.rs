@@ -5,6 +5,7 @@ use lucent_core::bssrdf::ProfileKind;
 use lucent_core::mesh::refine::Refine;
 pub use lucent_core::session::{Method, SolveMode};
 use lucent_core::shading::SingleScattering;
+use lucent_core::solver::transmission::Transmission;
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
 use std::path::{Path, PathBuf};
@@ -86,6 +87,11 @@ where
     use clap::builder::TypedValueParser as _;
     clap::builder::PossibleValuesParser::new(names.to_vec())
         .map(|s| s.parse::<T>().expect("one of the possible values"))
+}
+
+/// `--transmission NAME`: `slab` or `halfspace`, case-insensitive.
+pub fn parse_transmission(s: &str) -> Result<Transmission, String> {
+    s.parse::<Transmission>().map_err(|e| e.to_string())
 }
 
 /// `--profile NAME`: one of the diffusion profiles, case-insensitive.
@@ -290,6 +296,12 @@ pub struct RenderArgs {
     /// Scene key `single_scattering`.
     #[arg(long, value_parser = parse_single_scattering)]
     pub single_scattering: Option<SingleScattering>,
+    /// Light that crosses the body to a face on its far side (homogeneous profiles with a
+    /// finite-body gain): `slab` (default: the exact transmittance of a slab of the face's
+    /// thickness in place of the profile's far-side share) or `halfspace` (the profile at the
+    /// chord, as before issue 50).
+    #[arg(long, value_parser = parse_transmission)]
+    pub transmission: Option<Transmission>,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
     /// (every face against every face, O(N^2): the reference) or `htsm` (Heterogeneous
     /// Translucent Shadow Maps on the GPU, Shopf 2007).
@@ -375,6 +387,7 @@ impl RenderArgs {
             exposure: self.exposure,
             profile: self.profile,
             single_scattering: self.single_scattering,
+            transmission: self.transmission,
             lights: self.light.clone(),
             no_shadows: self.no_shadows,
             bounces: self.bounces,

@@ -13,6 +13,7 @@ mod fresnel;
 pub mod halfspace;
 mod material;
 pub mod profile;
+pub mod slab;
 pub mod walk;
 
 pub use entry::{Entry, zonal_band_weights};

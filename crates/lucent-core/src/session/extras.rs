@@ -7,6 +7,7 @@ use crate::irradiance::Entering;
 use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
+use crate::solver::transmission::{CrossBody, Transmission};
 use std::sync::Arc;
 
 impl FrameSession {
@@ -15,6 +16,18 @@ impl FrameSession {
         match &self.entry {
             Some(f) => e.iter().zip(f).map(|(e, f)| e.carried * *f).collect(),
             None => e.iter().map(|e| e.carried).collect(),
+        }
+    }
+
+    /// Adds to `b` the slab transmission across the body of the carried irradiance `carried`
+    /// (`solver::transmission`), where the transport asks for it, and to `sent` (per face,
+    /// made on first use) the transmitted light `b` then holds.
+    pub(super) fn add_transmission(&self, b: &mut [Rgb], sent: &mut Vec<Rgb>, carried: &[Rgb]) {
+        if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == b.len()) {
+            if sent.len() != b.len() {
+                *sent = vec![Rgb::ZERO; b.len()];
+            }
+            cross.add(b, sent, carried);
         }
     }
 
@@ -52,6 +65,7 @@ impl FrameSession {
     pub(super) fn measure_body(&mut self) {
         self.face_gain = None;
         self.exit_chord = None;
+        self.cross_body = None;
         let Some(caster) = self.caster.as_ref().filter(|_| self.dipole.bounds_energy()) else { return };
         let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
         // Traced once; a small deformation moves the hits with the mesh.
@@ -62,7 +76,12 @@ impl FrameSession {
             }
             _ => ThicknessRays::trace(&self.mesh, caster.bvh(), caster.offset()),
         };
-        self.face_gain = Some(Arc::new(fb.gains_along(&self.mesh, &rays, caster.offset())));
+        let gains = Arc::new(fb.gains_along(&self.mesh, &rays, caster.offset()));
+        if self.transport.transmission == Transmission::Slab {
+            let cross = CrossBody::new(&self.dipole, fb, &self.mesh, &rays, caster.offset(), &gains);
+            self.cross_body = (!cross.is_empty()).then(|| Arc::new(cross));
+        }
+        self.face_gain = Some(gains);
         self.exit_chord = ExitChord::new(&self.dipole).map(|chord| {
             let means = self.mesh.face_to_vertex(&chord.face_means(&self.mesh, &rays, caster.offset()));
             (chord, means)
@@ -95,7 +114,12 @@ impl FrameSession {
         };
         let diffuse = match chord {
             Some((chord, means)) => {
-                let factors = chord.vertex_factors(&view_rays(&scene, eye), means);
+                let rays = view_rays(&scene, eye);
+                let mut factors = chord.vertex_factors(&rays, means);
+                let (face_b, sent) = &self.transmitted;
+                if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == sent.len()) {
+                    factors = cross.exit_factors(&self.mesh, face_b, sent, &rays, &self.dipole.exit_lobe, &factors);
+                }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }
             None => self.diffuse.clone(),

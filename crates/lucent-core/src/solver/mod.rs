@@ -41,6 +41,7 @@ mod point_kernel;
 mod point_kernel_avx512;
 pub mod point_sample;
 pub mod progress;
+pub mod transmission;
 mod refine;
 
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};

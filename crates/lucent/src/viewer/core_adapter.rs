@@ -125,6 +125,7 @@ impl SolverSession {
             scale_m: params.scale_m,
             profile: params.profile,
             single_scattering: params.single_scattering,
+            transmission: Default::default(),
         };
         let settings = FrameSettings {
             method: Method::Hierarchical,
