@@ -283,6 +283,8 @@ pub struct FrameSession {
     /// The last solve's `B` per face and the transmitted light it holds (`cross_body`), for
     /// the transmitted light's exit lobe; empty without `cross_body`.
     transmitted: (Vec<Rgb>, Vec<Rgb>),
+    /// `cross_body`'s terms under uniform irradiance 1, for the energy bound.
+    face_terms: Option<Arc<Vec<Rgb>>>,
     changes: Changes,
     /// Changes the CPU solve has not seen yet (made while HTSM, which has none, was chosen).
     unsolved: Changes,
@@ -327,6 +329,7 @@ impl FrameSession {
             thickness_rays: None,
             cross_body: None,
             transmitted: Default::default(),
+            face_terms: None,
             changes: Changes::all(),
             unsolved: Changes::default(),
             last: Solved::default(),
@@ -623,16 +626,29 @@ impl FrameSession {
             let opts = FormFactorOptions::default();
             let p = self.progress.as_deref();
             let gain = self.face_gain.as_deref().map(|g| g.as_slice());
-            let b =
-                solver::exact::solve_receivers_with_gain(&self.mesh, &self.dipole, e, &opts, &all, p, gain);
+            let terms = self.cross_body.as_ref().map(|c| c.uniform_terms());
+            let b = solver::exact::solve_receivers_with_gain(
+                &self.mesh,
+                &self.dipole,
+                e,
+                &opts,
+                &all,
+                p,
+                gain,
+                terms.as_deref(),
+            );
             timings.gather_ms += ms_since(t);
             return (b, None);
         }
         let mode = self.settings.mode;
         self.make_solver();
-        let Self { solver, mesh, dipole, face_gain, .. } = self;
+        let Self { solver, mesh, dipole, face_gain, cross_body, face_terms, .. } = self;
         let s = solver.as_mut().expect("made above");
         s.set_face_gain(face_gain.clone());
+        if face_terms.as_ref().map(|t| t.len()) != cross_body.as_ref().map(|c| c.len()) {
+            *face_terms = cross_body.as_ref().map(|c| Arc::new(c.uniform_terms()));
+        }
+        s.set_face_term(face_terms.clone());
         let moved = s.mesh.positions != mesh.positions;
         let t = Instant::now();
         let profile_changed = s.dipole != *dipole;

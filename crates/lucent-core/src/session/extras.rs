@@ -66,6 +66,7 @@ impl FrameSession {
         self.face_gain = None;
         self.exit_chord = None;
         self.cross_body = None;
+        self.face_terms = None;
         let Some(caster) = self.caster.as_ref().filter(|_| self.dipole.bounds_energy()) else { return };
         let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
         // Traced once; a small deformation moves the hits with the mesh.

@@ -45,11 +45,30 @@ pub fn bound_with_gain(uniform: Rgb, gain: Rgb) -> Rgb {
     gain * bound(uniform * gain)
 }
 
+/// [`bound_with_gain`] for a face that also takes `term` (per channel, `B` it adds under
+/// uniform irradiance 1 after the solve: the slab transmission across the body,
+/// [`super::transmission`]): the gathered `B` is scaled so that `B G k + term` stays at most
+/// 1 in every channel, `gain k` returned (`k = 1` where it does; equal to [`bound_with_gain`]
+/// for a zero term).
+#[inline]
+pub fn bound_with_gain_and_term(uniform: Rgb, gain: Rgb, term: Rgb) -> Rgb {
+    let base = uniform * gain;
+    let mut k = 1.0f32;
+    for c in 0..3 {
+        let (b, t) = (base[c], term[c].max(0.0));
+        if b.is_finite() && b > 0.0 && b + t > 1.0 {
+            k = k.min((1.0 - t).max(0.0) / b);
+        }
+    }
+    gain * k
+}
+
 /// What [`uniform_report`] measures on one mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniformReport {
-    /// Largest `B` over faces and channels under uniform irradiance 1 after the finite-body gain
-    /// and the bound, as a render applies them (unitless; at most 1 for the bounded profiles).
+    /// Largest `B` over faces and channels under uniform irradiance 1 after the finite-body gain,
+    /// the bound and the slab transmission across the body, as a render applies them
+    /// (unitless; at most 1 for the bounded profiles).
     pub max_b_uniform: f32,
     /// The same before the bound: how far the profile alone breaks energy conservation.
     pub max_b_unbounded: f32,
@@ -77,19 +96,29 @@ pub fn uniform_report(
     let raw = solver.solve_on_the_fly(&ones);
     let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
     // As a render does: the finite-body gain of each face, applied with the bound.
+    // and the slab transmission across the body (`super::transmission`, the default).
+    let mut cross: Option<super::transmission::CrossBody> = None;
     let gain = dipole.bounds_energy().then(|| {
         let caster = crate::irradiance::ShadowCaster::new(mesh);
-        super::finite_body::FiniteBody::new(dipole).face_gains(mesh, caster.bvh(), caster.offset())
+        let fb = super::finite_body::FiniteBody::new(dipole);
+        let rays = super::finite_body::ThicknessRays::trace(mesh, caster.bvh(), caster.offset());
+        let gains = fb.gains_along(mesh, &rays, caster.offset());
+        cross = Some(super::transmission::CrossBody::new(dipole, &fb, mesh, &rays, caster.offset(), &gains));
+        gains
     });
-    let bounded: Vec<Rgb> = raw
+    let mut bounded: Vec<Rgb> = raw
         .face_b
         .iter()
         .enumerate()
-        .map(|(f, &u)| match &gain {
-            Some(g) => u * bound_with_gain(u, g[f]),
-            None => u,
+        .map(|(f, &u)| match (&gain, &cross) {
+            (Some(g), Some(c)) => u * bound_with_gain_and_term(u, g[f], c.uniform_term(f)),
+            (Some(g), None) => u * bound_with_gain(u, g[f]),
+            _ => u,
         })
         .collect();
+    if let Some(cross) = cross {
+        cross.add(&mut bounded, &mut vec![Rgb::ZERO; ones.len()], &ones);
+    }
     UniformReport {
         max_b_uniform: max(&bounded),
         max_b_unbounded: max(&raw.face_b),

@@ -119,6 +119,9 @@ pub struct HierarchicalSolver {
     /// Render mode's energy bound per face (see [`super::energy`]), made from the stored links
     /// under uniform irradiance, until the links change.
     pub(super) bound: Option<Vec<Rgb>>,
+    /// Per face, what it adds to `B` after the solve under uniform irradiance 1
+    /// ([`HierarchicalSolver::set_face_term`]); `None` (default): nothing.
+    pub(super) face_term: Option<Arc<Vec<Rgb>>>,
     /// The profile's reach (see [`super::local`]).
     pub(super) locality: Locality,
     /// Per cluster, whether all its faces take the local limit (made with the geometry).
@@ -150,6 +153,7 @@ impl HierarchicalSolver {
             frame: Default::default(),
             frame_geom: Default::default(),
             bound: None,
+            face_term: None,
             face_gain: None,
             locality,
             local,
@@ -284,9 +288,20 @@ impl HierarchicalSolver {
     /// uniform irradiance 1 is `uniform`.
     #[inline]
     pub(super) fn bound_factor(&self, f: usize, uniform: Rgb) -> Rgb {
-        match &self.face_gain {
-            Some(g) => energy::bound_with_gain(uniform, g[f]),
-            None => energy::bound(uniform),
+        match (&self.face_gain, &self.face_term) {
+            (Some(g), Some(t)) => energy::bound_with_gain_and_term(uniform, g[f], t[f]),
+            (Some(g), None) => energy::bound_with_gain(uniform, g[f]),
+            (None, _) => energy::bound(uniform),
+        }
+    }
+
+    /// Sets what each face adds to its `B` after the solve under uniform irradiance 1 (the
+    /// slab transmission, `super::transmission`; `None`: nothing), which the energy bound
+    /// leaves room for; the stored bound is remade.
+    pub fn set_face_term(&mut self, term: Option<Arc<Vec<Rgb>>>) {
+        if self.face_term != term {
+            self.face_term = term;
+            self.bound = None;
         }
     }
 

@@ -217,6 +217,18 @@ impl CrossBody {
             .collect()
     }
 
+    /// What face `f`'s term adds to its `B` under uniform irradiance 1 (the positive part of
+    /// its coefficient): what the energy bound leaves room for
+    /// ([`super::energy::bound_with_gain_and_term`]).
+    pub fn uniform_term(&self, f: usize) -> Rgb {
+        if self.far.get(f).is_some_and(|&k| k != u32::MAX) { self.coef[f].max(Rgb::ZERO) } else { Rgb::ZERO }
+    }
+
+    /// Per face, [`CrossBody::uniform_term`].
+    pub fn uniform_terms(&self) -> Vec<Rgb> {
+        (0..self.far.len()).map(|f| self.uniform_term(f)).collect()
+    }
+
     /// Faces it was made for.
     pub fn len(&self) -> usize {
         self.far.len()
