@@ -5,9 +5,9 @@ use lucent_core::bssrdf::ProfileKind;
 use lucent_core::mesh::refine::Refine;
 pub use lucent_core::session::{Method, SolveMode};
 use lucent_core::shading::SingleScattering;
-use lucent_core::solver::transmission::Transmission;
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
+use lucent_core::solver::transmission::Transmission;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]

@@ -418,13 +418,22 @@ impl SlabTable {
         }
         if tau <= self.tau[0] {
             let f = tau / self.tau[0];
-            return SlabReturn { transmitted: self.at[0].transmitted * f, reflected: self.at[0].reflected * f };
+            return SlabReturn {
+                transmitted: self.at[0].transmitted * f,
+                reflected: self.at[0].reflected * f,
+            };
         }
         if tau >= self.tau[n - 1] {
             let last = self.at[n - 1];
             let mode = |t: f64| {
                 let x = self.kappa * (t + 2.0 * MILNE_Z0);
-                if x < 1e-9 { t + 2.0 * MILNE_Z0 } else if x > 600.0 { f64::INFINITY } else { x.sinh() / self.kappa }
+                if x < 1e-9 {
+                    t + 2.0 * MILNE_Z0
+                } else if x > 600.0 {
+                    f64::INFINITY
+                } else {
+                    x.sinh() / self.kappa
+                }
             };
             let ratio = mode(self.tau[n - 1]) / mode(tau);
             let ratio = if ratio.is_finite() { ratio } else { 0.0 };
@@ -442,10 +451,7 @@ impl SlabTable {
         } else {
             a.transmitted + (b.transmitted - a.transmitted) * f
         };
-        SlabReturn {
-            transmitted,
-            reflected: a.reflected + (b.reflected - a.reflected) * f,
-        }
+        SlabReturn { transmitted, reflected: a.reflected + (b.reflected - a.reflected) * f }
     }
 }
 
@@ -456,7 +462,8 @@ mod tests {
     #[test]
     fn e2_matches_known_values() {
         // ∫₀¹ e^{-x/μ} dμ by the trapezoid rule on 4M points (numpy).
-        for (x, want) in [(0.5, 0.326_643_86), (1.0, 0.148_495_51), (2.0, 0.037_534_26), (5.0, 0.000_996_469)] {
+        for (x, want) in [(0.5, 0.326_643_86), (1.0, 0.148_495_51), (2.0, 0.037_534_26), (5.0, 0.000_996_469)]
+        {
             assert!((exp_integral_e2(x) / want - 1.0).abs() < 1e-5, "E2({x}) = {}", exp_integral_e2(x));
         }
     }
@@ -477,7 +484,10 @@ mod tests {
         for tau in [0.3, 3.3, 17.0, 40.0] {
             let got = t.at(tau);
             let want = multiple_return_exact(tau, rho, 1.0);
-            assert!((got.transmitted / want.transmitted - 1.0).abs() < 0.02, "tau {tau}: {got:?} vs {want:?}");
+            assert!(
+                (got.transmitted / want.transmitted - 1.0).abs() < 0.02,
+                "tau {tau}: {got:?} vs {want:?}"
+            );
             assert!((got.reflected / want.reflected - 1.0).abs() < 0.02, "tau {tau}: {got:?} vs {want:?}");
         }
     }
@@ -506,4 +516,3 @@ mod tests {
         }
     }
 }
-

@@ -6,6 +6,7 @@ use crate::Rgb;
 use crate::irradiance::Entering;
 use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use crate::shading::transmitted_exit;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use crate::solver::transmission::{CrossBody, Transmission};
 use std::sync::Arc;
@@ -119,7 +120,15 @@ impl FrameSession {
                 let mut factors = chord.vertex_factors(&rays, means);
                 let (face_b, sent) = &self.transmitted;
                 if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == sent.len()) {
-                    factors = cross.exit_factors(&self.mesh, face_b, sent, &rays, &self.dipole.exit_lobe, &factors);
+                    factors = transmitted_exit::exit_factors(
+                        cross,
+                        &self.mesh,
+                        face_b,
+                        sent,
+                        &rays,
+                        &self.dipole.exit_lobe,
+                        &factors,
+                    );
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

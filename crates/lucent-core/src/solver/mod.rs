@@ -41,8 +41,8 @@ mod point_kernel;
 mod point_kernel_avx512;
 pub mod point_sample;
 pub mod progress;
-pub mod transmission;
 mod refine;
+pub mod transmission;
 
 pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};

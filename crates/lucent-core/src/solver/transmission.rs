@@ -29,7 +29,7 @@
 //! The transmitted light also leaves differently: flux flowing out through the face, with no
 //! source near it, is forward-peaked (at 6.6 mean free paths 1.21 times a Lambertian exit's
 //! radiance head-on, 0.55 at grazing, where the half-space's multiple scattering is 1.04-1.07
-//! head-on); [`CrossBody::exit_factors`] gives the transmitted share of each vertex's `B` the
+//! head-on); `shading::transmitted_exit` gives the transmitted share of each vertex's `B` the
 //! slab's exact lobe (at `η = 1`; elsewhere the half-space's).
 //!
 //! Left out: the slab's transmittance at oblique incidence (`E_k` carries the half-space's
@@ -38,10 +38,9 @@
 //! transmitted light (about the thickness).
 
 use crate::Rgb;
+use crate::bssrdf::Dipole;
 use crate::bssrdf::slab::SlabTable;
-use crate::bssrdf::{Dipole, ExitLobe};
 use crate::mesh::Mesh;
-use crate::shading::single_scattering::ViewRay;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -138,9 +137,11 @@ impl CrossBody {
                 }
                 let carried = fb.slab_carried(t);
                 let g = gains[f].to_array();
-                let exact: [f64; 3] = std::array::from_fn(|c| tables[c].at(dipole.sigma_t[c] * t as f64).transmitted);
+                let exact: [f64; 3] =
+                    std::array::from_fn(|c| tables[c].at(dipole.sigma_t[c] * t as f64).transmitted);
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
-                let sent = std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
+                let sent =
+                    std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
                 (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t)
             })
             .collect();
@@ -156,7 +157,7 @@ impl CrossBody {
 
     /// Adds each face's term for the irradiance `carried` (per face, what enters and the
     /// profile carries) to `b`, keeping `B` non-negative, and the transmitted light it then
-    /// holds to `sent` (per face; the exit lobe of [`CrossBody::exit_factors`] reads it).
+    /// holds to `sent` (per face; `shading::transmitted_exit` reads it).
     pub fn add(&self, b: &mut [Rgb], sent: &mut [Rgb], carried: &[Rgb]) {
         if self.far.len() != b.len() || carried.len() != b.len() || sent.len() != b.len() {
             return;
@@ -171,50 +172,15 @@ impl CrossBody {
         });
     }
 
-    /// Per vertex of `mesh`, what multiplies the diffuse radiance `B / (c π)` for the way the
-    /// light crossing the body leaves: the share `w` of the vertex's `B` that was transmitted
-    /// (`sent` over `face_b`, area-weighted over its faces) leaves as a slab's transmitted light
-    /// does (forward-peaked: 1.2 times a Lambertian exit head-on at 6.6 mean free paths, where
-    /// the half-space's multiple scattering is 1.04-1.07), the rest as before, times its chord
-    /// factor `chord`: `(1 - w) C + w p_T(μ_o) / lobe(μ_o)`, with `p_T` the slab's
-    /// ([`SlabTable::lobe`]) at the vertex's thickness (weighted by the transmitted light) and
-    /// `lobe` the half-space's exit lobe the mesh pass applies. `rays` are the vertices' view
-    /// rays (`None`: not seen, `chord` as it is).
-    pub(crate) fn exit_factors(
-        &self,
-        mesh: &Mesh,
-        face_b: &[Rgb],
-        sent: &[Rgb],
-        rays: &[Option<ViewRay>],
-        lobe: &ExitLobe,
-        chord: &[Rgb],
-    ) -> Vec<Rgb> {
-        let b_v = mesh.face_to_vertex(face_b);
-        let sent_v = mesh.face_to_vertex(sent);
-        let weighted: Vec<Rgb> =
-            sent.iter().zip(&self.thickness).map(|(s, &t)| Rgb::splat(s.element_sum() * t)).collect();
-        let t_v = mesh.face_to_vertex(&weighted);
-        let sum_v = mesh.face_to_vertex(&sent.iter().map(|s| Rgb::splat(s.element_sum())).collect::<Vec<_>>());
-        (0..mesh.positions.len())
-            .into_par_iter()
-            .map(|v| {
-                let c = chord.get(v).copied().unwrap_or(Rgb::ONE);
-                let Some(ray) = &rays[v] else { return c };
-                if sum_v[v].x <= 0.0 {
-                    return c;
-                }
-                let t = t_v[v].x / sum_v[v].x;
-                let l = lobe.at(ray.mu_o).to_array();
-                Rgb::from_array(std::array::from_fn(|k| {
-                    let w = if b_v[v][k] > 0.0 { (sent_v[v][k] / b_v[v][k]).clamp(0.0, 1.0) } else { 0.0 };
-                    let p = self.tables[k].lobe(self.sigma_t[k] * t as f64, ray.mu_o);
-                    match p {
-                        Some(p) if l[k] > 1e-6 => (1.0 - w) * c[k] + w * p / l[k],
-                        _ => c[k],
-                    }
-                }))
-            })
-            .collect()
+    /// Per face: the thickness under it (mesh units; 0 where it has no term).
+    pub(crate) fn thickness(&self) -> &[f32] {
+        &self.thickness
+    }
+
+    /// The transmitted light's radiance over a Lambertian exit's in channel `c` at exit
+    /// cosine `mu`, for `thickness` mesh units ([`SlabTable::lobe`]); `None` where not modelled.
+    pub(crate) fn transmitted_lobe(&self, c: usize, thickness: f32, mu: f32) -> Option<f32> {
+        self.tables[c].lobe(self.sigma_t[c] * thickness as f64, mu)
     }
 
     /// What face `f`'s term adds to its `B` under uniform irradiance 1 (the positive part of
@@ -243,50 +209,6 @@ impl CrossBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bssrdf::Material;
-    use crate::irradiance::{Light, SceneLight};
-    use crate::mesh::generate;
-    use crate::session::{FrameSession, FrameSettings, Transport};
-    use glam::Vec3;
-
-    /// `B` per channel, averaged over the faces facing +z within `half` of the centre, of a box
-    /// 50 x 50 x 3 mm of `material` (index 1) lit head-on from -z with irradiance 1.
-    fn backlit_box(material: &str, transmission: Transmission, half: f32) -> [f32; 3] {
-        let mut mesh = generate::cube(24);
-        mesh.positions.iter_mut().for_each(|p| p.z *= 0.06);
-        let mut m = Material::by_name(material).unwrap();
-        m.eta = 1.0;
-        let transport = Transport { transmission, ..Transport::new(m, 0.05) };
-        let mut s = FrameSession::new(mesh.clone(), None, transport, FrameSettings::default());
-        s.set_lights(vec![SceneLight::from(Light::Directional { direction: Vec3::Z, irradiance: Vec3::ONE })]);
-        let b = s.solve().face_b.clone();
-        let (mut sum, mut n) = (Rgb::ZERO, 0);
-        for f in 0..mesh.triangles.len() {
-            let c = mesh.face_centroid(f);
-            if mesh.face_normal(f).z > 0.9 && c.x.abs() < half && c.y.abs() < half {
-                sum += b[f];
-                n += 1;
-            }
-        }
-        (sum / n as f32).to_array()
-    }
-
-    /// A thin box lit from behind transmits what a slab of its thickness does: the centre of
-    /// its far face against `validation/slab_walk.py material --name NAME --mm 3 --photons
-    /// 1000000 --seed 5` (multiple scattering, standard error 0.0003-0.0004). The box is 50 mm
-    /// wide, so light also leaves through its sides: skim milk's red, which reaches farthest,
-    /// loses 4% of the infinite slab's at the centre (hence 6% there, 2% for marble).
-    #[test]
-    fn a_thin_backlit_box_transmits_the_exact_slab() {
-        for (m, want, tol) in [("marble", [0.2020, 0.1685, 0.1431], 0.02), ("skimmilk", [0.2864, 0.2806, 0.1932], 0.06)] {
-            let got = backlit_box(m, Transmission::Slab, 0.2);
-            for c in 0..3 {
-                assert!((got[c] / want[c] - 1.0).abs() < tol, "{m} channel {c}: {got:?} vs {want:?}");
-            }
-            // The blue scattered back, the red transmitted: the slab's hue, not the tail's.
-            assert!(got[0] > got[2], "{m}: {got:?}");
-        }
-    }
 
     #[test]
     fn names_round_trip() {
