@@ -7,7 +7,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::formfactor::{FormFactorOptions, form_factor, point_sample};
 use std::hint::black_box;
 
@@ -16,8 +16,8 @@ fn figure3_triangle(d: f64) -> [DVec3; 3] {
 }
 
 fn bench(c: &mut Criterion) {
-    let dipole = Dipole::new(&Material::by_name("skimmilk").unwrap(), 1.0);
-    let pbd = Dipole::with_profile(&Material::by_name("skimmilk").unwrap(), 1.0, ProfileKind::Pbd, false);
+    let profile = Profile::new(&Material::by_name("skimmilk").unwrap(), 1.0);
+    let pbd = Profile::of_kind(&Material::by_name("skimmilk").unwrap(), 1.0, ProfileKind::Pbd, false);
     let opts = FormFactorOptions::default();
     let (x_o, n_o) = (DVec3::ZERO, DVec3::Z);
     // Far: a 1 mm triangle 30 mm away, tilted against the receiver's plane.
@@ -25,7 +25,7 @@ fn bench(c: &mut Criterion) {
     let cases = [("near", figure3_triangle(0.0)), ("mid", figure3_triangle(5.0)), ("far", far)];
     for (name, tri) in cases {
         c.bench_function(&format!("form_factor/{name}"), |b| {
-            b.iter(|| form_factor(black_box(&tri), black_box(x_o), n_o, &dipole, &opts))
+            b.iter(|| form_factor(black_box(&tri), black_box(x_o), n_o, &profile, &opts))
         });
     }
     for (name, tri) in &cases[..2] {
@@ -34,7 +34,7 @@ fn bench(c: &mut Criterion) {
         });
     }
     c.bench_function("point_sample", |b| {
-        b.iter(|| point_sample(black_box(&far), black_box(x_o), n_o, &dipole))
+        b.iter(|| point_sample(black_box(&far), black_box(x_o), n_o, &profile))
     });
 }
 

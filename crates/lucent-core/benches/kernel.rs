@@ -15,10 +15,10 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{Vec3, Vec3A};
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::simd::Isa;
 use lucent_core::solver::link_coef::{LinkCoef, gather_sum, receiver_scale};
-use lucent_core::solver::point_sample::{DipoleF32, ReceiverSources};
+use lucent_core::solver::point_sample::{ProfileF32, ReceiverSources};
 use rand::{Rng, SeedableRng};
 use std::hint::black_box;
 
@@ -27,13 +27,13 @@ const BATCHES: usize = 1024;
 /// Every profile on every instruction set this CPU has, for a receiver at `x_o` with normal
 /// `n_o`: the bench's name, the profile and the receiver's poles. Marble at 10 cm on a unit
 /// mesh: distances span the profile's whole range.
-fn profiles(x_o: Vec3, n_o: Vec3) -> Vec<(String, DipoleF32, ReceiverSources)> {
+fn profiles(x_o: Vec3, n_o: Vec3) -> Vec<(String, ProfileF32, ReceiverSources)> {
     let m = Material::by_name("marble").unwrap();
     let mut out = Vec::new();
     for kind in ProfileKind::ALL {
         for isa in Isa::available() {
-            let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
-            let d = DipoleF32::new(&dip).with_isa(isa);
+            let dip = Profile::of_kind(&m, 50.0, kind, kind.has_single_scattering());
+            let d = ProfileF32::new(&dip).with_isa(isa);
             let src = ReceiverSources::new(&d, x_o, n_o);
             out.push((format!("{}/{}", kind.name(), isa.name()), d, src));
         }

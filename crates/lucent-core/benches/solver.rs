@@ -4,7 +4,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Material, Profile};
 use lucent_core::hierarchy::subdivision::{butterfly, octahedron};
 use lucent_core::irradiance::{Light, face_irradiance};
 use lucent_core::solver::{HierarchicalSolver, Oracle};
@@ -13,7 +13,7 @@ use std::hint::black_box;
 fn bench(c: &mut Criterion) {
     let sub = butterfly(&octahedron(Vec3::new(1.0, 1.25, 0.9)), 4).expect("closed base mesh");
     let mesh = sub.mesh;
-    let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.025);
+    let d = Profile::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.025);
     let light = [Light::Point { position: Vec3::new(2.0, 3.0, 1.6), intensity: Vec3::splat(10.0) }];
     let e = face_irradiance(&mesh, &light, &d.entry);
     let mut s = HierarchicalSolver::new(mesh, sub.hierarchy, d, Oracle::default());

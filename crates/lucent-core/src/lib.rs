@@ -12,6 +12,9 @@
 //!
 //! * [`bssrdf`]: the dipole diffusion model (Jensen et al. 2001; Mertens table 1), the measured
 //!   materials and the dielectric Fresnel terms.
+//! * [`camera`]: the orbit camera that frames an object by its bounding sphere (pure math; the
+//!   GPU passes, the scene files and the viewer share it).
+//! * [`clock`]: wall-clock milliseconds for the stage timings.
 //! * [`fastexp`]: inlined, vectorisable exponentials for the hot loops.
 //! * [`formfactor`]: the semi-analytic point-to-polygon form factor (Mertens §4) and a Monte Carlo
 //!   reference for the same integral.
@@ -31,9 +34,11 @@
 //!
 //! Units: material coefficients are in mm^-1 as measured; a mesh is given a *model scale* (the
 //! largest side of its bounding box in metres) and every length inside the solver is in mesh
-//! units, with coefficients converted by [`bssrdf::Dipole::new`].
+//! units, with coefficients converted by [`bssrdf::Profile::new`].
 
 pub mod bssrdf;
+pub mod camera;
+pub mod clock;
 pub mod fastexp;
 pub mod formfactor;
 pub mod hierarchy;

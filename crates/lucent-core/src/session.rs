@@ -17,7 +17,8 @@
 //! [`FrameSession::environment`] from it.
 
 use crate::Rgb;
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
+use crate::clock::ms_since;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::{Hierarchy, face_cluster};
 use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering, interreflection};
@@ -245,7 +246,7 @@ pub struct FrameSession {
     /// does not follow a deformation.
     rest_extent: f32,
     transport: Transport,
-    dipole: Dipole,
+    profile: Profile,
     settings: FrameSettings,
     lights: Vec<SceneLight>,
     environment: Option<Environment>,
@@ -304,13 +305,13 @@ impl FrameSession {
         settings: FrameSettings,
     ) -> Self {
         let rest_extent = mesh.extent();
-        let dipole = transport.dipole(rest_extent);
+        let profile = transport.profile_at(rest_extent);
         FrameSession {
             rest: mesh.positions.clone(),
             mesh,
             rest_extent,
             transport,
-            dipole,
+            profile,
             settings,
             lights: Vec::new(),
             environment: None,
@@ -343,8 +344,8 @@ impl FrameSession {
     }
 
     /// The diffusion profile in mesh units.
-    pub fn dipole(&self) -> &Dipole {
-        &self.dipole
+    pub fn profile(&self) -> &Profile {
+        &self.profile
     }
 
     /// The material at its size.
@@ -374,7 +375,7 @@ impl FrameSession {
 
     /// The oracle in use: the settings' thresholds, else the profile's defaults.
     pub fn oracle(&self) -> Oracle {
-        self.settings.oracle.unwrap_or_else(|| Oracle::for_profile(self.dipole.profile))
+        self.settings.oracle.unwrap_or_else(|| Oracle::for_profile(self.profile.kind))
     }
 
     /// Moves the mesh to `positions` (a deformation of the rest pose: same vertex count).
@@ -394,7 +395,7 @@ impl FrameSession {
     /// changed).
     pub fn set_transport(&mut self, transport: Transport) {
         if self.transport != transport {
-            self.dipole = transport.dipole(self.rest_extent);
+            self.profile = transport.profile_at(self.rest_extent);
             self.transport = transport;
             self.finite_body = None;
             self.changes.transport = true;
@@ -534,7 +535,7 @@ impl FrameSession {
             && let Some(caster) = &self.caster
         {
             match &mut self.bounce_rays {
-                Some(rays) if rays.fits(&self.mesh, &self.dipole) => {
+                Some(rays) if rays.fits(&self.mesh, &self.profile) => {
                     if self.bounce_rays_moved {
                         rays.refit(&self.mesh, caster);
                     }
@@ -542,14 +543,14 @@ impl FrameSession {
                 _ => {
                     let progress = self.progress.as_deref();
                     self.bounce_rays =
-                        Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.dipole, progress));
+                        Some(interreflection::BounceRays::trace(&self.mesh, caster, &self.profile, progress));
                 }
             }
             self.bounce_rays_moved = false;
         }
         for _ in 0..self.settings.bounces {
             let Some(rays) = &self.bounce_rays else { break };
-            let e2 = interreflection::bounced_irradiance(rays, &last, &self.dipole);
+            let e2 = interreflection::bounced_irradiance(rays, &last, &self.profile);
             let unchanged = Changes::default();
             // On the fly, a bounce links anew; its light is a small part of `B`, so its links
             // may err more (stored links are reused as they are).
@@ -570,12 +571,12 @@ impl FrameSession {
         timings.bounces_ms = ms_since(t_bounces);
         self.irradiance = e;
         self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.clone(), sent) };
-        self.diffuse = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.dipole);
+        self.diffuse = shading::diffuse_radiance(&self.mesh.face_to_vertex(&face_b), &self.profile);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
         let (vertex_radiance, vertex_single) = self.seen_from_eye();
         timings.single_scattering_ms = ms_since(t);
-        let exit_lobe = self.dipole.exit_lobe.clone();
+        let exit_lobe = self.profile.exit_lobe.clone();
         self.last = Solved { face_b, vertex_radiance, vertex_single, exit_lobe, timings, links, fresh: true };
         &self.last
     }
@@ -588,7 +589,7 @@ impl FrameSession {
         let need_caster = shadows
             || self.settings.bounces > 0
             || self.transport.single_scattering_along_view()
-            || self.dipole.bounds_energy();
+            || self.profile.bounds_energy();
         match &mut self.caster {
             Some(c) if moved => {
                 c.update(&self.mesh);
@@ -599,13 +600,13 @@ impl FrameSession {
         // Lights shadow per their own flag; the environment only when asked.
         let caster = self.caster.as_ref().filter(|_| shadows);
         let env = self.environment.filter(|_| caster.is_none() || self.settings.environment_shadows);
-        let mut e = face_entering(&self.mesh, &self.lights, env.as_ref(), &self.dipole.entry, caster);
+        let mut e = face_entering(&self.mesh, &self.lights, env.as_ref(), &self.profile.entry, caster);
         if caster.is_some()
             && !self.settings.environment_shadows
             && let Some(env) = &self.environment
         {
             // Shadowed lights with an unshadowed environment: add the open environment.
-            let open = face_entering(&self.mesh, &[], Some(env), &self.dipole.entry, None);
+            let open = face_entering(&self.mesh, &[], Some(env), &self.profile.entry, None);
             e.iter_mut().zip(open).for_each(|(e, o)| *e += o);
         }
         e
@@ -629,7 +630,7 @@ impl FrameSession {
             let terms = self.cross_body.as_ref().map(|c| c.uniform_terms());
             let b = solver::exact::solve_receivers_with_gain(
                 &self.mesh,
-                &self.dipole,
+                &self.profile,
                 e,
                 &opts,
                 &all,
@@ -642,7 +643,7 @@ impl FrameSession {
         }
         let mode = self.settings.mode;
         self.make_solver();
-        let Self { solver, mesh, dipole, face_gain, cross_body, face_terms, .. } = self;
+        let Self { solver, mesh, profile, face_gain, cross_body, face_terms, .. } = self;
         let s = solver.as_mut().expect("made above");
         s.set_face_gain(face_gain.clone());
         if face_terms.as_ref().map(|t| t.len()) != cross_body.as_ref().map(|c| c.len()) {
@@ -651,7 +652,7 @@ impl FrameSession {
         s.set_face_term(face_terms.clone());
         let moved = s.mesh.positions != mesh.positions;
         let t = Instant::now();
-        let profile_changed = s.dipole != *dipole;
+        let profile_changed = s.profile != *profile;
         let oracle_changed = changes.oracle || s.oracle != oracle;
         let relink = moved || profile_changed || oracle_changed;
         s.oracle = oracle;
@@ -662,7 +663,7 @@ impl FrameSession {
                 if moved {
                     s.set_positions(&mesh.positions);
                 }
-                s.dipole = dipole.clone();
+                s.profile = profile.clone();
                 s.solve_on_the_fly(e)
             }
             SolveMode::Render => {
@@ -670,7 +671,7 @@ impl FrameSession {
                     if moved {
                         s.set_positions(&mesh.positions);
                     }
-                    s.dipole = dipole.clone();
+                    s.profile = profile.clone();
                     s.link();
                     timings.link_ms += ms_since(t);
                 }
@@ -678,7 +679,7 @@ impl FrameSession {
             }
             SolveMode::Incremental => {
                 if profile_changed {
-                    s.set_dipole(dipole.clone());
+                    s.set_profile(profile.clone());
                 }
                 if oracle_changed || s.links().is_none() {
                     // Links on the pose they were asked for first, so that later updates are
@@ -710,19 +711,15 @@ impl FrameSession {
     fn solver_maker(&mut self) -> impl FnOnce() -> HierarchicalSolver + Send + use<> {
         let rest = Mesh::new(self.rest.clone(), self.mesh.triangles.clone());
         let given = self.hierarchy.take();
-        let (dipole, oracle, progress) = (self.dipole.clone(), self.oracle(), self.progress.clone());
+        let (profile, oracle, progress) = (self.profile.clone(), self.oracle(), self.progress.clone());
         move || {
             let h = given.unwrap_or_else(|| face_cluster::build(&rest));
-            let mut s = HierarchicalSolver::new(rest, h, dipole, oracle);
+            let mut s = HierarchicalSolver::new(rest, h, profile, oracle);
             s.ff_opts = FormFactorOptions::default();
             s.progress = progress;
             s
         }
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

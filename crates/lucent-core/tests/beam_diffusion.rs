@@ -5,7 +5,7 @@
 
 use lucent_core::bssrdf::beam_diffusion::{EffectiveAlbedo, calibrated_albedo, effective_albedo};
 use lucent_core::bssrdf::halfspace::HalfSpace;
-use lucent_core::bssrdf::profile::channel_tables;
+use lucent_core::bssrdf::tables::channel_tables;
 use lucent_core::bssrdf::{fresnel_dielectric, fresnel_moment1, fresnel_moment2};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::mesh::Mesh;
@@ -49,10 +49,10 @@ fn uniform_irradiance_gives_at_most_one_for_the_bounded_profiles() {
     for (name, mesh, scale) in cases() {
         let ones = vec![Rgb::ONE; mesh.triangles.len()];
         let h = face_cluster::build(&mesh);
-        let mertens = Dipole::for_model_scale(&marble, mesh.extent() as f64, scale);
+        let mertens = Profile::for_model_scale(&marble, mesh.extent() as f64, scale);
         let unbounded = max_channel(&exact::solve(&mesh, &mertens, &ones, &FormFactorOptions::default()));
         for kind in [ProfileKind::Dipole, ProfileKind::Pbd] {
-            let d = Dipole::profile_for_model_scale(&marble, mesh.extent() as f64, scale, kind, true);
+            let d = Profile::at_model_scale(&marble, mesh.extent() as f64, scale, kind, true);
             let want = exact::solve(&mesh, &d, &ones, &FormFactorOptions::default());
             let mut s =
                 HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::for_profile(kind));
@@ -84,7 +84,7 @@ fn the_bound_follows_an_incremental_update() {
     use lucent_core::mesh::deform::{Deformer, twist};
     let mesh = thin_slab();
     let marble = Material::by_name("marble").unwrap();
-    let d = Dipole::profile_for_model_scale(&marble, mesh.extent() as f64, 0.02, ProfileKind::Pbd, true);
+    let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.02, ProfileKind::Pbd, true);
     let h = face_cluster::build(&mesh);
     let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::for_profile(ProfileKind::Pbd));
     let ones = vec![Rgb::ONE; mesh.triangles.len()];
@@ -104,7 +104,7 @@ fn the_bound_follows_an_incremental_update() {
 fn uniform_report_measures_before_and_after_the_bound() {
     let mesh = thin_slab();
     let marble = Material::by_name("marble").unwrap();
-    let d = Dipole::profile_for_model_scale(&marble, mesh.extent() as f64, 0.02, ProfileKind::Dipole, true);
+    let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.02, ProfileKind::Dipole, true);
     let r = lucent_core::solver::energy::uniform_report(&mesh, &d, Oracle::for_profile(ProfileKind::Dipole));
     println!("{r:?}");
     assert_eq!(r.faces, mesh.triangles.len());

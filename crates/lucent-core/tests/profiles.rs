@@ -4,19 +4,19 @@
 //! and the plane integral against each profile's total diffuse reflectance.
 
 use glam::{DVec3, Vec3};
-use lucent_core::bssrdf::profile::{RadialTable, TABLE_SIZE};
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::tables::{RadialTable, TABLE_SIZE};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::formfactor::montecarlo::adaptive_cubature;
 use lucent_core::formfactor::{FormFactorOptions, form_factor};
-use lucent_core::solver::oracle::{DipoleF32, ReceiverSources};
+use lucent_core::solver::oracle::{ProfileF32, ReceiverSources};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
 const DISTANCE_FORM: [(ProfileKind, bool); 3] =
     [(ProfileKind::Dipole, false), (ProfileKind::Dipole, true), (ProfileKind::Pbd, true)];
 
-fn profile(name: &str, mm_per_unit: f64, kind: ProfileKind, single: bool) -> Dipole {
-    Dipole::with_profile(&Material::by_name(name).unwrap(), mm_per_unit, kind, single)
+fn profile(name: &str, mm_per_unit: f64, kind: ProfileKind, single: bool) -> Profile {
+    Profile::of_kind(&Material::by_name(name).unwrap(), mm_per_unit, kind, single)
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -113,7 +113,7 @@ fn huge_polygon_gives_each_profiles_total_reflectance() {
 fn one_point_estimates_match_the_f64_profile() {
     for (kind, single) in DISTANCE_FORM.into_iter().chain([(ProfileKind::Mertens, false)]) {
         let d = profile("skimmilk", 0.5, kind, single);
-        let d32 = DipoleF32::new(&d);
+        let d32 = ProfileF32::new(&d);
         let x_o = Vec3::new(0.1, -0.2, 0.05);
         let n_o = Vec3::new(0.3, 0.4, 0.866).normalize();
         let src = ReceiverSources::new(&d32, x_o, n_o);

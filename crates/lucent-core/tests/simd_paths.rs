@@ -5,7 +5,7 @@
 //! the face's `B`, or a thousandth of the largest where that is smaller).
 
 use glam::Vec3;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::hierarchy::subdivision::{butterfly, octahedron};
 use lucent_core::irradiance::{Light, face_irradiance};
 use lucent_core::simd::Isa;
@@ -20,13 +20,7 @@ fn solve() -> Vec<f32> {
     let mut out = vec![];
     for kind in [ProfileKind::Mertens, ProfileKind::Pbd] {
         let mesh = sub.mesh.clone();
-        let d = Dipole::profile_for_model_scale(
-            &marble,
-            mesh.extent() as f64,
-            0.025,
-            kind,
-            kind == ProfileKind::Pbd,
-        );
+        let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.025, kind, kind == ProfileKind::Pbd);
         let light = [Light::Point { position: Vec3::new(2.0, 3.0, 1.6), intensity: Vec3::splat(10.0) }];
         let e = face_irradiance(&mesh, &light, &d.entry);
         let mut s = HierarchicalSolver::new(mesh, sub.hierarchy.clone(), d, Oracle::default());

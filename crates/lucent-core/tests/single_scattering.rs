@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind, fresnel_transmittance};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind, fresnel_transmittance};
 use lucent_core::irradiance::sh::Sh9;
 use lucent_core::irradiance::{Environment, Light, SceneLight};
 use lucent_core::mesh::bvh::Bvh;
@@ -14,12 +14,12 @@ use lucent_core::shading::single_scattering::{NEIGHBOUR_FLOOR, ViewRayScene, vie
 
 /// A cube 2 units wide of a material with a mean free path of a thousandth of a unit: a
 /// half-space seen from the middle of a face. Albedos 0.3, 0.9, 0.99.
-fn half_space(eta: f64) -> (Mesh, Dipole) {
+fn half_space(eta: f64) -> (Mesh, Profile) {
     let sigma_s = [3.0, 9.0, 9.9];
     let sigma_a = [7.0, 1.0, 0.1];
     let m = Material::custom("test", sigma_s, sigma_a, eta).unwrap();
     // 10 mm^-1 total, 100 mm per unit: σ_t = 1000 per unit.
-    (generate::cube(8), Dipole::with_profile(&m, 100.0, ProfileKind::Pbd, false))
+    (generate::cube(8), Profile::of_kind(&m, 100.0, ProfileKind::Pbd, false))
 }
 
 /// The top face's centre vertex (0, 1, 0).
@@ -29,7 +29,7 @@ fn top_centre(mesh: &Mesh) -> usize {
 
 /// Hanrahan & Krueger's half-space single scattering before the exit Fresnel factor, for
 /// irradiance 1 arriving at outside cosine `mu_i` and seen at outside cosine `mu_o`.
-fn closed_form(d: &Dipole, mu_i: f64, mu_o: f64) -> [f64; 3] {
+fn closed_form(d: &Profile, mu_i: f64, mu_o: f64) -> [f64; 3] {
     let eta = d.eta;
     let refracted = |mu: f64| (1.0 - (1.0 - mu * mu) / (eta * eta)).sqrt();
     std::array::from_fn(|c| {
@@ -41,17 +41,25 @@ fn closed_form(d: &Dipole, mu_i: f64, mu_o: f64) -> [f64; 3] {
 /// `f` of the view-ray scene of `mesh` (its vertex normals, a BVH over it).
 fn with_scene<R>(
     mesh: &Mesh,
-    d: &Dipole,
+    d: &Profile,
     lights: &[SceneLight],
     env: Option<&Environment>,
     f: impl FnOnce(&ViewRayScene) -> R,
 ) -> R {
     let normals = mesh.vertex_normals();
     let bvh = Bvh::build(mesh);
-    f(&ViewRayScene { mesh, normals: &normals, bvh: &bvh, offset: 1e-5, dipole: d, lights, environment: env })
+    f(&ViewRayScene {
+        mesh,
+        normals: &normals,
+        bvh: &bvh,
+        offset: 1e-5,
+        profile: d,
+        lights,
+        environment: env,
+    })
 }
 
-fn radiance_at(mesh: &Mesh, d: &Dipole, lights: &[SceneLight], env: Option<&Environment>, eye: Vec3) -> Rgb {
+fn radiance_at(mesh: &Mesh, d: &Profile, lights: &[SceneLight], env: Option<&Environment>, eye: Vec3) -> Rgb {
     with_scene(mesh, d, lights, env, |scene| view_ray_radiance(scene, eye)[top_centre(mesh)])
 }
 
@@ -64,7 +72,7 @@ fn constant_sky() -> Environment {
 
 /// The half-space's single scattering under [`constant_sky`] seen at outside cosine `mu_o`:
 /// [`closed_form`] integrated over the upper hemisphere by the midpoint rule.
-fn half_space_under_sky(d: &Dipole, mu_o: f64) -> [f64; 3] {
+fn half_space_under_sky(d: &Profile, mu_o: f64) -> [f64; 3] {
     let n = 4000;
     let mut sum = [0.0f64; 3];
     for k in 0..n {
@@ -148,7 +156,7 @@ fn a_constant_sky_gives_the_closed_form_integrated_over_the_hemisphere() {
 /// face seen head-on, integrated over the sphere's exact geometry (f64): along the view ray
 /// (the diameter) and over every direction inside, each bringing `η² F_t e^{-σ_t s}` from
 /// where it meets the sphere within the critical angle; the `1/η²` of the exit applied.
-fn sphere_under_sky(d: &Dipole) -> [f64; 3] {
+fn sphere_under_sky(d: &Profile) -> [f64; 3] {
     use std::f64::consts::PI;
     let eta = d.eta;
     let (steps, cosines) = (4000, 4000);
@@ -196,7 +204,7 @@ fn a_small_sphere_under_a_constant_sky_gets_the_light_from_behind() {
         let sigma_t = [0.04, 0.06, 0.1];
         let m =
             Material::custom("test", sigma_t.map(|s| s * 0.999), sigma_t.map(|s| s * 0.001), eta).unwrap();
-        let d = Dipole::with_profile(&m, 100.0, ProfileKind::Pbd, false);
+        let d = Profile::of_kind(&m, 100.0, ProfileKind::Pbd, false);
         let mesh = generate::icosphere(5);
         // Every point of a sphere seen head-on is the same point: the mean over a few of them
         // takes out the directions' jitter (each vertex's own estimate is within a few per cent).

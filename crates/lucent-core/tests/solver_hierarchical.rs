@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, face_irradiance};
@@ -66,10 +66,10 @@ fn point_light() -> [Light; 1] {
 
 /// The level-3 blob in marble at 5 cm under [`point_light`]: mesh, hierarchy, profile and
 /// face irradiance.
-fn marble_blob() -> (Mesh, lucent_core::hierarchy::Hierarchy, Dipole, Vec<Rgb>) {
+fn marble_blob() -> (Mesh, lucent_core::hierarchy::Hierarchy, Profile, Vec<Rgb>) {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
-    let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
+    let d = Profile::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
     let e = face_irradiance(&mesh, &point_light(), &d.entry);
     (mesh, h, d, e)
 }
@@ -108,9 +108,9 @@ fn render_mode_equals_on_the_fly_with_curved_receivers() {
     assert!(mesh.triangles.len() > 2 * 2048, "big enough to split the tree across threads");
     let h = face_cluster::build(&mesh);
     let marble = Material::by_name("marble").unwrap();
-    let d = Dipole::profile_for_model_scale(&marble, mesh.extent() as f64, 0.05, ProfileKind::Pbd, true);
+    let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.05, ProfileKind::Pbd, true);
     let e = face_irradiance(&mesh, &point_light(), &d.entry);
-    let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::for_profile(d.profile));
+    let mut s = HierarchicalSolver::new(mesh.clone(), h, d.clone(), Oracle::for_profile(d.kind));
     assert!(s.oracle.linear_receivers && s.oracle.curved_receivers);
     let otf = s.solve_on_the_fly(&e);
     s.link();
@@ -130,7 +130,7 @@ fn render_mode_equals_on_the_fly_with_curved_receivers() {
 fn links_partition_every_receiver_emitter_pair() {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
-    let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.02);
+    let d = Profile::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.02);
     let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
     s.link();
     let l = s.links().unwrap();
@@ -157,7 +157,7 @@ fn links_partition_every_receiver_emitter_pair() {
 fn flat_plane_gives_total_diffuse_reflectance() {
     // 200 mm square of marble (1/sigma_tr <= 8.6 mm: the edges are > 11 diffusion lengths away).
     let mesh = plane(24, 1.0);
-    let d = Dipole::new(&Material::by_name("marble").unwrap(), 200.0);
+    let d = Profile::new(&Material::by_name("marble").unwrap(), 200.0);
     let e = vec![Rgb::ONE; mesh.triangles.len()];
     let centre = mesh.positions.iter().position(|p| p.length() < 1e-6).expect("grid has a centre vertex");
     let want = d.total_diffuse_reflectance();
@@ -181,7 +181,7 @@ fn accuracy_against_exact() {
     let lights = point_light();
     for name in ["marble", "skimmilk", "ketchup"] {
         for scale in [0.01, 0.1, 1.0] {
-            let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale);
+            let d = Profile::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale);
             let e = face_irradiance(&mesh, &lights, &d.entry);
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
             let s = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
@@ -220,7 +220,7 @@ fn links_without_candidates_render_the_same_and_relink_before_an_update() {
 fn incremental_matches_on_the_fly_after_deformation() {
     let mesh = blob(3);
     let h = face_cluster::build(&mesh);
-    let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.05);
+    let d = Profile::for_model_scale(&Material::by_name("skimmilk").unwrap(), mesh.extent() as f64, 0.05);
     // A twist about y (angle proportional to height) and a bump on one side.
     let deformed: Vec<Vec3> = mesh
         .positions
@@ -301,7 +301,7 @@ fn bunny_accuracy(kind: ProfileKind, single: bool) {
     for name in ["marble", "skimmilk", "ketchup"] {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
-            let d = Dipole::profile_for_model_scale(&material, mesh.extent() as f64, scale, kind, single);
+            let d = Profile::at_model_scale(&material, mesh.extent() as f64, scale, kind, single);
             let e = face_irradiance(&mesh, &lights, &d.entry);
             let t = std::time::Instant::now();
             let want = mesh.face_to_vertex(&exact::solve(&mesh, &d, &e, &FormFactorOptions::default()));
@@ -349,7 +349,7 @@ fn bunny_incremental_matches_on_the_fly_after_deformation() {
     for name in ["marble", "skimmilk", "ketchup"] {
         let material = Material::by_name(name).unwrap();
         for scale in [0.01, 0.1, 1.0] {
-            let d = Dipole::for_model_scale(&material, ext as f64, scale);
+            let d = Profile::for_model_scale(&material, ext as f64, scale);
             let e = face_irradiance(&moved, &lights, &d.entry);
             let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());
             inc.link();
@@ -381,7 +381,7 @@ fn bunny_local_incremental_update_equals_fresh_links() {
     );
     let lights = light_for(&mesh);
     for (name, scale) in [("skimmilk", 0.1), ("ketchup", 0.01)] {
-        let d = Dipole::for_model_scale(&Material::by_name(name).unwrap(), ext as f64, scale);
+        let d = Profile::for_model_scale(&Material::by_name(name).unwrap(), ext as f64, scale);
         let e = face_irradiance(&bumped, &lights, &d.entry);
         let mut fresh = HierarchicalSolver::new(bumped.clone(), h.clone(), d.clone(), Oracle::default());
         let want_links = fresh.link().links;

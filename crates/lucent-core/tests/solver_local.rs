@@ -2,7 +2,7 @@
 //! below a face, `B = R_d_total E` with one link per face, and it agrees with the exact solve.
 
 use glam::Vec3;
-use lucent_core::bssrdf::{Dipole, Material, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile, ProfileKind};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, face_irradiance};
@@ -29,7 +29,7 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
     for (kind, single) in
         [(ProfileKind::Pbd, true), (ProfileKind::Dipole, false), (ProfileKind::Mertens, false)]
     {
-        let d = Dipole::profile_for_model_scale(&m, ext as f64, 0.1, kind, single);
+        let d = Profile::at_model_scale(&m, ext as f64, 0.1, kind, single);
         let loc = Locality::of(&d);
         let reach_mm = loc.reach as f64 * d.mm_per_unit;
         // The numerical `∫ R dA` of the local limit is the closed form's.
@@ -64,7 +64,7 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
 fn translucent_bunny_has_no_local_face() {
     let mesh = lucent_core::mesh::embedded::bunny();
     let h = face_cluster::build(&mesh);
-    let d = Dipole::profile_for_model_scale(
+    let d = Profile::at_model_scale(
         &Material::by_name("marble").unwrap(),
         mesh.extent() as f64,
         0.1,

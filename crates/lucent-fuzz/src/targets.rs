@@ -63,7 +63,7 @@ fn envmap(bytes: &[u8], ext: &str) -> Result<String, String> {
 fn scene(bytes: &[u8]) -> Result<String, String> {
     let text = std::str::from_utf8(bytes).map_err(|_| "not UTF-8".to_string())?;
     // A folder that does not exist: whatever file a mutated scene names cannot be read.
-    let scene = lucent::scene::SceneFile::parse(text, "/nonexistent-fuzz-dir".into())
+    let scene = lucent_scene::scene::SceneFile::parse(text, "/nonexistent-fuzz-dir".into())
         .map_err(|e| format!("{e:#}"))?;
     // The environment map itself is the hdr and exr targets' business (and decoding the
     // built-in probes for every input would only slow the run).

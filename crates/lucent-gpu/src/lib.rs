@@ -6,17 +6,15 @@
 //!
 //! * [`context`]: [`GpuContext`] (device, queue, adapter) and the shared texture formats.
 //! * [`readback`]: textures and buffers back to the CPU (row padding handled).
-//! * [`camera`]: the orbit camera framing a bounding sphere (renderer, scene files and viewer:
-//!   orbit, pan, zoom, picking rays).
 //! * [`mesh_pass`]: per-vertex `B / pi` times the per-pixel exit Fresnel factor, highlights and
-//!   the environment-reflection hook, into an HDR target.
+//!   the environment-reflection hook, into an HDR target, seen through a
+//!   `lucent_core::camera::CameraView`.
 //! * [`surface_maps`]: the environment and albedo maps the mesh pass samples.
 //! * [`tonemap`]: exposure, gamma curve or ACES fit, background.
 //! * [`offscreen`]: the two passes into offscreen targets and read-back to an image.
 //! * [`htsm`]: Heterogeneous Translucent Shadow Maps (Shopf 2007).
 //! * [`test_support`]: tests that skip with a note where no adapter exists (and fail under CI).
 
-pub mod camera;
 pub mod context;
 pub mod htsm;
 pub mod mesh_pass;

@@ -19,13 +19,13 @@
 //! 2 = albedo map and sampler (a mesh's colour texture: the radiance is multiplied by its
 //! square root per pixel, the exit half of `lucent_core::mesh::texture`'s modulation).
 
-use crate::camera::CameraView;
 use crate::context::{DEPTH_FORMAT, GpuContext, GpuError};
 pub use crate::surface_maps::{AlbedoMap, EnvironmentMap};
 use crate::surface_maps::{albedo_bind_group, env_bind_group, texture_layout};
 use glam::{Vec2, Vec3};
 use lucent_core::Rgb;
 use lucent_core::bssrdf::ExitLobe;
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::Light;
 use wgpu::util::DeviceExt;
 
@@ -123,7 +123,7 @@ impl GpuMesh {
             contents: bytemuck::cast_slice(triangles),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let (center, radius) = crate::camera::bounding_sphere(positions);
+        let (center, radius) = lucent_core::camera::bounding_sphere(positions);
         Ok(GpuMesh {
             geometry,
             radiance,
@@ -290,6 +290,35 @@ pub struct MeshPass {
     albedo_sampler: wgpu::Sampler,
 }
 
+/// The layout of the mesh pass's uniform buffer ([`MeshUniforms`]), read by both stages.
+fn uniform_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lucent mesh uniforms"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<MeshUniforms>() as u64),
+            },
+            count: None,
+        }],
+    })
+}
+
+/// A bilinear sampler that repeats in u and addresses v with `v_mode`.
+fn linear_sampler(device: &wgpu::Device, label: &str, v_mode: wgpu::AddressMode) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(label),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: v_mode,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    })
+}
+
 impl MeshPass {
     /// Builds the pipeline for colour targets of `color_format` with `sample_count` samples
     /// (1 or 4).
@@ -306,19 +335,7 @@ impl MeshPass {
                 concat!(include_str!("shaders/spot.wgsl"), include_str!("shaders/mesh.wgsl")).into(),
             ),
         });
-        let uniform_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lucent mesh uniforms"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<MeshUniforms>() as u64),
-                },
-                count: None,
-            }],
-        });
+        let uniform_layout = uniform_layout(device);
         let env_layout = texture_layout(device, "lucent mesh environment");
         let albedo_layout = texture_layout(device, "lucent mesh albedo");
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -365,24 +382,11 @@ impl MeshPass {
             layout: &uniform_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("lucent environment"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        // Longitude wraps around; latitude stops at the poles.
+        let sampler = linear_sampler(device, "lucent environment", wgpu::AddressMode::ClampToEdge);
         let black = EnvironmentMap::from_rgba_f32(ctx, 1, 1, &[[0.0; 4]])?;
         let env_group = env_bind_group(device, &env_layout, &black, &sampler);
-        let albedo_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("lucent albedo"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let albedo_sampler = linear_sampler(device, "lucent albedo", wgpu::AddressMode::Repeat);
         let white = AlbedoMap::from_rgb(ctx, 1, 1, &[Vec3::ONE])?;
         let albedo_group = albedo_bind_group(device, &albedo_layout, &white, &albedo_sampler);
         if let Some(e) = pollster::block_on(scope.pop()) {

@@ -3,11 +3,11 @@
 //!
 //! mesh pass (4x MSAA, [`HDR_FORMAT`]) ─► resolve ─► tone-map pass ([`LDR_FORMAT`]) ─► read-back.
 
-use crate::camera::{CameraView, OrbitCamera};
 use crate::context::{DEPTH_FORMAT, GpuContext, GpuError, HDR_FORMAT, LDR_FORMAT};
 use crate::mesh_pass::{GpuMesh, MeshPass, Shading};
 use crate::readback::read_texture;
 use crate::tonemap::{ToneMap, ToneMapPass};
+use lucent_core::camera::{CameraView, OrbitCamera};
 
 /// Samples per pixel of the mesh pass (4 is guaranteed for the formats used).
 pub const MSAA_SAMPLES: u32 = 4;

@@ -4,8 +4,8 @@
 mod common;
 
 use glam::Vec3;
+use lucent_core::camera::OrbitCamera;
 use lucent_core::irradiance::{EnvMap, equirect_uv};
-use lucent_gpu::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, Shading};
 use lucent_gpu::offscreen::OffscreenRenderer;
 use lucent_gpu::test_support::adapter_or_skip;

@@ -9,8 +9,8 @@
 mod common;
 
 use glam::Vec3;
+use lucent_core::camera::OrbitCamera;
 use lucent_core::irradiance::Light;
-use lucent_gpu::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::{GpuMesh, Shading};
 use lucent_gpu::offscreen::{RenderSettings, render_image};
 use lucent_gpu::test_support::adapter_or_skip;
@@ -132,7 +132,8 @@ mod solved {
     use super::check_golden;
     use glam::Vec3;
     use lucent_core::Rgb;
-    use lucent_core::bssrdf::{Dipole, Material};
+    use lucent_core::bssrdf::{Material, Profile};
+    use lucent_core::camera::{CameraView, OrbitCamera};
     use lucent_core::formfactor::FormFactorOptions;
     use lucent_core::irradiance::{
         BandWeights, EnvMap, Environment, Light, SceneLight, ShadowCaster, face_irradiance_shadowed,
@@ -140,7 +141,6 @@ mod solved {
     use lucent_core::mesh::{Mesh, generate};
     use lucent_core::{shading, solver};
     use lucent_gpu::GpuContext;
-    use lucent_gpu::camera::{CameraView, OrbitCamera};
     use lucent_gpu::mesh_pass::{EnvironmentMap, GpuMesh, Shading};
     use lucent_gpu::offscreen::OffscreenRenderer;
     use lucent_gpu::test_support::adapter_or_skip;
@@ -164,9 +164,9 @@ mod solved {
     }
 
     /// Per-vertex `B / pi` of the exact solve.
-    fn solve(mesh: &Mesh, dipole: &Dipole, e: &[Rgb]) -> Vec<Rgb> {
-        let b = solver::exact::solve(mesh, dipole, e, &FormFactorOptions::default());
-        shading::diffuse_radiance(&mesh.face_to_vertex(&b), dipole)
+    fn solve(mesh: &Mesh, profile: &Profile, e: &[Rgb]) -> Vec<Rgb> {
+        let b = solver::exact::solve(mesh, profile, e, &FormFactorOptions::default());
+        shading::diffuse_radiance(&mesh.face_to_vertex(&b), profile)
     }
 
     struct Shot {
@@ -235,10 +235,10 @@ mod solved {
         // Marble, slab 4 units = 40 cm: the diffusion length (under 1 cm) is far below the
         // shadow's size, so the umbra stays dark.
         let material = Material::by_name("marble").unwrap();
-        let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, 0.4);
+        let profile = Profile::for_model_scale(&material, mesh.extent() as f64, 0.4);
         let caster = ShadowCaster::new(&mesh);
-        let e = face_irradiance_shadowed(&mesh, &lights, None, &dipole.entry, Some(&caster));
-        let e_open = face_irradiance_shadowed(&mesh, &lights, None, &dipole.entry, None);
+        let e = face_irradiance_shadowed(&mesh, &lights, None, &profile.entry, Some(&caster));
+        let e_open = face_irradiance_shadowed(&mesh, &lights, None, &profile.entry, None);
 
         // The shadow is where a ray to the light meets the block (slab tops only; a closed-form
         // box test, independent of the BVH).
@@ -268,8 +268,8 @@ mod solved {
         let camera = OrbitCamera { yaw_deg: -20.0, pitch_deg: 35.0, ..Default::default() };
         let shading = Shading { eta: material.eta as f32, lights: vec![light], ..Default::default() };
         let tone = ToneMap { exposure: 1.5, ..Default::default() };
-        let shot = shoot(&ctx, &mesh, &solve(&mesh, &dipole, &e), &camera, &shading, None, &tone);
-        let open = shoot(&ctx, &mesh, &solve(&mesh, &dipole, &e_open), &camera, &shading, None, &tone);
+        let shot = shoot(&ctx, &mesh, &solve(&mesh, &profile, &e), &camera, &shading, None, &tone);
+        let open = shoot(&ctx, &mesh, &solve(&mesh, &profile, &e_open), &camera, &shading, None, &tone);
 
         // The umbra's centre: the block's centre projected from the light onto the slab top;
         // a lit point as far from the block on the other side.
@@ -302,15 +302,15 @@ mod solved {
         let mesh = generate::icosphere(4);
         let material = Material::by_name("marble").unwrap();
         // 20 cm across: radius over 10 diffusion lengths in every channel.
-        let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, 0.2);
-        let e = face_irradiance_shadowed(&mesh, &[], Some(&env), &dipole.entry, None);
-        let b = solver::exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default());
+        let profile = Profile::for_model_scale(&material, mesh.extent() as f64, 0.2);
+        let e = face_irradiance_shadowed(&mesh, &[], Some(&env), &profile.entry, None);
+        let b = solver::exact::solve(&mesh, &profile, &e, &FormFactorOptions::default());
 
         let area: f32 = (0..mesh.triangles.len()).map(|f| mesh.face_area(f)).sum();
         let mean = |v: &[Rgb]| v.iter().enumerate().map(|(f, x)| *x * mesh.face_area(f)).sum::<Rgb>() / area;
         let l_mean = env.sh.coeffs[0] * 0.282_094_8; // L_00 Y_00: the map's mean radiance
         let a0 = BandWeights::fresnel_cosine(material.eta).0[0];
-        let rd = Vec3::from_array(dipole.total_diffuse_reflectance().map(|x| x as f32));
+        let rd = Vec3::from_array(profile.total_diffuse_reflectance().map(|x| x as f32));
         let (e_mean, b_mean) = (mean(&e), mean(&b));
         eprintln!(
             "environment: mean E {e_mean}, A0 L {}, mean B {b_mean}, Rd E {}",
@@ -328,7 +328,7 @@ mod solved {
         let env_map = EnvironmentMap::from_rgba_f32(&ctx, 256, 128, &texels).unwrap();
         let shading = Shading { eta: material.eta as f32, environment: 1.0, ..Default::default() };
         let tone = ToneMap { exposure: 0.6, ..Default::default() };
-        let radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b), &dipole);
+        let radiance = shading::diffuse_radiance(&mesh.face_to_vertex(&b), &profile);
         // The image's mean colour over six views along the axes (pitch 89 for the poles): a
         // view's mean is a zonal convolution of the radiance about the view direction, so its
         // first- and second-order SH terms sum to zero over the six, leaving R_d_total times the

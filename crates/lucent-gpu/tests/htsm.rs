@@ -18,11 +18,11 @@ mod lights;
 mod target;
 
 use glam::Vec3;
+use lucent_core::camera::{OrbitCamera, bounding_sphere};
 use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::{DensityVolume, VolumeSpec};
 use lucent_gpu::GpuContext;
-use lucent_gpu::camera::{OrbitCamera, bounding_sphere};
 use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel};
 use lucent_gpu::readback::read_texture;
 use lucent_gpu::test_support::adapter_or_skip;

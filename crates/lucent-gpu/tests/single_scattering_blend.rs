@@ -6,7 +6,7 @@
 mod common;
 
 use glam::{Vec2, Vec3};
-use lucent_gpu::camera::OrbitCamera;
+use lucent_core::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::{GpuMesh, Shading};
 use lucent_gpu::offscreen::OffscreenRenderer;
 use lucent_gpu::test_support::adapter_or_skip;

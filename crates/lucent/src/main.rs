@@ -93,8 +93,8 @@ fn quiet_mesa_without_runtime_dir() {
 
 /// glibc raises its mmap threshold (up to 32 MiB) each time a large mapped block is freed, so
 /// the link traversal's growing buffers, once freed, end up inside the heap, which is not
-/// returned to the system: the 203K dragon's bench row peaked at 1,742 MiB, 1,017 MiB with
-/// the threshold held at its initial 128 KiB.
+/// returned to the system and add to the peak of every later solve. Holding the threshold at
+/// its initial 128 KiB keeps large buffers mapped, so freeing them returns the memory.
 fn return_large_buffers_to_the_os() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {

@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Background of the 3D view in the PNG: `viewer::mesh_pass::BACKGROUND` (0.055, 0.06, 0.07)
+/// Background of the 3D view in the PNG: `viewer::draw::BACKGROUND` (0.055, 0.06, 0.07)
 /// written as 8-bit display values.
 const BACKGROUND: [u8; 3] = [14, 15, 18];
 

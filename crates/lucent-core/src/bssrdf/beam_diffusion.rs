@@ -23,7 +23,7 @@
 //! the entry point that 100 exponential samples miss.
 //!
 //! Photon beam diffusion's multiple scattering is then calibrated to the exact half-space albedo
-//! ([`super::halfspace`], [`super::profile::channel_tables`]); [`EffectiveAlbedo`] tabulates
+//! ([`super::halfspace`], [`super::tables::channel_tables`]); [`EffectiveAlbedo`] tabulates
 //! the calibrated total over albedo, for materials given by colour.
 
 use super::fresnel::{fresnel_dielectric, fresnel_moment1, fresnel_moment2};
@@ -173,7 +173,7 @@ pub fn effective_albedo(rho: f64, eta: f64) -> Split {
 }
 
 /// The albedo of the calibrated `pbd` profile, which is the exact half-space albedo at normal
-/// incidence ([`super::halfspace`]; see [`super::profile::channel_tables`]), of one channel
+/// incidence ([`super::halfspace`]; see [`super::tables::channel_tables`]), of one channel
 /// with reduced albedo `rho` (0..=1) at relative index `eta`.
 pub fn calibrated_albedo(rho: f64, eta: f64) -> f64 {
     super::halfspace::HalfSpace::new(rho.min(1.0 - 1e-9), eta).albedo(1.0)

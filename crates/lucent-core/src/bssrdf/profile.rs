@@ -1,5 +1,6 @@
 //! Diffusion profiles: which radial function `R(r)` carries light from where it enters to where
-//! it leaves, and the tables that make tabulated profiles as cheap to evaluate as the dipole.
+//! it leaves ([`ProfileKind`], the list of names and everything that differs between them), and
+//! [`Profile`], one material's profile at one model scale.
 //!
 //! Three profiles, each a radial function of the distance `r = |x_o - x_i|` between entry and
 //! exit points together with its radial tail integral `Q(r) = ∫_r^∞ R(t) t dt` (the form factor
@@ -15,11 +16,11 @@
 //!   plus single scattering.
 //!
 //! Single scattering: PBD's single-scattering term, tabulated likewise, is part of the `pbd`
-//! profile and may be added to the `dipole` profile ([`super::Dipole::single_scattering`]).
+//! profile and may be added to the `dipole` profile ([`super::Profile::single_scattering`]).
 
-use std::sync::Arc;
+use super::{Entry, ExitLobe, Material, boundary_a, fresnel_moment1, tables};
 
-/// Which diffusion profile a [`super::Dipole`] evaluates.
+/// Which diffusion profile a [`super::Profile`] evaluates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum ProfileKind {
     /// Mertens et al. 2003's dipole on the receiver's normal (the paper's model).
@@ -44,15 +45,47 @@ impl ProfileKind {
         }
     }
 
-    /// Whether `R` depends on the normal at the dipole's point (only Mertens' placement does).
+    /// Whether `R` depends on the normal at the dipole's point (only Mertens' placement does:
+    /// its poles sit on the receiver's normal; the others are functions of distance alone).
     pub fn uses_normals(self) -> bool {
         self == ProfileKind::Mertens
     }
 
-    /// Whether single scattering is included unless asked otherwise (`pbd` and `dipole`; the
-    /// paper's `mertens` reproduces its tables without it).
-    pub fn single_scattering_by_default(self) -> bool {
+    /// Whether the profile has a single-scattering term, on unless asked otherwise (`pbd` and
+    /// `dipole`; the paper's `mertens` reproduces its tables without it).
+    pub fn has_single_scattering(self) -> bool {
         self != ProfileKind::Mertens
+    }
+
+    /// Whether solves bound each face's `B` under uniform irradiance by 1 (the energy bound of
+    /// [`crate::solver::energy`]) and apply the finite-body gain. Off for `mertens`, kept as
+    /// published to reproduce the paper's tables.
+    pub fn bounds_energy(self) -> bool {
+        self != ProfileKind::Mertens
+    }
+
+    /// Whether light enters and leaves through the exact half-space's boundary terms (the
+    /// entry term's albedo ratio, the exit lobe, the exit normalisation `1 / c`), or through
+    /// Fresnel's transmittance alone and `F_t B / π` as Mertens et al. write it.
+    pub fn half_space_boundary(self) -> bool {
+        self != ProfileKind::Mertens
+    }
+
+    /// Whether light bounces between facing parts by default. Not for `mertens`, which does not
+    /// bound energy on thin parts: bounces would carry that glow on.
+    pub fn bounces_by_default(self) -> bool {
+        self != ProfileKind::Mertens
+    }
+
+    /// The refinement oracle's thresholds `(ε1, ε2, ε_abs)` that keep this profile within 1% of
+    /// the exact solve (see [`crate::solver::Oracle::for_profile`]); `None`: the oracle's
+    /// defaults, the paper's.
+    pub fn oracle_thresholds(self) -> Option<(f32, f32, f32)> {
+        match self {
+            ProfileKind::Mertens => None,
+            ProfileKind::Dipole => Some((0.1, 0.03, 3e-4)),
+            ProfileKind::Pbd => Some((0.3, 0.1, 5e-4)),
+        }
     }
 }
 
@@ -75,217 +108,259 @@ impl std::str::FromStr for ProfileKind {
     }
 }
 
-/// Samples per channel of a [`RadialTable`] (the grid is `r_k = r_max (k/N)²`, `k = 0..=N`,
-/// dense near 0 where profiles peak).
-pub const TABLE_SIZE: usize = 1024;
-
-/// Tails below this fraction of `Q(0)` are cut: `r_max` is where the tail falls below it.
-const TAIL_CUT: f64 = 1e-8;
-
-/// One channel's radial profile tabulated in mesh units: `r R(r)` for the one-point estimates
-/// (in `f32`, linear in `x = √(r / r_max)`) and the tail `Q(r)` for the form factor (`f64`).
-/// Beyond `r_max` both are 0.
+/// The diffusion profile of one material at one model scale, per colour channel, with every
+/// length in *mesh units* (coefficients are measured in mm^-1 and converted by `mm_per_unit`).
+/// The dipole's coefficients are kept for every profile: they set the length scales the
+/// solver's oracle and the form factor's segmentation use.
 #[derive(Clone, Debug, PartialEq)]
-pub struct RadialTable {
-    /// Largest tabulated distance (mesh units); the profile is 0 beyond it.
-    pub r_max: f64,
-    /// `r R(r)` at the grid points (per mesh unit).
-    pub r_radial: Vec<f32>,
-    /// `Q(r) = ∫_r^∞ R(t) t dt` at the grid points (unitless), non-increasing, last entry 0.
-    pub tail: Vec<f64>,
-    /// Smallest distance at which `R = r R / r` is evaluated (mesh units): `R` may grow like
-    /// `1/r` at 0 (single scattering), and the area below it holds a negligible share.
-    pub r_floor: f64,
+pub struct Profile {
+    /// Effective transport coefficient `sigma_tr = sqrt(3 sigma_a sigma_t')`, per mesh unit.
+    pub sigma_tr: [f64; 3],
+    /// Depth of the real source below the surface, `z_r = 1 / sigma_t'`, in mesh units.
+    pub z_r: [f64; 3],
+    /// Height of the virtual source above the surface, `z_v = z_r (1 + 4A/3)`, in mesh units.
+    pub z_v: [f64; 3],
+    /// Reduced albedo `alpha' = sigma_s' / sigma_t'` (unitless, 0..1).
+    pub alpha_prime: [f64; 3],
+    /// Relative index of refraction of the material (unitless, > 0; 1.3 for the measured table).
+    pub eta: f64,
+    /// How many millimetres one mesh unit stands for.
+    pub mm_per_unit: f64,
+    /// Which radial profile `R` is (default for [`Profile::new`]: [`ProfileKind::Mertens`], the
+    /// paper's; front ends default to [`ProfileKind::default`]).
+    pub kind: ProfileKind,
+    /// Whether the single-scattering term is included (tabulated, see [`profile`]). Always
+    /// `false` for [`ProfileKind::Mertens`].
+    pub single_scattering: bool,
+    /// Extinction coefficient `σ_t = σ_a + σ_s'` per channel, per mesh unit.
+    pub sigma_t: [f64; 3],
+    /// The tabulated part of the profile, per channel, if any (PBD; the single-scattering
+    /// term of the distance-form dipole).
+    pub tables: Option<tables::SharedTables>,
+    /// Whether solves scale each face's `B` so that uniform irradiance never gives more than 1
+    /// ([`crate::solver::energy`]). Default: on for every profile but Mertens', which is kept
+    /// as published to reproduce the paper's tables.
+    pub energy_bound: bool,
+    /// How much of the light arriving from each direction enters and is carried by the profile:
+    /// Fresnel's transmittance for [`ProfileKind::Mertens`] (the paper's), times the exact
+    /// half-space albedo ratio `A(μ_t) / A(1)` for the others ([`Entry`]). Shared.
+    pub entry: std::sync::Arc<Entry>,
+    /// How the diffuse light leaves over exit angles: flat for [`ProfileKind::Mertens`] (the
+    /// paper's `F_t B / π`), the half-space's lobe for light entering head-on for the others
+    /// ([`ExitLobe`]).
+    pub exit_lobe: ExitLobe,
 }
 
-/// Cell index and fraction of grid position `x` (`√(r / r_max)` times [`TABLE_SIZE`]), or
-/// `None` beyond the grid.
-#[inline]
-fn cell_at(x: f64) -> Option<(usize, f64)> {
-    (x < TABLE_SIZE as f64).then(|| {
-        let i = x as usize;
-        (i, x - i as f64)
-    })
-}
+impl Profile {
+    /// Mertens' dipole for `material` when one mesh unit is `mm_per_unit` millimetres (the
+    /// paper's model; see [`Profile::of_kind`] for the others).
+    pub fn new(material: &Material, mm_per_unit: f64) -> Self {
+        Self::of_kind(material, mm_per_unit, ProfileKind::Mertens, false)
+    }
 
-impl RadialTable {
-    /// Tabulates a profile given in *optical* units (`σ_t = 1`) for a medium with extinction
-    /// `sigma_t` (per mesh unit): `R(r) = σ_t² R_opt(σ_t r)`, `Q(r) = Q_opt(σ_t r)`.
-    /// `tail_opt` must be non-increasing and reach 0 (or `TAIL_CUT` of its start) by
-    /// optical radius `r_opt_max`.
-    pub fn from_optical(
-        sigma_t: f64,
-        r_opt_max: f64,
-        radial_opt: impl Fn(f64) -> f64,
-        tail_opt: impl Fn(f64) -> f64,
+    /// Profile `kind` for `material` when one mesh unit is `mm_per_unit` millimetres, with or
+    /// without single scattering (ignored for [`ProfileKind::Mertens`]). Tabulated profiles
+    /// cost a table per distinct `eta` once (shared) and three channel tables here.
+    pub fn of_kind(
+        material: &Material,
+        mm_per_unit: f64,
+        kind: ProfileKind,
+        single_scattering: bool,
     ) -> Self {
-        let q0 = tail_opt(0.0);
-        // Shrink the range to where the tail is negligible, by bisection on the grid variable.
-        let (mut lo, mut hi) = (0.0f64, r_opt_max);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if tail_opt(mid) > TAIL_CUT * q0 { lo = mid } else { hi = mid }
-        }
-        let r_opt_max = hi.max(1e-6);
-        let r_max = r_opt_max / sigma_t;
-        let mut r_radial = Vec::with_capacity(TABLE_SIZE + 1);
-        let mut tail = Vec::with_capacity(TABLE_SIZE + 1);
-        for k in 0..=TABLE_SIZE {
-            let x = k as f64 / TABLE_SIZE as f64;
-            let r_opt = r_opt_max * x * x;
-            let last = k == TABLE_SIZE;
-            r_radial.push(if last { 0.0 } else { (sigma_t * r_opt * radial_opt(r_opt)) as f32 });
-            tail.push(if last { 0.0 } else { tail_opt(r_opt).max(0.0) });
-        }
-        // Round-off must not make the tail grow outwards.
-        for k in (0..TABLE_SIZE).rev() {
-            tail[k] = tail[k].max(tail[k + 1]);
-        }
-        RadialTable { r_max, r_radial, tail, r_floor: 1e-3 / sigma_t }
-    }
-
-    /// Tabulates a profile given in optical units by `R_opt` alone, up to optical radius
-    /// `r_opt_max`: the tail `Q` is integrated on the grid (trapezoid rule in `x`, from the
-    /// outside in). `R_opt` is evaluated at the 1,024 inner grid points, in parallel.
-    pub fn from_radial(sigma_t: f64, r_opt_max: f64, radial_opt: impl Fn(f64) -> f64 + Sync) -> Self {
-        use rayon::prelude::*;
-        let n = TABLE_SIZE;
-        // `r R(r)` in optical units at x_k; the integrand of Q in x is `r R(r) · 2 r_max x`.
-        let w: Vec<f64> = (0..=n)
-            .into_par_iter()
-            .map(|k| {
-                let x = k as f64 / n as f64;
-                let r = r_opt_max * x * x;
-                if k == n { 0.0 } else { r * radial_opt(r) }
-            })
-            .collect();
-        let mut tail = vec![0.0; n + 1];
-        for k in (0..n).rev() {
-            let (x0, x1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
-            let g = |x: f64, w: f64| w * 2.0 * r_opt_max * x;
-            tail[k] = tail[k + 1] + 0.5 * (x1 - x0) * (g(x0, w[k]) + g(x1, w[k + 1]));
-        }
-        RadialTable {
-            r_max: r_opt_max / sigma_t,
-            r_radial: w.iter().map(|&v| (sigma_t * v) as f32).collect(),
-            tail,
-            r_floor: 1e-3 / sigma_t,
-        }
-    }
-
-    /// `wa · self + wb · other`, for two tables on the same grid (same `σ_t` and range).
-    pub fn weighted_sum(&self, wa: f64, other: &RadialTable, wb: f64) -> RadialTable {
-        debug_assert!(self.r_max == other.r_max && self.r_floor == other.r_floor);
-        let zip_f32 = |a: &[f32], b: &[f32]| {
-            a.iter().zip(b).map(|(x, y)| (wa * *x as f64 + wb * *y as f64) as f32).collect()
+        let a = boundary_a(material.eta);
+        let mut d = Profile {
+            sigma_tr: [0.0; 3],
+            z_r: [0.0; 3],
+            z_v: [0.0; 3],
+            alpha_prime: [0.0; 3],
+            eta: material.eta,
+            mm_per_unit,
+            kind,
+            single_scattering: single_scattering && kind.has_single_scattering(),
+            sigma_t: [0.0; 3],
+            tables: None,
+            energy_bound: kind.bounds_energy(),
+            entry: std::sync::Arc::new(Entry::fresnel(material.eta)),
+            exit_lobe: ExitLobe::flat(),
         };
-        RadialTable {
-            r_max: self.r_max,
-            r_radial: zip_f32(&self.r_radial, &other.r_radial),
-            tail: self.tail.iter().zip(&other.tail).map(|(x, y)| wa * x + wb * y).collect(),
-            r_floor: self.r_floor,
+        for c in 0..3 {
+            let sigma_a = material.sigma_a[c] * mm_per_unit;
+            let sigma_s = material.sigma_s_prime[c] * mm_per_unit;
+            let sigma_t = sigma_a + sigma_s;
+            d.sigma_tr[c] = (3.0 * sigma_a * sigma_t).sqrt();
+            d.z_r[c] = 1.0 / sigma_t;
+            d.z_v[c] = d.z_r[c] * (1.0 + 4.0 * a / 3.0);
+            d.alpha_prime[c] = sigma_s / sigma_t;
+            d.sigma_t[c] = sigma_t;
         }
+        let multiple = kind == ProfileKind::Pbd;
+        if multiple || d.single_scattering {
+            d.tables = Some(tables::channel_tables(
+                &d.alpha_prime,
+                &d.sigma_t,
+                d.eta,
+                multiple,
+                d.single_scattering,
+            ));
+        }
+        if kind.half_space_boundary() {
+            d.entry = std::sync::Arc::new(Entry::half_space(&d.alpha_prime, d.eta, d.single_scattering));
+            d.exit_lobe = ExitLobe::half_space(&d.alpha_prime, d.eta, d.single_scattering);
+        }
+        d
     }
 
-    /// Grid position of distance `r`: cell index and fraction, or `None` beyond `r_max`.
-    #[inline]
-    fn cell(&self, r: f64) -> Option<(usize, f64)> {
-        cell_at((r.max(0.0) / self.r_max).sqrt() * TABLE_SIZE as f64)
+    /// Dipole coefficients for a mesh whose bounding box's largest side (`extent`, in mesh
+    /// units) is `scale_m` metres, as in the paper's "marble scaled at 10 cm".
+    pub fn for_model_scale(material: &Material, extent: f64, scale_m: f64) -> Self {
+        Self::new(material, scale_m * 1000.0 / extent)
     }
 
-    /// `R(r)` (per mesh unit²) at distance `r` (mesh units).
+    /// [`Profile::of_kind`] at a model scale (see [`Profile::for_model_scale`]).
+    pub fn at_model_scale(
+        material: &Material,
+        extent: f64,
+        scale_m: f64,
+        kind: ProfileKind,
+        single_scattering: bool,
+    ) -> Self {
+        Self::of_kind(material, scale_m * 1000.0 / extent, kind, single_scattering)
+    }
+
+    /// Whether solves apply the energy bound of [`crate::solver::energy`] ([`Profile::energy_bound`]).
     #[inline]
-    pub fn radial(&self, r: f64) -> f64 {
-        self.cell(r).map_or(0.0, |(i, t)| {
-            let w = self.r_radial[i] as f64 * (1.0 - t) + self.r_radial[i + 1] as f64 * t;
-            w / r.max(self.r_floor)
+    pub fn bounds_energy(&self) -> bool {
+        self.energy_bound
+    }
+
+    /// Whether the analytic dipole terms are part of the profile (all but PBD).
+    #[inline]
+    pub fn has_analytic(&self) -> bool {
+        self.kind != ProfileKind::Pbd
+    }
+
+    /// `R` at distance `r` (mesh units) in the plane of the entry point, per mesh unit^2. For
+    /// the distance-form profiles this is the whole profile.
+    pub fn rd_planar(&self, r: f64) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            let mut v = 0.0;
+            if self.has_analytic() {
+                let (zr, zv) = (self.z_r[c], self.z_v[c]);
+                let s_r = (r * r + zr * zr).sqrt();
+                let s_v = (r * r + zv * zv).sqrt();
+                v += self.rd_from_distances(c, s_r, s_v);
+            }
+            if let Some(t) = &self.tables {
+                v += t.channels[c].radial(r);
+            }
+            v
         })
     }
 
-    /// `Q(r)` (unitless) at distance `r` (mesh units).
-    #[inline]
-    pub fn tail(&self, r: f64) -> f64 {
-        self.cell(r).map_or(0.0, |(i, t)| self.tail_in(i, t))
-    }
-
-    /// `Q` at fraction `t` of cell `i`.
-    #[inline]
-    fn tail_in(&self, i: usize, t: f64) -> f64 {
-        self.tail[i] * (1.0 - t) + self.tail[i + 1] * t
-    }
-
-    /// `TABLE_SIZE / √r_max`: the grid position of distance `r` is `√r` times this, so tables of
-    /// several channels can share the square root ([`RadialTable::tail_at_root`]).
-    #[inline]
-    pub fn root_scale(&self) -> f64 {
-        TABLE_SIZE as f64 / self.r_max.sqrt()
-    }
-
-    /// [`RadialTable::tail`] at the distance whose square root is `root_r`, given this table's
-    /// [`RadialTable::root_scale`] `scale`.
-    #[inline]
-    pub fn tail_at_root(&self, root_r: f64, scale: f64) -> f64 {
-        cell_at(root_r * scale).map_or(0.0, |(i, t)| self.tail_in(i, t))
-    }
-
-    /// `∫ R dA` over the plane, `2π Q(0)` (unitless).
-    pub fn total(&self) -> f64 {
-        std::f64::consts::TAU * self.tail[0]
-    }
-}
-
-/// The tabulated part of a profile, one table per colour channel (PBD's multiple plus single
-/// scattering, or only the single-scattering term added to an analytic dipole).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ProfileTables {
-    /// One table per channel.
-    pub channels: [RadialTable; 3],
-}
-
-/// Shared, immutable tables (cloning a [`super::Dipole`] shares them).
-pub type SharedTables = Arc<ProfileTables>;
-
-/// Per-channel tables of photon beam diffusion for reduced albedos `rho` and extinctions
-/// `sigma_t` (per mesh unit) at relative index `eta`: its multiple-scattering part, its
-/// single-scattering part, or both, evaluated on each channel's grid (no albedo interpolation).
-///
-/// The multiple-scattering part is *calibrated*: scaled so that, with the single-scattering
-/// part (exact for a half-space at normal incidence), the profile integrates to the exact
-/// half-space albedo ([`super::halfspace`]). Uncalibrated, diffusion returns 4-15% too much
-/// light near albedo 1 and up to 40% too much multiple scattering at albedo 0.3 (the factors
-/// are in `tests/beam_diffusion.rs`). The scale is taken on the tables' own integrals, so a flat
-/// slab renders the exact albedo; the profile's shape is photon beam diffusion's.
-pub fn channel_tables(
-    rho: &[f64; 3],
-    sigma_t: &[f64; 3],
-    eta: f64,
-    multiple: bool,
-    single: bool,
-) -> SharedTables {
-    use super::beam_diffusion::{beam_diffusion_multiple, beam_diffusion_single};
-    let channels = std::array::from_fn(|c| {
-        let rho = rho[c].clamp(0.0, 1.0 - 1e-9);
-        // Both parts decay at least as fast as e^{-σ_tr r}, σ_tr = √(3(1-ρ)/(2-ρ)) (Grosjean).
-        let sigma_tr = (3.0 * (1.0 - rho) / (2.0 - rho)).sqrt();
-        let r_opt_max = (20.0 / sigma_tr + 30.0).min(400.0);
-        let ss = RadialTable::from_radial(sigma_t[c], r_opt_max, |r| {
-            beam_diffusion_single(rho, 1.0 - rho, eta, r)
-        });
-        if !multiple {
-            return ss;
+    /// `R(x_i, x_o)` between an entry point `x_i` with unit normal `n_i` (where Mertens'
+    /// dipole sits, table 1) and an exit point `x_o`. The distance-form profiles ignore `n_i`.
+    pub fn rd(&self, x_i: glam::DVec3, n_i: glam::DVec3, x_o: glam::DVec3) -> [f64; 3] {
+        if !self.kind.uses_normals() {
+            return self.rd_planar(x_i.distance(x_o));
         }
-        let ms = RadialTable::from_radial(sigma_t[c], r_opt_max, |r| {
-            beam_diffusion_multiple(rho, 1.0 - rho, eta, r)
-        });
-        let scale = multiple_scattering_scale(rho, eta, ms.total(), ss.total());
-        ms.weighted_sum(scale, &ss, if single { 1.0 } else { 0.0 })
-    });
-    Arc::new(ProfileTables { channels })
-}
+        std::array::from_fn(|c| {
+            let s_r = (x_i - self.z_r[c] * n_i - x_o).length();
+            let s_v = (x_i + self.z_v[c] * n_i - x_o).length();
+            self.rd_from_distances(c, s_r, s_v)
+        })
+    }
 
-/// The factor on photon beam diffusion's multiple scattering (total `ms_total`) that makes it,
-/// plus single scattering (`ss_total`), the exact albedo of a half-space at normal incidence.
-pub fn multiple_scattering_scale(rho: f64, eta: f64, ms_total: f64, ss_total: f64) -> f64 {
-    let exact = super::halfspace::HalfSpace::new(rho, eta).albedo(1.0);
-    if ms_total > 1e-12 { ((exact - ss_total) / ms_total).max(0.0) } else { 1.0 }
+    /// The analytic dipole's `R_d` in channel `c` from the distances to the real (`s_r`) and
+    /// virtual (`s_v`) sources.
+    #[inline]
+    pub fn rd_from_distances(&self, c: usize, s_r: f64, s_v: f64) -> f64 {
+        let sigma = self.sigma_tr[c];
+        let term = |z: f64, s: f64| z * (1.0 + sigma * s) * (-sigma * s).exp() / (s * s * s);
+        self.alpha_prime[c] / (4.0 * std::f64::consts::PI) * (term(self.z_r[c], s_r) + term(self.z_v[c], s_v))
+    }
+
+    /// Distance (mesh units) from `p` to the nearest point where `R` peaks, per channel, for the
+    /// dipole at `x_o` with normal `n_o`: the nearer of Mertens' two sources, or for the
+    /// distance-form profiles `√(|p - x_o|² + z_r²)` (their `R` is smooth on the scale `z_r`).
+    #[inline]
+    pub fn peak_distance(&self, x_o: glam::DVec3, n_o: glam::DVec3, p: glam::DVec3) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            if self.kind.uses_normals() {
+                let s_r = (x_o - self.z_r[c] * n_o - p).length();
+                let s_v = (x_o + self.z_v[c] * n_o - p).length();
+                s_r.min(s_v)
+            } else if self.tables.is_some() {
+                // A table with single scattering peaks like 1/r at the entry point.
+                (p.distance_squared(x_o) + 0.01 * self.z_r[c] * self.z_r[c]).sqrt()
+            } else {
+                (p.distance_squared(x_o) + self.z_r[c] * self.z_r[c]).sqrt()
+            }
+        })
+    }
+
+    /// Whether a sphere (`centre`, `radius`, mesh units) lies so far from the dipole at `x_o`
+    /// (normal `n_o`) that `R` over it is below `e^{-60}` of its peak (beyond the tables'
+    /// reach, for tabulated parts).
+    pub fn out_of_reach(&self, x_o: glam::DVec3, n_o: glam::DVec3, centre: glam::DVec3, radius: f64) -> bool {
+        let s = self.peak_distance(x_o, n_o, centre);
+        (0..3).all(|c| {
+            let analytic_far = !self.has_analytic() || self.sigma_tr[c] * (s[c] - radius) > 60.0;
+            let table_far =
+                self.tables.as_ref().is_none_or(|t| x_o.distance(centre) - radius > t.channels[c].r_max);
+            analytic_far && table_far
+        })
+    }
+
+    /// Total diffuse reflectance `∫ R dA` over an infinite plane, per channel, unitless 0..1:
+    /// for the dipoles the closed form of Jensen et al. 2001 (eq. 6), plus the tabulated
+    /// single-scattering total where included; for PBD its table's effective albedo.
+    pub fn total_diffuse_reflectance(&self) -> [f64; 3] {
+        let a = boundary_a(self.eta);
+        std::array::from_fn(|c| {
+            let mut total = 0.0;
+            if self.has_analytic() {
+                let ap = self.alpha_prime[c];
+                let k = (3.0 * (1.0 - ap)).sqrt();
+                total += 0.5 * ap * (1.0 + (-(4.0 / 3.0) * a * k).exp()) * (-k).exp();
+            }
+            if let Some(t) = &self.tables {
+                total += t.channels[c].total();
+            }
+            total
+        })
+    }
+
+    /// `∫ R dA` over a whole plane parallel to the entry point's and `t` mesh units from it, per
+    /// channel, unitless: what a distance-form profile carries through a slab of thickness `t`
+    /// to its far side under uniform light there (`t = 0`: [`Profile::total_diffuse_reflectance`]).
+    /// The profile's tail at `t`: `2π Q(t)`, for each pole `α'/2 · z e^{-σ_tr s}/s` at
+    /// `s = √(t² + z²)`. [`ProfileKind::Mertens`], whose poles sit on the normal, is taken in the
+    /// distance form.
+    pub fn plane_reflectance(&self, t: f64) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            let mut total = 0.0;
+            if self.has_analytic() {
+                let pole = |z: f64| {
+                    let s = (t * t + z * z).sqrt();
+                    z * (-self.sigma_tr[c] * s).exp() / s
+                };
+                total += 0.5 * self.alpha_prime[c] * (pole(self.z_r[c]) + pole(self.z_v[c]));
+            }
+            if let Some(tables) = &self.tables {
+                total += std::f64::consts::TAU * tables.channels[c].tail(t);
+            }
+            total
+        })
+    }
+
+    /// The factor `1 / c`, `c = 1 - 2 FM_1(1/η)`, that normalises the exit term `F_t(η, ω_o) /
+    /// (c π)` so that it integrates to 1 over the hemisphere (pbrt-v3's separable BSSRDF).
+    /// 1 at `η = 1`, and 1 for [`ProfileKind::Mertens`], which keeps the paper's `F_t / π`.
+    /// Applied to `B` by [`crate::shading`].
+    pub fn exit_normalization(&self) -> f64 {
+        if !self.kind.half_space_boundary() {
+            return 1.0;
+        }
+        1.0 / (1.0 - 2.0 * fresnel_moment1(1.0 / self.eta))
+    }
 }

@@ -2,7 +2,7 @@ use super::*;
 use std::f64::consts::PI;
 
 /// Integrate R_d over the plane numerically (radial, substitution r = t/(1-t) on [0,1)).
-fn integrate_rd_plane(d: &Dipole) -> [f64; 3] {
+fn integrate_rd_plane(d: &Profile) -> [f64; 3] {
     let n = 400_000;
     let mut sum = [0.0; 3];
     for i in 0..n {
@@ -24,7 +24,7 @@ fn integrate_rd_plane(d: &Dipole) -> [f64; 3] {
 fn total_diffuse_reflectance_matches_numerical_integral() {
     for name in ["marble", "skimmilk", "ketchup", "skin1", "wax"] {
         let m = Material::by_name(name).unwrap();
-        let d = Dipole::new(&m, 1.0);
+        let d = Profile::new(&m, 1.0);
         let closed = d.total_diffuse_reflectance();
         let num = integrate_rd_plane(&d);
         for c in 0..3 {
@@ -40,13 +40,13 @@ fn total_diffuse_reflectance_limits() {
     let dark = Material::custom("dark", [1e-6; 3], [10.0; 3], 1.3).unwrap();
     let white = Material::custom("white", [10.0; 3], [1e-9; 3], 1.3).unwrap();
     for c in 0..3 {
-        assert!(Dipole::new(&dark, 1.0).total_diffuse_reflectance()[c] < 1e-6);
-        assert!((Dipole::new(&white, 1.0).total_diffuse_reflectance()[c] - 1.0).abs() < 1e-3);
+        assert!(Profile::new(&dark, 1.0).total_diffuse_reflectance()[c] < 1e-6);
+        assert!((Profile::new(&white, 1.0).total_diffuse_reflectance()[c] - 1.0).abs() < 1e-3);
     }
     // Scale-invariant: R_d_total depends on alpha' only.
     let m = Material::by_name("marble").unwrap();
-    let a = Dipole::new(&m, 1.0).total_diffuse_reflectance();
-    let b = Dipole::new(&m, 37.0).total_diffuse_reflectance();
+    let a = Profile::new(&m, 1.0).total_diffuse_reflectance();
+    let b = Profile::new(&m, 37.0).total_diffuse_reflectance();
     for c in 0..3 {
         assert!((a[c] - b[c]).abs() < 1e-12);
     }
@@ -54,7 +54,7 @@ fn total_diffuse_reflectance_limits() {
 
 #[test]
 fn rd_is_reciprocal_in_the_planar_case() {
-    let d = Dipole::new(&Material::by_name("skin2").unwrap(), 1.0);
+    let d = Profile::new(&Material::by_name("skin2").unwrap(), 1.0);
     let n = glam::DVec3::Z;
     let x = glam::DVec3::new(0.3, -1.2, 0.0);
     let y = glam::DVec3::new(-2.0, 0.7, 0.0);
@@ -69,8 +69,8 @@ fn rd_is_reciprocal_in_the_planar_case() {
 fn scale_converts_mm_to_mesh_units() {
     // A 1-unit mesh at 10 cm: one unit is 100 mm, so sigma_tr per unit is 100x sigma_tr per mm.
     let m = Material::by_name("Marble").unwrap();
-    let per_mm = Dipole::new(&m, 1.0);
-    let per_unit = Dipole::for_model_scale(&m, 1.0, 0.1);
+    let per_mm = Profile::new(&m, 1.0);
+    let per_unit = Profile::for_model_scale(&m, 1.0, 0.1);
     for c in 0..3 {
         assert!((per_unit.sigma_tr[c] - 100.0 * per_mm.sigma_tr[c]).abs() < 1e-9);
         assert!((per_unit.z_r[c] - per_mm.z_r[c] / 100.0).abs() < 1e-12);
@@ -125,7 +125,7 @@ fn materials_by_name() {
 fn plane_reflectance_is_the_profile_over_a_parallel_plane() {
     let m = Material::by_name("skimmilk").unwrap();
     for kind in [ProfileKind::Pbd, ProfileKind::Dipole] {
-        let d = Dipole::with_profile(&m, 1.0, kind, false);
+        let d = Profile::of_kind(&m, 1.0, kind, false);
         let total = d.total_diffuse_reflectance();
         let at0 = d.plane_reflectance(0.0);
         for c in 0..3 {

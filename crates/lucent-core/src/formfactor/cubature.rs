@@ -9,7 +9,7 @@
 //! with 25× finer segments), while the rule errs by less than 1e-4 (test
 //! `smooth_far_triangle_matches_converged_form_factor`). It is also 20 to 50 times cheaper.
 
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use glam::DVec3;
 
 /// Radon's rule (exact for polynomials of degree 5): per orbit, the barycentric coordinates
@@ -40,10 +40,10 @@ pub fn radon7(a: DVec3, b: DVec3, c: DVec3) -> [(DVec3, f64); 7] {
 
 /// `k ρ` of a polygon with centre `centre` and radius `radius` for the dipole at `x_o`
 /// (normal `n_o`): the largest over channels of `(σ_tr + 3/s) ρ`, `s` the distance from the
-/// centre to where the profile peaks ([`Dipole::peak_distance`]).
-pub fn k_rho(dipole: &Dipole, x_o: DVec3, n_o: DVec3, centre: DVec3, radius: f64) -> f64 {
-    let s = dipole.peak_distance(x_o, n_o, centre);
-    (0..3).map(|c| (dipole.sigma_tr[c] + 3.0 / s[c]) * radius).fold(0.0, f64::max)
+/// centre to where the profile peaks ([`Profile::peak_distance`]).
+pub fn k_rho(profile: &Profile, x_o: DVec3, n_o: DVec3, centre: DVec3, radius: f64) -> f64 {
+    let s = profile.peak_distance(x_o, n_o, centre);
+    (0..3).map(|c| (profile.sigma_tr[c] + 3.0 / s[c]) * radius).fold(0.0, f64::max)
 }
 
 /// `∫_P R_d` over polygon `polygon` (planar, any winding, convex or not) by the rule on the
@@ -54,7 +54,7 @@ pub fn polygon_integral(
     normal: DVec3,
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
 ) -> [f64; 3] {
     let p0 = polygon[0];
     let mut sum = [0.0f64; 3];
@@ -62,7 +62,7 @@ pub fn polygon_integral(
         let (p1, p2) = (polygon[i], polygon[i + 1]);
         let area = 0.5 * (p1 - p0).cross(p2 - p0).dot(normal);
         for (p, w) in radon7(p0, p1, p2) {
-            let rd = dipole.rd(x_o, n_o, p);
+            let rd = profile.rd(x_o, n_o, p);
             for c in 0..3 {
                 sum[c] += w * area * rd[c];
             }

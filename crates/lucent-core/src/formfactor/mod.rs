@@ -56,7 +56,7 @@
 //!
 //! Everything is `f64`, allocation free and deterministic.
 
-use crate::bssrdf::{Dipole, ProfileKind, RadialTable};
+use crate::bssrdf::{Profile, RadialTable};
 use crate::fastexp::exp_neg_f64;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
@@ -124,10 +124,10 @@ pub fn form_factor(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
     opts: &FormFactorOptions,
 ) -> [f64; 3] {
-    form_factor_counted(polygon, x_o, n_o, dipole, opts).0
+    form_factor_counted(polygon, x_o, n_o, profile, opts).0
 }
 
 /// [`form_factor`] plus the number of edge segments it integrated (over all six dipole
@@ -136,7 +136,7 @@ pub fn form_factor_counted(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
     opts: &FormFactorOptions,
 ) -> ([f64; 3], usize) {
     let n = polygon.len();
@@ -173,8 +173,8 @@ pub fn form_factor_counted(
     let n_p = twice_area_vec / twice_area;
     if opts.cubature_max_k_rho > 0.0 {
         let radius = polygon.iter().map(|p| p.distance_squared(origin)).fold(0.0, f64::max).sqrt();
-        if cubature::k_rho(dipole, x_o, n_o, origin, radius) <= opts.cubature_max_k_rho {
-            return (cubature::polygon_integral(polygon, n_p, x_o, n_o, dipole), 7 * (n - 2));
+        if cubature::k_rho(profile, x_o, n_o, origin, radius) <= opts.cubature_max_k_rho {
+            return (cubature::polygon_integral(polygon, n_p, x_o, n_o, profile), 7 * (n - 2));
         }
     }
     let (e1, e2) = n_p.any_orthonormal_pair();
@@ -182,14 +182,14 @@ pub fn form_factor_counted(
         let d = v - origin;
         DVec2::new(d.dot(e1), d.dot(e2))
     };
-    let (src, n_src) = sources(dipole, x_o, n_o, origin, n_p, e1, e2);
+    let (src, n_src) = sources(profile, x_o, n_o, origin, n_p, e1, e2);
     let mut src = src;
     let src = &mut src[..n_src];
 
     let seg = Segmenter::new(opts);
     // A profile of tables alone (PBD) has its three sources at one point: one pass serves all.
-    let channels = match &dipole.tables {
-        Some(t) if !dipole.has_analytic() => Some(ChannelTails::new(&t.channels, dipole.sigma_t)),
+    let channels = match &profile.tables {
+        Some(t) if !profile.has_analytic() => Some(ChannelTails::new(&t.channels, profile.sigma_t)),
         _ => None,
     };
     let passes = if channels.is_some() { 1 } else { src.len() };
@@ -240,7 +240,7 @@ pub fn form_factor_counted(
             let ([i2], segs) = match s.tail {
                 Tail::Pole => edge_i2(r_s.abs(), s2, &PoleTail { sigma: s.sigma, h: s.h }, t_a, t_b, &seg),
                 Tail::Table(c) => {
-                    let table = &dipole.tables.as_ref().expect("table source without tables").channels[c];
+                    let table = &profile.tables.as_ref().expect("table source without tables").channels[c];
                     edge_i2(r_s.abs(), s2, &TableTail { table, sigma: s.sigma }, t_a, t_b, &seg)
                 }
             };
@@ -261,7 +261,7 @@ pub fn form_factor_counted(
         let theta = if s.on_line { boundary_angle(polygon, &to_2d, s.d) } else { TAU * s.winding as f64 };
         let q_h = match s.tail {
             Tail::Pole => PoleTail { sigma: s.sigma, h: s.h }.q(s.h)[0],
-            Tail::Table(c) => dipole.tables.as_ref().expect("tables").channels[c].tail(s.h),
+            Tail::Table(c) => profile.tables.as_ref().expect("tables").channels[c].tail(s.h),
         };
         f[s.channel] += s.weight * (theta * q_h - s.i2);
     }
@@ -307,7 +307,7 @@ struct Source {
 /// the distance form's six poles at `x_o`, and a tabulated source per channel. Returns the
 /// array and how many are used.
 fn sources(
-    dipole: &Dipole,
+    profile: &Profile,
     x_o: DVec3,
     n_o: DVec3,
     origin: DVec3,
@@ -333,11 +333,11 @@ fn sources(
     };
     let h_o = (x_o - origin).dot(n_p).abs();
     for c in 0..3 {
-        let k = dipole.alpha_prime[c] / (4.0 * PI);
-        let sigma = dipole.sigma_tr[c];
-        if dipole.has_analytic() {
-            for (z, sign) in [(dipole.z_r[c], -1.0), (dipole.z_v[c], 1.0)] {
-                if dipole.profile == ProfileKind::Mertens {
+        let k = profile.alpha_prime[c] / (4.0 * PI);
+        let sigma = profile.sigma_tr[c];
+        if profile.has_analytic() {
+            for (z, sign) in [(profile.z_r[c], -1.0), (profile.z_v[c], 1.0)] {
+                if profile.kind.uses_normals() {
                     let pos = x_o + sign * z * n_o;
                     let h = (pos - origin).dot(n_p).abs().max(HEIGHT_FLOOR * z);
                     push(pos, h, k * z, sigma, Tail::Pole, c);
@@ -346,8 +346,8 @@ fn sources(
                 }
             }
         }
-        if dipole.tables.is_some() {
-            push(x_o, h_o, 1.0, dipole.sigma_t[c], Tail::Table(c), c);
+        if profile.tables.is_some() {
+            push(x_o, h_o, 1.0, profile.sigma_t[c], Tail::Table(c), c);
         }
     }
     (src, n)
@@ -609,9 +609,9 @@ fn half_edge_i2<const N: usize>(
 
 /// One-sample estimate: `R_d` from the polygon's centroid times its area (the far-field
 /// approximation used for distant links, Mertens §4.2).
-pub fn point_sample(polygon: &[DVec3], x_o: DVec3, n_o: DVec3, dipole: &Dipole) -> [f64; 3] {
+pub fn point_sample(polygon: &[DVec3], x_o: DVec3, n_o: DVec3, profile: &Profile) -> [f64; 3] {
     let (centroid, area) = polygon_centroid_area(polygon);
-    let rd = dipole.rd(x_o, n_o, centroid);
+    let rd = profile.rd(x_o, n_o, centroid);
     rd.map(|v| v * area)
 }
 

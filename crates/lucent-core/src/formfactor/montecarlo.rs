@@ -12,7 +12,7 @@
 //! Polygons are split into a fan from vertex 0 whose triangles are weighted by their *signed*
 //! area along the polygon's normal, which is exact for any simple planar polygon.
 
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -83,7 +83,7 @@ pub fn monte_carlo(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
     samples: usize,
     seed: u64,
 ) -> MonteCarloEstimate {
@@ -104,7 +104,7 @@ pub fn monte_carlo(
                         let u = (i as f64 + rng.random::<f64>()) * inv;
                         let v = (j as f64 + rng.random::<f64>()) * inv;
                         let x = square_to_triangle(tri, u, v);
-                        add(est, dipole.rd(x_o, n_o, x), w);
+                        add(est, profile.rd(x_o, n_o, x), w);
                     }
                 }
                 used += m * m;
@@ -126,7 +126,7 @@ pub fn sample_estimate(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
     n: usize,
     seed: u64,
 ) -> [f64; 3] {
@@ -149,7 +149,7 @@ pub fn sample_estimate(
             pick -= t.1.abs();
         }
         let x = square_to_triangle(&chosen.0, rng.random(), rng.random());
-        add(&mut acc, dipole.rd(x_o, n_o, x), chosen.1.signum());
+        add(&mut acc, profile.rd(x_o, n_o, x), chosen.1.signum());
     }
     acc.map(|v| v * total_area / n as f64)
 }
@@ -173,11 +173,11 @@ const RADON: [([f64; 3], f64); 7] = {
 };
 
 /// Degree-5 cubature of `R_d` over one triangle of signed area `area`.
-fn radon(tri: &[DVec3; 3], area: f64, x_o: DVec3, n_o: DVec3, dipole: &Dipole) -> [f64; 3] {
+fn radon(tri: &[DVec3; 3], area: f64, x_o: DVec3, n_o: DVec3, profile: &Profile) -> [f64; 3] {
     let mut acc = [0.0; 3];
     for (b, w) in RADON {
         let x = b[0] * tri[0] + b[1] * tri[1] + b[2] * tri[2];
-        add(&mut acc, dipole.rd(x_o, n_o, x), w * area);
+        add(&mut acc, profile.rd(x_o, n_o, x), w * area);
     }
     acc
 }
@@ -191,7 +191,7 @@ pub fn adaptive_cubature(
     polygon: &[DVec3],
     x_o: DVec3,
     n_o: DVec3,
-    dipole: &Dipole,
+    profile: &Profile,
     rel_tol: f64,
 ) -> [f64; 3] {
     let tris = fan(polygon);
@@ -212,16 +212,16 @@ pub fn adaptive_cubature(
         std::mem::swap(&mut stack, &mut level);
     }
     for (t, a, _) in &stack {
-        add(&mut coarse, radon(t, *a, x_o, n_o, dipole), 1.0);
+        add(&mut coarse, radon(t, *a, x_o, n_o, profile), 1.0);
     }
     let tol: [f64; 3] = std::array::from_fn(|c| rel_tol * coarse[c].abs().max(f64::MIN_POSITIVE));
     let mut result = [0.0; 3];
     while let Some((t, a, d)) = stack.pop() {
-        let parent = radon(&t, a, x_o, n_o, dipole);
+        let parent = radon(&t, a, x_o, n_o, profile);
         let kids = split(&t, a, d);
         let mut sum = [0.0; 3];
         for (kt, ka, _) in &kids {
-            add(&mut sum, radon(kt, *ka, x_o, n_o, dipole), 1.0);
+            add(&mut sum, radon(kt, *ka, x_o, n_o, profile), 1.0);
         }
         let share = a.abs() / total_area;
         let converged = (0..3).all(|c| (sum[c] - parent[c]).abs() <= tol[c] * share);

@@ -21,7 +21,7 @@
 use super::occlusion::{ENVIRONMENT_SHADOW_RAYS, stratified_cosine_rays};
 use super::{Entering, ShadowCaster};
 use crate::Rgb;
-use crate::bssrdf::{Dipole, fresnel_transmittance};
+use crate::bssrdf::{Profile, fresnel_transmittance};
 use crate::mesh::Mesh;
 use crate::mesh::deform::TracedPose;
 use crate::solver::Progress;
@@ -83,9 +83,9 @@ impl BounceRays {
     /// Traces the bounce rays of every face of `mesh` (`caster` built on it) at the ray count
     /// the profile `dipole` asks for, counting faces done on `progress` (stage "bounce rays";
     /// the 871K Stanford dragon's 3.5M rays and its three bounces took 4.4 s in all).
-    pub fn trace(mesh: &Mesh, caster: &ShadowCaster, dipole: &Dipole, progress: Option<&Progress>) -> Self {
+    pub fn trace(mesh: &Mesh, caster: &ShadowCaster, profile: &Profile, progress: Option<&Progress>) -> Self {
         let eps = caster.offset();
-        let strata = strata_for(mesh, dipole);
+        let strata = strata_for(mesh, profile);
         let faces = mesh.triangles.len();
         if let Some(p) = progress {
             p.start("bounce rays", faces);
@@ -158,9 +158,9 @@ impl BounceRays {
     /// Whether these rays serve `mesh` under `dipole`, as they are or refitted ([`Self::refit`]):
     /// the same faces, the ray count the profile asks for, and the pose traced still holds
     /// ([`TracedPose::holds`]).
-    pub fn fits(&self, mesh: &Mesh, dipole: &Dipole) -> bool {
+    pub fn fits(&self, mesh: &Mesh, profile: &Profile) -> bool {
         self.offsets.len() == mesh.triangles.len() + 1
-            && self.strata == strata_for(mesh, dipole)
+            && self.strata == strata_for(mesh, profile)
             && self.pose.holds(mesh)
     }
 
@@ -223,10 +223,10 @@ impl BounceRays {
 /// radiosity `face_b` (per face, the solve's `B`) under the profile `dipole` (its exit term and
 /// entry term, in both its parts), along the traced `rays`. Zero where a face sees no other
 /// face's front.
-pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], dipole: &Dipole) -> Vec<Entering> {
+pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], profile: &Profile) -> Vec<Entering> {
     assert_eq!(face_b.len() + 1, rays.offsets.len());
-    let exit = (dipole.exit_normalization() / std::f64::consts::PI) as f32;
-    let eta = dipole.eta;
+    let exit = (profile.exit_normalization() / std::f64::consts::PI) as f32;
+    let eta = profile.eta;
     let weight = std::f32::consts::PI / (rays.strata * rays.strata) as f32;
     rays.offsets
         .par_windows(2)
@@ -235,7 +235,7 @@ pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], dipole: &Dipole) ->
             for h in &rays.hits[w[0] as usize..w[1] as usize] {
                 let radiance = face_b[h.k as usize]
                     * (h.weight * exit * fresnel_transmittance(h.mu_k as f64, eta) as f32);
-                e.add(radiance, &dipole.entry, h.cos);
+                e.add(radiance, &profile.entry, h.cos);
             }
             e * weight
         })
@@ -253,8 +253,8 @@ const FACES_PER_DISC: f64 = 64.0;
 /// disc (all 64 rays), the 203K Stanford dragon hundreds: its bounce took a third of the time,
 /// and the image moved by 0.24% at the median pixel, 2.1% at the 99th percentile (low-frequency
 /// blotches, not speckle: the profile smooths them).
-fn strata_for(mesh: &Mesh, dipole: &Dipole) -> usize {
-    let sigma_tr = dipole.sigma_tr.into_iter().fold(0.0f64, f64::max);
+fn strata_for(mesh: &Mesh, profile: &Profile) -> usize {
+    let sigma_tr = profile.sigma_tr.into_iter().fold(0.0f64, f64::max);
     let faces = mesh.triangles.len().max(1);
     let area: f64 = (0..faces).map(|f| mesh.face_area(f) as f64).sum::<f64>() / faces as f64;
     let usable = sigma_tr.is_finite() && sigma_tr > 0.0 && area.is_finite() && area > 0.0;
@@ -280,13 +280,7 @@ mod tests {
     fn dense_meshes_cast_fewer_bounce_rays() {
         let marble = Material::by_name("marble").unwrap();
         let at = |mesh: &Mesh, metres: f64| {
-            let d = Dipole::profile_for_model_scale(
-                &marble,
-                mesh.extent() as f64,
-                metres,
-                ProfileKind::Pbd,
-                true,
-            );
+            let d = Profile::at_model_scale(&marble, mesh.extent() as f64, metres, ProfileKind::Pbd, true);
             strata_for(mesh, &d)
         };
         let bunny = crate::mesh::embedded::bunny();
@@ -332,7 +326,7 @@ mod tests {
     #[test]
     fn refitted_rays_follow_a_move_as_a_new_trace_does() {
         let m1 = Material::custom("m", [1.0; 3], [0.01; 3], 1.0).unwrap();
-        let d1 = Dipole::with_profile(&m1, 1.0, ProfileKind::Pbd, true);
+        let d1 = Profile::of_kind(&m1, 1.0, ProfileKind::Pbd, true);
         let plates = facing_plates(12, 4.0, 1.0);
         let total = |rays: &BounceRays| -> f32 {
             let b = vec![Rgb::ONE; plates.triangles.len()];
@@ -364,7 +358,7 @@ mod tests {
     fn a_convex_mesh_lights_nothing_and_facing_plates_light_each_other() {
         let m = Material::by_name("marble").unwrap();
         let sphere = generate::icosphere(3);
-        let d = Dipole::with_profile(&m, 10.0, crate::bssrdf::ProfileKind::Pbd, true);
+        let d = Profile::of_kind(&m, 10.0, crate::bssrdf::ProfileKind::Pbd, true);
         let b = vec![Rgb::ONE; sphere.triangles.len()];
         let rays = BounceRays::trace(&sphere, &ShadowCaster::new(&sphere), &d, None);
         let e = bounced_irradiance(&rays, &b, &d);
@@ -375,7 +369,7 @@ mod tests {
         // radiance 1/π through its entry term: the entry term's cosine-weighted mean (its
         // zonal band weight A_0 over π; above 1, as oblique light returns more).
         let m1 = Material::custom("m", [1.0; 3], [0.01; 3], 1.0).unwrap();
-        let d1 = Dipole::with_profile(&m1, 1.0, crate::bssrdf::ProfileKind::Pbd, true);
+        let d1 = Profile::of_kind(&m1, 1.0, crate::bssrdf::ProfileKind::Pbd, true);
         let plates = facing_plates(16, 20.0, 0.2);
         let b = vec![Rgb::ONE; plates.triangles.len()];
         let rays = BounceRays::trace(&plates, &ShadowCaster::new(&plates), &d1, None);

@@ -139,7 +139,7 @@ impl std::ops::AddAssign for Entering {
 }
 
 /// Transmitted irradiance at every face centroid from `lights`, without shadows, through the
-/// material's `entry` term ([`crate::bssrdf::Dipole::entry`]).
+/// material's `entry` term ([`crate::bssrdf::Profile::entry`]).
 pub fn face_irradiance(mesh: &Mesh, lights: &[Light], entry: &Entry) -> Vec<Rgb> {
     (0..mesh.triangles.len())
         .into_par_iter()

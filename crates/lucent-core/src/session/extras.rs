@@ -36,10 +36,10 @@ impl FrameSession {
     /// local part of `e`, past the texture's entry factors, times the profile's total diffuse
     /// reflectance.
     pub(super) fn add_local(&self, b: &mut [Rgb], e: &[Entering]) {
-        if !self.dipole.entry.has_local() {
+        if !self.profile.entry.has_local() {
             return;
         }
-        let r = Rgb::from_array(self.dipole.total_diffuse_reflectance().map(|v| v as f32));
+        let r = Rgb::from_array(self.profile.total_diffuse_reflectance().map(|v| v as f32));
         for (f, (b, e)) in b.iter_mut().zip(e).enumerate() {
             let texture = self.entry.as_ref().map_or(Rgb::ONE, |t| t[f]);
             *b += e.local * texture * r;
@@ -68,8 +68,8 @@ impl FrameSession {
         self.exit_chord = None;
         self.cross_body = None;
         self.face_terms = None;
-        let Some(caster) = self.caster.as_ref().filter(|_| self.dipole.bounds_energy()) else { return };
-        let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.dipole));
+        let Some(caster) = self.caster.as_ref().filter(|_| self.profile.bounds_energy()) else { return };
+        let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(&self.profile));
         // Traced once; a small deformation moves the hits with the mesh.
         let rays = match self.thickness_rays.take() {
             Some(mut rays) if rays.fits(&self.mesh) => {
@@ -80,11 +80,11 @@ impl FrameSession {
         };
         let gains = Arc::new(fb.gains_along(&self.mesh, &rays, caster.offset()));
         if self.transport.transmission == Transmission::Slab {
-            let cross = CrossBody::new(&self.dipole, fb, &self.mesh, &rays, caster.offset(), &gains);
+            let cross = CrossBody::new(&self.profile, fb, &self.mesh, &rays, caster.offset(), &gains);
             self.cross_body = (!cross.is_empty()).then(|| Arc::new(cross));
         }
         self.face_gain = Some(gains);
-        self.exit_chord = ExitChord::new(&self.dipole).map(|chord| {
+        self.exit_chord = ExitChord::new(&self.profile).map(|chord| {
             let means = self.mesh.face_to_vertex(&chord.face_means(&self.mesh, &rays, caster.offset()));
             (chord, means)
         });
@@ -110,7 +110,7 @@ impl FrameSession {
             normals: &normals,
             bvh: caster.bvh(),
             offset: caster.offset(),
-            dipole: &self.dipole,
+            profile: &self.profile,
             lights: &self.lights,
             environment: self.environment.as_ref(),
         };
@@ -126,7 +126,7 @@ impl FrameSession {
                         face_b,
                         sent,
                         &rays,
-                        &self.dipole.exit_lobe,
+                        &self.profile.exit_lobe,
                         &factors,
                     );
                 }

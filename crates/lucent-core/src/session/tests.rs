@@ -33,18 +33,18 @@ fn on_the_fly_matches_the_solver_called_directly() {
     let mut s = session(SolveMode::OnTheFly);
     let b = s.solve().face_b.clone();
     let mesh = generate::icosphere(2);
-    let dipole = marble().dipole(mesh.extent());
-    let entering = crate::irradiance::face_entering(&mesh, &key_light(), None, &dipole.entry, None);
+    let profile = marble().profile_at(mesh.extent());
+    let entering = crate::irradiance::face_entering(&mesh, &key_light(), None, &profile.entry, None);
     let e: Vec<Rgb> = entering.iter().map(|e| e.carried).collect();
     let mut solver = HierarchicalSolver::new(
         mesh.clone(),
         face_cluster::build(&mesh),
-        dipole.clone(),
-        Oracle::for_profile(dipole.profile),
+        profile.clone(),
+        Oracle::for_profile(profile.kind),
     );
     // The session applies the finite-body gain of its pose with the energy bound.
     let caster = ShadowCaster::new(&mesh);
-    let fb = FiniteBody::new(&dipole);
+    let fb = FiniteBody::new(&profile);
     let rays = ThicknessRays::trace(&mesh, caster.bvh(), caster.offset());
     let gain = fb.gains_along(&mesh, &rays, caster.offset());
     assert!(gain.iter().all(|g| g.min_element() > 1.0), "a small marble sphere gains");
@@ -58,7 +58,7 @@ fn on_the_fly_matches_the_solver_called_directly() {
     if !cross.is_empty() {
         cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e);
     }
-    let r = Rgb::from_array(dipole.total_diffuse_reflectance().map(|v| v as f32));
+    let r = Rgb::from_array(profile.total_diffuse_reflectance().map(|v| v as f32));
     assert!(entering.iter().any(|e| e.local.max_element() > 0.0), "oblique faces return some light locally");
     direct.iter_mut().zip(&entering).for_each(|(b, e)| *b += e.local * Rgb::ONE * r);
     assert_eq!(b, direct);
@@ -196,7 +196,7 @@ fn moving_the_eye_redoes_only_single_scattering() {
     s.set_eye(None);
     let c = s.solve().clone();
     assert!(c.vertex_single.is_empty());
-    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&c.face_b), &s.dipole);
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&c.face_b), &s.profile);
     assert_eq!(c.vertex_radiance, diffuse);
     // A 5 cm marble sphere is a half-space to the chord but where it is seen edge-on.
     for seen in [&a, &b] {
@@ -222,11 +222,11 @@ fn a_small_sphere_sends_its_diffuse_light_along_its_chords() {
     let eye = Vec3::new(0.0, 0.0, 6.0);
     s.set_eye(Some(eye));
     let solved = s.solve().clone();
-    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&solved.face_b), &s.dipole);
-    let chord = shading::exit_chord::ExitChord::new(&s.dipole).unwrap();
+    let diffuse = shading::diffuse_radiance(&s.mesh().face_to_vertex(&solved.face_b), &s.profile);
+    let chord = shading::exit_chord::ExitChord::new(&s.profile).unwrap();
     // Unit sphere: thickness 2 along the normal, slabness 0.
     let mean = chord.mean(2.0, 0.0);
-    let sigma_t = s.dipole.sigma_t.map(|v| v as f32);
+    let sigma_t = s.profile.sigma_t.map(|v| v as f32);
     let mut checked = 0;
     for (v, p) in s.mesh().positions.iter().enumerate() {
         let mu_o = p.normalize().dot((eye - *p).normalize());

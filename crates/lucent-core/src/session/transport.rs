@@ -1,6 +1,6 @@
 //! The material at its size: what decides the diffusion profile of a [`super::FrameSession`].
 
-use crate::bssrdf::{Dipole, Material, ProfileKind};
+use crate::bssrdf::{Material, Profile, ProfileKind};
 use crate::shading::SingleScattering;
 use crate::solver::transmission::Transmission;
 
@@ -42,8 +42,8 @@ impl Transport {
 
     /// The profile in the units of a mesh whose largest bounding-box side is `extent` mesh
     /// units (tabulated profiles cost tens of milliseconds: made only when this changes).
-    pub fn dipole(&self, extent: f32) -> Dipole {
-        Dipole::profile_for_model_scale(
+    pub fn profile_at(&self, extent: f32) -> Profile {
+        Profile::at_model_scale(
             &self.material,
             extent as f64,
             self.scale_m,
@@ -54,6 +54,6 @@ impl Transport {
 
     /// Whether single scattering is integrated along the view ray (needs the eye).
     pub fn single_scattering_along_view(&self) -> bool {
-        self.single_scattering == SingleScattering::ViewRay && self.profile != ProfileKind::Mertens
+        self.single_scattering == SingleScattering::ViewRay && self.profile.has_single_scattering()
     }
 }

@@ -27,7 +27,7 @@
 
 use crate::Rgb;
 use crate::bssrdf::halfspace::gauss_legendre;
-use crate::bssrdf::{Dipole, fresnel_transmittance, refracted_cosine};
+use crate::bssrdf::{Profile, fresnel_transmittance, refracted_cosine};
 use crate::mesh::Mesh;
 use crate::solver::finite_body::ThicknessRays;
 use rayon::prelude::*;
@@ -55,16 +55,16 @@ pub struct ExitChord {
 impl ExitChord {
     /// The weights of `dipole`'s exit lobe at its index (`None` for a flat lobe: Mertens'
     /// profile keeps the paper's `F_t B / π`, and so no chord either).
-    pub fn new(dipole: &Dipole) -> Option<Self> {
-        if dipole.exit_lobe.is_flat() {
+    pub fn new(profile: &Profile) -> Option<Self> {
+        if profile.exit_lobe.is_flat() {
             return None;
         }
-        let eta = dipole.eta;
+        let eta = profile.eta;
         let q = gauss_legendre(NODES, 0.0, 1.0);
         let raw: Vec<(f32, [f64; 3])> = q
             .iter()
             .map(|&(mu, w)| {
-                let t = dipole.exit_lobe.at(mu as f32);
+                let t = profile.exit_lobe.at(mu as f32);
                 let base = w * fresnel_transmittance(mu, eta) * mu;
                 (refracted_cosine(mu, eta) as f32, std::array::from_fn(|c| base * t[c] as f64))
             })
@@ -72,7 +72,7 @@ impl ExitChord {
         let total: [f64; 3] = std::array::from_fn(|c| raw.iter().map(|(_, a)| a[c]).sum::<f64>().max(1e-30));
         let nodes =
             raw.iter().map(|(mu_t, a)| (*mu_t, std::array::from_fn(|c| (a[c] / total[c]) as f32))).collect();
-        Some(ExitChord { nodes, sigma_t: dipole.sigma_t.map(|s| s as f32) })
+        Some(ExitChord { nodes, sigma_t: profile.sigma_t.map(|s| s as f32) })
     }
 
     /// `N` (module docs) for a part of thickness `t` (mesh units) and slabness `s` (0..=1).
@@ -123,10 +123,10 @@ mod tests {
     use crate::bssrdf::{Material, ProfileKind};
 
     /// Ketchup in millimetres, single scattering along the view ray (not in `B`).
-    fn ketchup(eta: f64) -> Dipole {
+    fn ketchup(eta: f64) -> Profile {
         let mut m = Material::by_name("ketchup").unwrap();
         m.eta = eta;
-        Dipole::with_profile(&m, 1.0, ProfileKind::Pbd, false)
+        Profile::of_kind(&m, 1.0, ProfileKind::Pbd, false)
     }
 
     /// Over a sphere's exit directions, as the lobe weighs them, the factor averages to 1: the
@@ -169,7 +169,7 @@ mod tests {
     /// Mertens' profile keeps the paper's flat lobe, and so no chord.
     #[test]
     fn mertens_has_no_chord() {
-        let d = Dipole::with_profile(&Material::by_name("marble").unwrap(), 1.0, ProfileKind::Mertens, false);
+        let d = Profile::new(&Material::by_name("marble").unwrap(), 1.0);
         assert!(ExitChord::new(&d).is_none());
     }
 }

@@ -42,7 +42,7 @@
 //! blacken its faces, each vertex keeps at least [`NEIGHBOUR_FLOOR`] of its brightest neighbour.
 
 use crate::Rgb;
-use crate::bssrdf::{Dipole, fresnel_transmittance, zonal_band_weights};
+use crate::bssrdf::{Profile, fresnel_transmittance, zonal_band_weights};
 use crate::irradiance::sh::BandWeights;
 use crate::irradiance::{Environment, SceneLight};
 use crate::mesh::Mesh;
@@ -125,7 +125,7 @@ pub struct ViewRayScene<'a> {
     /// Ray origins move this far off the surface (mesh units), so a ray does not hit its own face.
     pub offset: f32,
     /// The material's coefficients (`sigma_t`, `alpha_prime`, `eta`) in mesh units.
-    pub dipole: &'a Dipole,
+    pub profile: &'a Profile,
     /// The lights (each says whether it casts shadows).
     pub lights: &'a [SceneLight],
     /// The environment, if any.
@@ -151,7 +151,7 @@ pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
 /// Single-scattered radiance along each face's view ray (`Rgb::ZERO` where there is none),
 /// before the exit Fresnel factor.
 fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
-    let d = scene.dipole;
+    let d = scene.profile;
     let eta = d.eta as f32;
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
@@ -213,7 +213,7 @@ impl ViewRay {
             mu_o = -mu_o;
         }
         let mu_o = mu_o.clamp(1e-3, 1.0);
-        let w_t = refract_inward(w_o, n, mu_o, scene.dipole.eta as f32);
+        let w_t = refract_inward(w_o, n, mu_o, scene.profile.eta as f32);
         // Only this ray starts on the surface (and skips its own faces); the points along it
         // are inside.
         let exit =
@@ -340,7 +340,7 @@ const BODY_STRATA: (usize, usize) = (4, 4);
 /// surface and one shadow ray.
 fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewRay) -> Rgb {
     let n = ray.normal;
-    let d = scene.dipole;
+    let d = scene.profile;
     let eta = d.eta as f32;
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
@@ -426,7 +426,7 @@ struct EnvironmentKernel {
 }
 
 impl EnvironmentKernel {
-    fn new(d: &Dipole) -> Self {
+    fn new(d: &Profile) -> Self {
         let eta = d.eta;
         let refracted = |mu: f64| (1.0 - (1.0 - mu * mu) / (eta * eta)).max(1e-6).sqrt();
         let weights = (0..ENV_MU_SAMPLES)

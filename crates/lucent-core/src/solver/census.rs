@@ -5,7 +5,7 @@
 
 use super::hierarchical::HierarchicalSolver;
 use super::oracle::{Decision, LinkKind, ReceiverView, Samples};
-use super::point_sample::DipoleF32;
+use super::point_sample::ProfileF32;
 use std::collections::BTreeMap;
 
 /// Why one of the oracle's two tests decided as it did.
@@ -66,8 +66,8 @@ impl HierarchicalSolver {
     /// [`Census`]). Slow (one core) and diagnostic only.
     pub fn census(&self) -> Census {
         let h = &self.hierarchy;
-        let d = DipoleF32::new(&self.dipole);
-        let r = self.dipole.total_diffuse_reflectance();
+        let d = ProfileF32::new(&self.profile);
+        let r = self.profile.total_diffuse_reflectance();
         let inv_rtot = [(1.0 / r[0].max(r[1]).max(r[2]).max(1e-12)) as f32; 3];
         let sigma_min = d.sigma_tr[0].min(d.sigma_tr[1]).min(d.sigma_tr[2]);
         let mut c = Census::default();

@@ -85,11 +85,11 @@ pub struct UniformReport {
 /// reports the largest `B` with and without the bound (`lucent bench energy`).
 pub fn uniform_report(
     mesh: &crate::mesh::Mesh,
-    dipole: &crate::bssrdf::Dipole,
+    profile: &crate::bssrdf::Profile,
     oracle: super::Oracle,
 ) -> UniformReport {
     let h = crate::hierarchy::face_cluster::build(mesh);
-    let mut unbounded = dipole.clone();
+    let mut unbounded = profile.clone();
     unbounded.energy_bound = false;
     let ones = vec![Rgb::ONE; mesh.triangles.len()];
     let solver = super::HierarchicalSolver::new(mesh.clone(), h, unbounded, oracle);
@@ -98,12 +98,12 @@ pub fn uniform_report(
     // As a render does: the finite-body gain of each face, applied with the bound.
     // and the slab transmission across the body (`super::transmission`, the default).
     let mut cross: Option<super::transmission::CrossBody> = None;
-    let gain = dipole.bounds_energy().then(|| {
+    let gain = profile.bounds_energy().then(|| {
         let caster = crate::irradiance::ShadowCaster::new(mesh);
-        let fb = super::finite_body::FiniteBody::new(dipole);
+        let fb = super::finite_body::FiniteBody::new(profile);
         let rays = super::finite_body::ThicknessRays::trace(mesh, caster.bvh(), caster.offset());
         let gains = fb.gains_along(mesh, &rays, caster.offset());
-        cross = Some(super::transmission::CrossBody::new(dipole, &fb, mesh, &rays, caster.offset(), &gains));
+        cross = Some(super::transmission::CrossBody::new(profile, &fb, mesh, &rays, caster.offset(), &gains));
         gains
     });
     let mut bounded: Vec<Rgb> = raw
@@ -162,7 +162,7 @@ pub enum SlabSolver {
 /// one-point estimate `A R(d)` of a convex, decaying profile, which is always low (Jensen's
 /// inequality): -0.3% at worst with 48² squares a side, less on coarser slabs.
 pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32, solver: SlabSolver) -> SlabAlbedo {
-    use crate::bssrdf::{Dipole, ProfileKind};
+    use crate::bssrdf::{Profile, ProfileKind};
     let mut mesh = crate::mesh::generate::cube(subdivisions);
     for p in &mut mesh.positions {
         p.y *= 0.25;
@@ -175,21 +175,21 @@ pub fn slab_albedo(material: &crate::bssrdf::Material, subdivisions: u32, solver
         })
         .fold(0.0, f64::max);
     let kind = ProfileKind::default();
-    let dipole = Dipole::profile_for_model_scale(
+    let profile = Profile::at_model_scale(
         material,
         mesh.extent() as f64,
         reach_mm / 1000.0,
         kind,
-        kind.single_scattering_by_default(),
+        kind.has_single_scattering(),
     );
     let top: Vec<bool> = (0..mesh.triangles.len()).map(|f| mesh.face_normal(f).y > 0.99).collect();
     let irradiance: Vec<Rgb> = top.iter().map(|&t| if t { Rgb::ONE } else { Rgb::ZERO }).collect();
     let b = match solver {
-        SlabSolver::Exact => super::exact::solve(&mesh, &dipole, &irradiance, &Default::default()),
+        SlabSolver::Exact => super::exact::solve(&mesh, &profile, &irradiance, &Default::default()),
         SlabSolver::Hierarchical => {
             let h = crate::hierarchy::face_cluster::build(&mesh);
             let oracle = super::Oracle::for_profile(kind);
-            super::HierarchicalSolver::new(mesh.clone(), h, dipole, oracle)
+            super::HierarchicalSolver::new(mesh.clone(), h, profile, oracle)
                 .solve_on_the_fly(&irradiance)
                 .face_b
         }

@@ -7,8 +7,8 @@
 
 use super::near_face::Nodes;
 use super::oracle::LinkKind;
-use super::point_sample::{DipoleF32, PointBuf, ReceiverSources, SmoothBound};
-use crate::bssrdf::Dipole;
+use super::point_sample::{PointBuf, ProfileF32, ReceiverSources, SmoothBound};
+use crate::bssrdf::Profile;
 use crate::formfactor::montecarlo::sample_estimate;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::hierarchy::Hierarchy;
@@ -61,8 +61,8 @@ fn cut_smooth(
 /// Evaluates links: holds the dipole in both precisions and a scratch polygon buffer.
 pub(crate) struct Evaluator<'a> {
     pub h: &'a Hierarchy,
-    pub dipole: &'a Dipole,
-    pub d32: DipoleF32,
+    pub profile: &'a Profile,
+    pub d32: ProfileF32,
     pub opts: FormFactorOptions,
     /// Near links by uniform point sampling instead of the form factor (Mertens table 5).
     pub near_point_sampling: bool,
@@ -79,11 +79,11 @@ pub(crate) struct Evaluator<'a> {
 }
 
 impl<'a> Evaluator<'a> {
-    pub fn new(h: &'a Hierarchy, dipole: &'a Dipole, opts: FormFactorOptions) -> Self {
+    pub fn new(h: &'a Hierarchy, profile: &'a Profile, opts: FormFactorOptions) -> Self {
         Evaluator {
             h,
-            dipole,
-            d32: DipoleF32::new(dipole),
+            profile,
+            d32: ProfileF32::new(profile),
             opts,
             near_point_sampling: false,
             form_factors: 0,
@@ -207,20 +207,25 @@ impl<'a> Evaluator<'a> {
         if self.near_point_sampling {
             // Jensen & Buhler 2002 space their samples about one mean free path
             // `1/sigma_t'` apart: that many uniform samples over the polygon.
-            let mfp = self.dipole.z_r.iter().copied().fold(f64::MAX, f64::min);
+            let mfp = self.profile.z_r.iter().copied().fold(f64::MAX, f64::min);
             let n = ((eg.area as f64 / (mfp * mfp)).ceil() as usize).clamp(1, 1 << 16);
             let f = sample_estimate(
                 &self.scratch,
                 rg.midpoint.as_dvec3(),
                 rg.normal.as_dvec3(),
-                self.dipole,
+                self.profile,
                 n,
                 (r as u64) << 32 | e as u64,
             );
             return f.map(|v| v as f32);
         }
-        let f =
-            form_factor(&self.scratch, rg.midpoint.as_dvec3(), rg.normal.as_dvec3(), self.dipole, &self.opts);
+        let f = form_factor(
+            &self.scratch,
+            rg.midpoint.as_dvec3(),
+            rg.normal.as_dvec3(),
+            self.profile,
+            &self.opts,
+        );
         // The projected polygon stands for the cluster's true area (§5.1.1); scale so
         // that the far field matches the point sample `A R_d`. Leaves: scale 1.
         let scale = if self.h.nodes[e].is_leaf() || eg.polygon_area <= 0.0 {
@@ -246,7 +251,7 @@ mod tests {
         let m = Material::by_name("marble").unwrap();
         let edges = FormFactorOptions { cubature_max_k_rho: 0.0, ..FormFactorOptions::default() };
         for profile in [ProfileKind::Pbd, ProfileKind::Dipole] {
-            let dip = Dipole::profile_for_model_scale(&m, 1.0, 0.01, profile, true);
+            let dip = Profile::at_model_scale(&m, 1.0, 0.01, profile, true);
             // One face beside the receiver's, then moved away along x: from touching to clear.
             let mut mesh_tris = Vec::new();
             for step in 0..40 {
@@ -319,7 +324,7 @@ mod tests {
     fn own_faces_are_never_cut() {
         let m = Material::by_name("marble").unwrap();
         let edges = FormFactorOptions { cubature_max_k_rho: 0.0, ..FormFactorOptions::default() };
-        let dip = Dipole::profile_for_model_scale(&m, 1.0, 0.01, ProfileKind::Pbd, true);
+        let dip = Profile::at_model_scale(&m, 1.0, 0.01, ProfileKind::Pbd, true);
         let shapes = [
             [Vec3::new(-0.004, -0.004, 0.0), Vec3::new(0.008, -0.004, 0.0), Vec3::new(-0.004, 0.008, 0.0)],
             [Vec3::new(-0.006, -0.001, 0.0), Vec3::new(0.009, -0.001, 0.0), Vec3::new(-0.003, 0.002, 0.0)],

@@ -2,7 +2,7 @@
 //! faces of `E_k F(A_k, x_o)`, O(N^2), parallel over receivers, with the energy bound of
 //! [`super::energy`] where the profile asks for it.
 //!
-//! The only shortcut: a face out of the profile's reach ([`Dipole::out_of_reach`]: farther than
+//! The only shortcut: a face out of the profile's reach ([`Profile::out_of_reach`]: farther than
 //! 60 diffusion lengths `1/σ_tr` from the dipole's poles, and beyond its tables) contributes
 //! less than `e^{-60}` of a near face and is skipped, as the form factor itself drops edge
 //! parts past `e^{-40}`. This matters only for opaque materials at large scales (a face then sees a few
@@ -11,7 +11,7 @@
 use super::energy;
 use super::progress::Progress;
 use crate::Rgb;
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use crate::formfactor::{FormFactorOptions, form_factor};
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -31,9 +31,9 @@ pub fn rel_rmse(reference: &[Rgb], test: &[Rgb]) -> f64 {
 }
 
 /// Per-face `B` (same units as the irradiance) for per-face irradiance `face_irradiance`.
-pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Vec<Rgb> {
+pub fn solve(mesh: &Mesh, profile: &Profile, face_irradiance: &[Rgb], opts: &FormFactorOptions) -> Vec<Rgb> {
     let all: Vec<usize> = (0..mesh.triangles.len()).collect();
-    solve_receivers(mesh, dipole, face_irradiance, opts, &all, None)
+    solve_receivers(mesh, profile, face_irradiance, opts, &all, None)
 }
 
 /// `B` at the faces `receivers` only (in that order), each gathered exactly as [`solve`] does
@@ -42,13 +42,13 @@ pub fn solve(mesh: &Mesh, dipole: &Dipole, face_irradiance: &[Rgb], opts: &FormF
 /// when given, counts receivers done (stage "exact").
 pub fn solve_receivers(
     mesh: &Mesh,
-    dipole: &Dipole,
+    profile: &Profile,
     face_irradiance: &[Rgb],
     opts: &FormFactorOptions,
     receivers: &[usize],
     progress: Option<&Progress>,
 ) -> Vec<Rgb> {
-    solve_receivers_with_gain(mesh, dipole, face_irradiance, opts, receivers, progress, None, None)
+    solve_receivers_with_gain(mesh, profile, face_irradiance, opts, receivers, progress, None, None)
 }
 
 /// [`solve_receivers`] with the finite-body gain per face (`gain`, one per face of `mesh`;
@@ -58,7 +58,7 @@ pub fn solve_receivers(
 #[allow(clippy::too_many_arguments)] // the solve's inputs, each one per face or per call
 pub fn solve_receivers_with_gain(
     mesh: &Mesh,
-    dipole: &Dipole,
+    profile: &Profile,
     face_irradiance: &[Rgb],
     opts: &FormFactorOptions,
     receivers: &[usize],
@@ -80,7 +80,7 @@ pub fn solve_receivers_with_gain(
             (c, t.iter().map(|p| p.distance(c)).fold(0.0, f64::max))
         })
         .collect();
-    let bound = dipole.bounds_energy();
+    let bound = profile.bounds_energy();
     receivers
         .par_iter()
         .map(|&o| {
@@ -94,10 +94,10 @@ pub fn solve_receivers_with_gain(
                     continue;
                 }
                 let (c, r) = spheres[k];
-                if dipole.out_of_reach(x_o, n_o, c, r) {
+                if profile.out_of_reach(x_o, n_o, c, r) {
                     continue;
                 }
-                let f = form_factor(tri, x_o, n_o, dipole, opts);
+                let f = form_factor(tri, x_o, n_o, profile, opts);
                 for c in 0..3 {
                     b[c] += e[c] as f64 * f[c];
                     u[c] += f[c];
@@ -129,7 +129,7 @@ mod tests {
     #[test]
     fn receivers_match_the_full_solve_and_count_progress() {
         let mesh = icosphere(2);
-        let d = Dipole::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
+        let d = Profile::for_model_scale(&Material::by_name("marble").unwrap(), mesh.extent() as f64, 0.05);
         let e: Vec<Rgb> = (0..mesh.triangles.len()).map(|f| Rgb::splat((f % 7) as f32 * 0.1)).collect();
         let opts = FormFactorOptions::default();
         let all = solve(&mesh, &d, &e, &opts);

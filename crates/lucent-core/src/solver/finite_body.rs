@@ -37,7 +37,7 @@
 //! (`validation/README.md`, "Reach: the hue a small part cuts").
 //!
 //! On a part shaped like a slab it is not: the profile also gathers the far side's share, `X(t)`, the
-//! profile integrated over a plane the thickness `t` away ([`Dipole::plane_reflectance`]), and
+//! profile integrated over a plane the thickness `t` away ([`Profile::plane_reflectance`]), and
 //! the gain would multiply that too (the skim-milk bunny's ears 20% too bright, the ketchup
 //! bunny's 54% block). So the gain is divided by `1 + s X(t) / R_d` (channel sums), where the
 //! *slabness* `s` says how far the part is a slab rather than a sphere: four rays tilted 45°
@@ -47,7 +47,7 @@
 
 use crate::Rgb;
 use crate::bssrdf::walk;
-use crate::bssrdf::{Dipole, boundary_a};
+use crate::bssrdf::{Profile, boundary_a};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use crate::mesh::deform::TracedPose;
@@ -88,22 +88,24 @@ impl FiniteBody {
     /// The table for the material and scale of `dipole`: 10-150 ms on two cores for a new
     /// albedo and index (the random walks; most for albedos near 1 at `eta > 1`, whose paths
     /// are long), microseconds for one seen before.
-    pub fn new(dipole: &Dipole) -> Self {
-        let tables: Vec<Arc<OpticalGain>> =
-            (0..3).into_par_iter().map(|c| OpticalGain::cached(dipole.alpha_prime[c], dipole.eta)).collect();
+    pub fn new(profile: &Profile) -> Self {
+        let tables: Vec<Arc<OpticalGain>> = (0..3)
+            .into_par_iter()
+            .map(|c| OpticalGain::cached(profile.alpha_prime[c], profile.eta))
+            .collect();
         // Optical radii to millimetres: divide by σ_t in mm^-1.
         let mm = |c: usize| {
-            let sigma_t_mm = dipole.sigma_t[c] / dipole.mm_per_unit;
+            let sigma_t_mm = profile.sigma_t[c] / profile.mm_per_unit;
             tables[c].radius.iter().map(|r| r / sigma_t_mm.max(1e-300)).collect::<Vec<f64>>()
         };
-        let (slab_t_mm, slab_reach) = slab_table(dipole);
+        let (slab_t_mm, slab_reach) = slab_table(profile);
         FiniteBody {
             radius_mm: [mm(0), mm(1), mm(2)],
             gain: std::array::from_fn(|c| tables[c].gain.clone()),
-            mm_per_unit: dipole.mm_per_unit,
+            mm_per_unit: profile.mm_per_unit,
             slab_t_mm,
             slab_reach,
-            rd: dipole.total_diffuse_reflectance(),
+            rd: profile.total_diffuse_reflectance(),
         }
     }
 
@@ -398,14 +400,14 @@ impl OpticalGain {
 /// The through-slab table of [`FiniteBody`]: thicknesses from a hundredth of the shortest
 /// mean free path to where the longest-reaching channel's share has fallen below `e^{-30}`,
 /// and each channel's share at each.
-fn slab_table(dipole: &Dipole) -> (Vec<f64>, [Vec<f64>; 3]) {
-    let mm = dipole.mm_per_unit;
-    let total = dipole.total_diffuse_reflectance();
-    let lo = 0.01 * mm / dipole.sigma_t.iter().copied().fold(0.0, f64::max).max(1e-12);
-    let hi = (30.0 * mm / dipole.sigma_tr.iter().copied().fold(f64::MAX, f64::min).max(1e-12)).max(2.0 * lo);
+fn slab_table(profile: &Profile) -> (Vec<f64>, [Vec<f64>; 3]) {
+    let mm = profile.mm_per_unit;
+    let total = profile.total_diffuse_reflectance();
+    let lo = 0.01 * mm / profile.sigma_t.iter().copied().fold(0.0, f64::max).max(1e-12);
+    let hi = (30.0 * mm / profile.sigma_tr.iter().copied().fold(f64::MAX, f64::min).max(1e-12)).max(2.0 * lo);
     let ts: Vec<f64> =
         (0..SLAB_STEPS).map(|k| lo * (hi / lo).powf(k as f64 / (SLAB_STEPS - 1) as f64)).collect();
-    let x: Vec<[f64; 3]> = ts.iter().map(|&t_mm| dipole.plane_reflectance(t_mm / mm)).collect();
+    let x: Vec<[f64; 3]> = ts.iter().map(|&t_mm| profile.plane_reflectance(t_mm / mm)).collect();
     let reach = std::array::from_fn(|c| {
         x.iter().map(|x| if total[c] > 0.0 { (x[c] / total[c]).clamp(0.0, 1.0) } else { 0.0 }).collect()
     });
@@ -462,10 +464,10 @@ mod tests {
     use super::*;
     use crate::bssrdf::{Material, ProfileKind};
 
-    fn marble(mm_per_unit: f64, eta: f64) -> Dipole {
+    fn marble(mm_per_unit: f64, eta: f64) -> Profile {
         let mut m = Material::by_name("marble").unwrap();
         m.eta = eta;
-        Dipole::with_profile(&m, mm_per_unit, ProfileKind::Pbd, false)
+        Profile::of_kind(&m, mm_per_unit, ProfileKind::Pbd, false)
     }
 
     #[test]
@@ -527,17 +529,17 @@ mod tests {
     fn the_reach_factor_gives_a_small_sphere_the_half_space_hue() {
         let mesh = crate::mesh::generate::icosphere(3);
         let milk = Material::by_name("skimmilk").unwrap();
-        let mut dipole = Dipole::with_profile(&milk, 10.0, ProfileKind::Pbd, false);
-        dipole.energy_bound = false;
+        let mut profile = Profile::of_kind(&milk, 10.0, ProfileKind::Pbd, false);
+        profile.energy_bound = false;
         let oracle = crate::solver::Oracle::for_profile(ProfileKind::Pbd);
         let h = crate::hierarchy::face_cluster::build(&mesh);
         let ones = vec![Rgb::ONE; mesh.triangles.len()];
-        let u = crate::solver::HierarchicalSolver::new(mesh.clone(), h, dipole.clone(), oracle)
+        let u = crate::solver::HierarchicalSolver::new(mesh.clone(), h, profile.clone(), oracle)
             .solve_on_the_fly(&ones)
             .face_b;
-        let fb = FiniteBody::new(&dipole);
+        let fb = FiniteBody::new(&profile);
         let gains = fb.face_gains(&mesh, &Bvh::build(&mesh), 1e-4);
-        let rd = dipole.total_diffuse_reflectance();
+        let rd = profile.total_diffuse_reflectance();
         let hue = |b: Rgb| [b.y as f64 / b.x as f64, b.z as f64 / b.x as f64];
         let want = [rd[1] / rd[0], rd[2] / rd[0]];
         let (mut cut, mut kept) = (0.0f64, 0.0f64);
@@ -633,7 +635,7 @@ mod tests {
         // Ketchup 2 mm thick as a slab (which cuts nothing off the profile): red returns
         // nearly all the light and sets the one factor.
         let ketchup = Material::by_name("ketchup").unwrap();
-        let d = Dipole::with_profile(&ketchup, 1.0, ProfileKind::Pbd, false);
+        let d = Profile::of_kind(&ketchup, 1.0, ProfileKind::Pbd, false);
         let fb = FiniteBody::new(&d);
         let (table, rd) = (fb.gain(1.0), d.total_diffuse_reflectance());
         assert!(rd[0] > 5.0 * rd[1] && rd[0] > 5.0 * rd[2], "{rd:?}");

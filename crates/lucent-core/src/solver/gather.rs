@@ -56,7 +56,7 @@ impl HierarchicalSolver {
             self.link();
         }
         let mut solution = self.render_stored(face_irradiance);
-        if self.dipole.bounds_energy() {
+        if self.profile.bounds_energy() {
             let t0 = Instant::now();
             if self.bound.is_none() {
                 let ones = vec![Rgb::ONE; self.hierarchy.leaf_count()];
@@ -136,7 +136,7 @@ impl HierarchicalSolver {
         self.otf_rec(&mut ctx, 0, Cands::ROOT, [Linear::default(); 2], &e_node, &mut leaf_b);
         self.tick_progress(None, 0);
         let t2 = Instant::now();
-        let bound = self.dipole.bounds_energy();
+        let bound = self.profile.bounds_energy();
         let mut face_b = vec![Rgb::ZERO; h.leaf_count()];
         for (pos, &f) in h.leaf_faces.iter().enumerate() {
             let [b, u] = leaf_b[pos];

@@ -25,7 +25,7 @@ use super::oracle::Oracle;
 use super::progress::Progress;
 use super::refine::Reuse;
 use crate::Rgb;
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use crate::formfactor::FormFactorOptions;
 use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
@@ -82,7 +82,7 @@ pub struct HierarchicalSolver {
     /// The cluster hierarchy over `mesh`.
     pub hierarchy: Hierarchy,
     /// The material at the model's scale.
-    pub dipole: Dipole,
+    pub profile: Profile,
     /// The refinement oracle.
     pub oracle: Oracle,
     /// Options of the semi-analytic form factor.
@@ -132,15 +132,15 @@ impl HierarchicalSolver {
     /// A solver for `mesh` (whose topology `hierarchy` was built on) with `dipole` and
     /// `oracle`, using the default form factor options. The hierarchy is refitted to `mesh`'s
     /// positions. No links are stored yet.
-    pub fn new(mesh: Mesh, mut hierarchy: Hierarchy, dipole: Dipole, oracle: Oracle) -> Self {
+    pub fn new(mesh: Mesh, mut hierarchy: Hierarchy, profile: Profile, oracle: Oracle) -> Self {
         assert_eq!(hierarchy.leaf_count(), mesh.triangles.len());
         hierarchy.refit(&mesh);
-        let locality = Locality::of(&dipole);
+        let locality = Locality::of(&profile);
         let local = locality.local_clusters(&hierarchy, &mesh);
         HierarchicalSolver {
             mesh,
             hierarchy,
-            dipole,
+            profile,
             oracle,
             ff_opts: FormFactorOptions::default(),
             near_point_sampling: false,
@@ -165,7 +165,7 @@ impl HierarchicalSolver {
     pub(super) fn linear_receivers(&self) -> bool {
         self.oracle.linear_receivers
             && self.oracle.mode == super::oracle::OracleMode::Transport
-            && !self.dipole.profile.uses_normals()
+            && !self.profile.kind.uses_normals()
     }
 
     /// Whether linear receivers also carry their links' curvature
@@ -308,10 +308,10 @@ impl HierarchicalSolver {
     /// Changes the material: every stored link's coefficient becomes stale and is recomputed by
     /// the next [`HierarchicalSolver::update_incremental`] (the oracle is geometric, so the
     /// links themselves stay).
-    pub fn set_dipole(&mut self, dipole: Dipole) {
-        self.locality = Locality::of(&dipole);
+    pub fn set_profile(&mut self, profile: Profile) {
+        self.locality = Locality::of(&profile);
         self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
-        self.dipole = dipole;
+        self.profile = profile;
         self.spare = None;
         self.bound = None;
         if let Some(l) = self.links.as_mut() {

@@ -535,7 +535,7 @@ impl ChunkPool {
 
 #[cfg(test)]
 mod tests {
-    use crate::bssrdf::{Dipole, Material};
+    use crate::bssrdf::{Material, Profile};
     use crate::hierarchy::face_cluster;
     use crate::irradiance::{Light, face_irradiance};
     use crate::mesh::deform::{Deformer, bump, twist};
@@ -553,7 +553,7 @@ mod tests {
         let h = face_cluster::build(&mesh);
         let ext = mesh.extent();
         let (lo, hi) = mesh.bounds();
-        let d = Dipole::for_model_scale(&Material::by_name("skimmilk").unwrap(), ext as f64, 0.05);
+        let d = Profile::for_model_scale(&Material::by_name("skimmilk").unwrap(), ext as f64, 0.05);
         let light =
             [Light::Point { position: hi + Vec3::splat(ext), intensity: Vec3::splat(4.0 * ext * ext) }];
         let mut inc = HierarchicalSolver::new(mesh.clone(), h.clone(), d.clone(), Oracle::default());

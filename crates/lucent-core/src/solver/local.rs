@@ -6,7 +6,7 @@
 //! every face's neighbours, and emitters out of reach of any receiver are dropped instead of
 //! linked, so the cost falls with locality.
 
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
 use crate::mesh::bvh::query::closest_on_triangle;
@@ -30,7 +30,7 @@ pub struct Locality {
 impl Locality {
     /// The reach of `d`'s profile (see [`Locality::reach`]), from `∫ 2π r² R(r) d ln r` on a
     /// log grid spanning every length of the profile.
-    pub fn of(d: &Dipole) -> Self {
+    pub fn of(d: &Profile) -> Self {
         let mut lo = f64::INFINITY;
         let mut hi = 0.0f64;
         for c in 0..3 {

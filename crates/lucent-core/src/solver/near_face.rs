@@ -18,8 +18,8 @@
 //! them, so the rule serves only the faces too close to `x_o` to be cut into smooth pieces
 //! for the cubature: its own and those beside it.
 
-use crate::bssrdf::Dipole;
-use crate::bssrdf::profile::{ProfileTables, TABLE_SIZE};
+use crate::bssrdf::Profile;
+use crate::bssrdf::tables::{ProfileTables, TABLE_SIZE};
 use crate::simd::Isa;
 use glam::Vec3;
 
@@ -98,7 +98,7 @@ pub(crate) struct CumulativeTables {
 impl CumulativeTables {
     /// The tables of `d`, a profile of tables alone (`None` otherwise: the analytic dipole's
     /// poles are not tabulated).
-    pub fn new(d: &Dipole) -> Option<Self> {
+    pub fn new(d: &Profile) -> Option<Self> {
         let tables: &ProfileTables = d.tables.as_ref().filter(|_| !d.has_analytic())?;
         let mut p = Box::new([[0.0f32; TABLE_SIZE + 1]; 3]);
         for (c, t) in tables.channels.iter().enumerate() {
@@ -295,7 +295,7 @@ mod avx512 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bssrdf::{Dipole, Material, ProfileKind};
+    use crate::bssrdf::{Material, Profile, ProfileKind};
     use crate::formfactor::{FormFactorOptions, form_factor};
     use glam::DVec3;
 
@@ -339,8 +339,7 @@ mod tests {
         for name in ["marble", "skimmilk", "ketchup"] {
             for scale in [0.01, 0.1] {
                 let m = Material::by_name(name).unwrap();
-                let dip =
-                    Dipole::profile_for_model_scale(&m, mesh.extent() as f64, scale, ProfileKind::Pbd, true);
+                let dip = Profile::at_model_scale(&m, mesh.extent() as f64, scale, ProfileKind::Pbd, true);
                 let table = CumulativeTables::new(&dip).unwrap();
                 let (mut faces, mut sums, mut own, mut skipped) = (Vec::new(), Vec::new(), 0, 0);
                 for (x_o, tris) in &hoods {
@@ -383,7 +382,7 @@ mod tests {
     #[test]
     fn slivers_and_far_faces_are_declined_and_paths_agree() {
         let m = Material::by_name("marble").unwrap();
-        let dip = Dipole::profile_for_model_scale(&m, 1.0, 0.01, ProfileKind::Pbd, true);
+        let dip = Profile::at_model_scale(&m, 1.0, 0.01, ProfileKind::Pbd, true);
         let table = CumulativeTables::new(&dip).unwrap();
         let free_path = 1.0 / table.sigma_t;
         let tri = [Vec3::ZERO, Vec3::new(free_path, 0.0, 0.0), Vec3::new(0.3, 0.8, 0.0) * free_path];

@@ -6,7 +6,7 @@
 
 use super::census::Cause;
 use super::point_sample::point_samples_from;
-pub use super::point_sample::{DipoleF32, ReceiverSources};
+pub use super::point_sample::{ProfileF32, ReceiverSources};
 use crate::bssrdf::ProfileKind;
 use crate::hierarchy::{ClusterGeom, Hierarchy, Node};
 use glam::Vec3;
@@ -134,10 +134,9 @@ impl Oracle {
     /// the gain it erred by 0.87% at 117-166. Neither has room for `eps_share` or
     /// `irradiance_contrast`.
     pub fn for_profile(kind: ProfileKind) -> Oracle {
-        match kind {
-            ProfileKind::Mertens => Oracle::default(),
-            ProfileKind::Dipole => Oracle { eps1: 0.1, eps2: 0.03, eps_abs: 3e-4, ..Oracle::default() },
-            ProfileKind::Pbd => Oracle { eps1: 0.3, eps2: 0.1, eps_abs: 5e-4, ..Oracle::default() },
+        match kind.oracle_thresholds() {
+            None => Oracle::default(),
+            Some((eps1, eps2, eps_abs)) => Oracle { eps1, eps2, eps_abs, ..Oracle::default() },
         }
     }
 }
@@ -236,7 +235,7 @@ pub(crate) struct ReceiverView {
 }
 
 impl ReceiverView {
-    pub fn new(h: &Hierarchy, d: &DipoleF32, inv_rtot: [f32; 3], r: usize) -> Self {
+    pub fn new(h: &Hierarchy, d: &ProfileF32, inv_rtot: [f32; 3], r: usize) -> Self {
         let g = &h.geom[r];
         let src = ReceiverSources::new(d, g.midpoint, g.normal);
         let mut child_src = [src; 4];
@@ -338,7 +337,7 @@ impl Oracle {
     pub(crate) fn decide(
         &self,
         h: &Hierarchy,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         r: usize,
         e: usize,
@@ -375,7 +374,7 @@ impl Oracle {
 
     /// [`OracleMode::SolidAngle`]: Jensen & Buhler's solid angles as in Mertens §5.2.
     #[inline]
-    fn decide_solid_angle(&self, h: &Hierarchy, d: &DipoleF32, p: &Pair) -> Decision {
+    fn decide_solid_angle(&self, h: &Hierarchy, d: &ProfileF32, p: &Pair) -> Decision {
         let far = p.w <= self.eps2;
         if !p.rn.is_leaf() && (p.receiver_degenerate() || self.solid_angle_opens_receiver(h, d, p)) {
             if p.emitter_first() && !far {
@@ -393,7 +392,7 @@ impl Oracle {
     /// criterion (`eps_normal`) for a curved receiver, then `ε1` on the solid angles from the
     /// children's midpoints.
     #[inline]
-    fn solid_angle_opens_receiver(&self, h: &Hierarchy, d: &DipoleF32, p: &Pair) -> bool {
+    fn solid_angle_opens_receiver(&self, h: &Hierarchy, d: &ProfileF32, p: &Pair) -> bool {
         let (rg, eg) = (p.rg, p.eg);
         if rg.projected_area < rg.area {
             let spread = (2.0 * (1.0 - rg.flatness())).sqrt();
@@ -417,7 +416,7 @@ impl Oracle {
     fn decide_transport(
         &self,
         h: &Hierarchy,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         p: &Pair,
         known_f_mid: Option<[f32; 3]>,
@@ -457,7 +456,7 @@ impl Oracle {
     fn transport_opens_receiver(
         &self,
         h: &Hierarchy,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         p: &Pair,
         f_mid: [f32; 3],
@@ -560,7 +559,7 @@ impl Oracle {
     fn transport_far(
         &self,
         h: &Hierarchy,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         p: &Pair,
         f_mid: [f32; 3],
@@ -591,7 +590,7 @@ impl Oracle {
     #[inline]
     fn far_face(
         &self,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         eg: &ClusterGeom,
         f: [f32; 3],
@@ -622,7 +621,7 @@ impl Oracle {
     fn far_cluster(
         &self,
         h: &Hierarchy,
-        d: &DipoleF32,
+        d: &ProfileF32,
         view: &ReceiverView,
         p: &Pair,
         f: [f32; 3],
@@ -713,7 +712,7 @@ fn midpoint_rule_gain(sigma_tr: f32, dist: f32, r2: f32, max_gain: f32) -> f32 {
 #[allow(clippy::too_many_arguments)]
 fn linear_slope(
     h: &Hierarchy,
-    d: &DipoleF32,
+    d: &ProfileF32,
     rn: &Node,
     rg: &ClusterGeom,
     eg: &ClusterGeom,

@@ -19,7 +19,7 @@
 //! without square roots and divisions ([`super::point_kernel_avx512`]).
 
 use super::point_sample::ReceiverSources;
-use crate::bssrdf::profile::TABLE_SIZE;
+use crate::bssrdf::tables::TABLE_SIZE;
 use crate::fastexp::exp_neg_with;
 use crate::simd::Madd;
 use glam::Vec3;
@@ -42,7 +42,7 @@ fn single_channel(i: usize) -> usize {
 }
 
 /// A profile's per-channel coefficients over `W` lanes (lane `i` of channel `channel(i)`; see
-/// `DipoleF32` for their meaning).
+/// `ProfileF32` for their meaning).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Lanes<const W: usize> {
     pub sigma_tr: [f32; W],
@@ -131,9 +131,9 @@ fn radial<M: Madd, const W: usize>(t: &[f32; TABLE_LEN], l: &Lanes<W>, i: usize,
     if inside { w / r.max(l.r_floor[i]) } else { 0.0 }
 }
 
-/// What a batch needs of the profile (a part of `DipoleF32`).
+/// What a batch needs of the profile (a part of `ProfileF32`).
 #[derive(Clone, Debug)]
-pub(super) struct Profile32 {
+pub(super) struct ProfileLanes {
     /// Lanes of a batch of four points.
     pub batch: Lanes<WIDTH>,
     /// Lanes of a single estimate.
@@ -147,11 +147,11 @@ pub(super) struct Profile32 {
     pub table: Option<Table32>,
 }
 
-impl Profile32 {
+impl ProfileLanes {
     /// Per-channel `[sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor]`, the analytic
     /// flag and the table.
     pub fn new(per_channel: [[f32; 3]; 8], analytic: bool, table: Option<Table32>) -> Self {
-        Profile32 {
+        ProfileLanes {
             batch: Lanes::new(per_channel, batch_channel),
             single: Lanes::new(per_channel, single_channel),
             channel: [
@@ -183,7 +183,7 @@ fn dist2<M: Madd>(a: Vec3, b: Vec3) -> f32 {
 /// `area[i]`.
 #[inline(always)]
 fn lanes<M: Madd, const N: usize, const W: usize>(
-    k: &Profile32,
+    k: &ProfileLanes,
     l: &Lanes<W>,
     s2_r: &[f32; N],
     s2_v: &[f32; N],
@@ -213,7 +213,7 @@ fn lanes<M: Madd, const N: usize, const W: usize>(
 /// A batch's lanes (`N` of 12 or 16, channel-major) from their poles and points.
 #[inline(always)]
 fn batch<M: Madd, const N: usize>(
-    k: &Profile32,
+    k: &ProfileLanes,
     pole_r: impl Fn(usize, usize) -> Vec3,
     pole_v: impl Fn(usize, usize) -> Vec3,
     p: impl Fn(usize) -> Vec3,
@@ -241,7 +241,7 @@ fn batch<M: Madd, const N: usize>(
 /// `A R` from one receiver's poles to four points (areas 0 pad).
 #[inline(always)]
 pub(super) fn to_points<M: Madd, const N: usize>(
-    k: &Profile32,
+    k: &ProfileLanes,
     src: &ReceiverSources,
     p: &[Vec3; 4],
     area: &[f32; 4],
@@ -252,7 +252,7 @@ pub(super) fn to_points<M: Madd, const N: usize>(
 /// `A R` from four receivers' poles to one point.
 #[inline(always)]
 pub(super) fn from_point<M: Madd, const N: usize>(
-    k: &Profile32,
+    k: &ProfileLanes,
     src: &[ReceiverSources; 4],
     p: Vec3,
     area: f32,
@@ -263,7 +263,7 @@ pub(super) fn from_point<M: Madd, const N: usize>(
 /// `A R` from one receiver's poles to one point (`N` of 3 or 4).
 #[inline(always)]
 pub(super) fn to_point<M: Madd, const N: usize>(
-    k: &Profile32,
+    k: &ProfileLanes,
     src: &ReceiverSources,
     p: Vec3,
     area: f32,
@@ -280,13 +280,13 @@ macro_rules! isa_kernels {
     ($name:ident, $features:literal) => {
         #[cfg(target_arch = "x86_64")]
         pub(super) mod $name {
-            use super::{Profile32, ReceiverSources, WIDTH};
+            use super::{ProfileLanes, ReceiverSources, WIDTH};
             use crate::simd::Fused;
             use glam::Vec3;
 
             #[target_feature(enable = $features)]
             pub(in crate::solver) fn to_points(
-                k: &Profile32,
+                k: &ProfileLanes,
                 src: &ReceiverSources,
                 p: &[Vec3; 4],
                 area: &[f32; 4],
@@ -296,7 +296,7 @@ macro_rules! isa_kernels {
 
             #[target_feature(enable = $features)]
             pub(in crate::solver) fn from_point(
-                k: &Profile32,
+                k: &ProfileLanes,
                 src: &[ReceiverSources; 4],
                 p: Vec3,
                 area: f32,
@@ -306,7 +306,7 @@ macro_rules! isa_kernels {
 
             #[target_feature(enable = $features)]
             pub(in crate::solver) fn to_point(
-                k: &Profile32,
+                k: &ProfileLanes,
                 src: &ReceiverSources,
                 p: Vec3,
                 area: f32,

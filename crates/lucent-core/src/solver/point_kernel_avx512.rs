@@ -9,9 +9,9 @@
 //! 8e-6 measured); lanes do not interact, so a single estimate, a batch of four points and a
 //! batch of four receivers agree bit for bit, as the oracle needs.
 
-use super::point_kernel::{Lanes, Profile32, TABLE_LEN, WIDTH};
+use super::point_kernel::{Lanes, ProfileLanes, TABLE_LEN, WIDTH};
 use super::point_sample::ReceiverSources;
-use crate::bssrdf::profile::TABLE_SIZE;
+use crate::bssrdf::tables::TABLE_SIZE;
 use glam::Vec3;
 use std::arch::x86_64::*;
 
@@ -131,7 +131,7 @@ fn radial_at(t: &[f32; TABLE_LEN], l: &Lanes<WIDTH>, x: __m512, inv_r: __m512, u
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 fn lanes(
-    k: &Profile32,
+    k: &ProfileLanes,
     l: &Lanes<WIDTH>,
     s2_r: __m512,
     s2_v: __m512,
@@ -156,7 +156,7 @@ fn lanes(
 /// `area R` over the batch lanes (four points × three channels, lanes 12..16 padding).
 #[inline]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-fn estimate(k: &Profile32, s2_r: __m512, s2_v: __m512, area: __m512) -> __m512 {
+fn estimate(k: &ProfileLanes, s2_r: __m512, s2_v: __m512, area: __m512) -> __m512 {
     lanes(k, &k.batch, s2_r, s2_v, area, 0x0f)
 }
 
@@ -236,7 +236,7 @@ fn unpack(v: __m512) -> [[f32; 3]; 4] {
 /// `A R` from one receiver's poles to four points (areas 0 pad).
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 pub(super) fn to_points(
-    k: &Profile32,
+    k: &ProfileLanes,
     src: &ReceiverSources,
     p: &[Vec3; 4],
     area: &[f32; 4],
@@ -272,7 +272,7 @@ fn poles4(x: [&[Vec3; 3]; 4]) -> Xyz {
 
 /// `A R` from four receivers' poles to one point.
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-pub(super) fn from_point(k: &Profile32, src: &[ReceiverSources; 4], p: Vec3, area: f32) -> [[f32; 3]; 4] {
+pub(super) fn from_point(k: &ProfileLanes, src: &[ReceiverSources; 4], p: Vec3, area: f32) -> [[f32; 3]; 4] {
     let pt = splat(p);
     let s2_r = dist2(&poles4(src.each_ref().map(|s| &s.x_r)), &pt);
     let s2_v = if k.analytic { dist2(&poles4(src.each_ref().map(|s| &s.x_v)), &pt) } else { s2_r };
@@ -281,7 +281,7 @@ pub(super) fn from_point(k: &Profile32, src: &[ReceiverSources; 4], p: Vec3, are
 
 /// `A R` from one receiver's poles to one point (lanes `4 c` of a batch of four equal points).
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
-pub(super) fn to_point(k: &Profile32, src: &ReceiverSources, p: Vec3, area: f32) -> [f32; 3] {
+pub(super) fn to_point(k: &ProfileLanes, src: &ReceiverSources, p: Vec3, area: f32) -> [f32; 3] {
     let pt = splat(p);
     let s2_r = dist2(&poles(&src.x_r), &pt);
     let s2_v = if k.analytic { dist2(&poles(&src.x_v), &pt) } else { s2_r };
@@ -294,7 +294,7 @@ pub(super) fn to_point(k: &Profile32, src: &ReceiverSources, p: Vec3, area: f32)
 /// channels: the kernel's lanes all used, where a batch of four points leaves a quarter idle.
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma,f16c")]
 pub(super) fn weighted_sum(
-    k: &Profile32,
+    k: &ProfileLanes,
     src: &ReceiverSources,
     x: &[f32],
     y: &[f32],

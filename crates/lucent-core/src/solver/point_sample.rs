@@ -6,21 +6,21 @@
 //! receiver and the emitter's children, then between the receiver's children and the emitter:
 //! twelve profile evaluations (four points × three channels) per question. The arithmetic is
 //! `point_kernel`'s, run on the widest instruction set the CPU has ([`Isa::best`]);
-//! every estimate of one [`DipoleF32`] takes the same path, so that the oracle may hand an
+//! every estimate of one [`ProfileF32`] takes the same path, so that the oracle may hand an
 //! estimate from one form on as another's.
 
 use super::near_face::CumulativeTables;
-use super::point_kernel::{self as kernel, Profile32};
-use crate::bssrdf::Dipole;
-use crate::bssrdf::profile::TABLE_SIZE;
+use super::point_kernel::{self as kernel, ProfileLanes};
+use crate::bssrdf::Profile;
+use crate::bssrdf::tables::TABLE_SIZE;
 use crate::formfactor::cubature;
 use crate::simd::{Isa, Separate};
 use glam::{Vec3, Vec3A};
 
-/// The profile's coefficients in `f32` for the hot loops (see [`Dipole`] for their meaning;
+/// The profile's coefficients in `f32` for the hot loops (see [`Profile`] for their meaning;
 /// lengths in mesh units).
 #[derive(Clone, Debug)]
-pub struct DipoleF32 {
+pub struct ProfileF32 {
     /// `sigma_tr` per channel, per mesh unit.
     pub sigma_tr: [f32; 3],
     /// `z_r` per channel, mesh units.
@@ -48,7 +48,7 @@ pub struct DipoleF32 {
     /// took the cubature and fell 13-85% short).
     cut_off: [f32; 3],
     /// The lanes, poles and table of the kernel.
-    kernel: Profile32,
+    kernel: ProfileLanes,
     /// The cumulative tables of a profile of tables alone (photon beam diffusion), for the
     /// faces at the receiver's peak.
     pub(super) cumulative: Option<CumulativeTables>,
@@ -56,14 +56,14 @@ pub struct DipoleF32 {
     isa: Isa,
 }
 
-impl DipoleF32 {
+impl ProfileF32 {
     /// The `f32` copy of `d`.
-    pub fn new(d: &Dipole) -> Self {
+    pub fn new(d: &Profile) -> Self {
         let sigma_tr = d.sigma_tr.map(|v| v as f32);
         let z_r = d.z_r.map(|v| v as f32);
         let z_v = d.z_v.map(|v| v as f32);
         let k = d.alpha_prime.map(|v| (v / (4.0 * std::f64::consts::PI)) as f32);
-        let normal_weight = if d.profile.uses_normals() { 1.0 } else { 0.0 };
+        let normal_weight = if d.kind.uses_normals() { 1.0 } else { 0.0 };
         let off = |z: [f32; 3]| z.map(|z| (1.0 - normal_weight) * z * z);
         let (off_r, off_v) = (off(z_r), off(z_v));
         let (near_off, cut_off) = match &d.tables {
@@ -78,7 +78,7 @@ impl DipoleF32 {
             d.tables.as_ref().map_or([0.0; 3], |t| t.channels.each_ref().map(|c| f(c) as f32))
         };
         let (inv_r_max, r_floor) = (per_table(|c| 1.0 / c.r_max), per_table(|c| c.r_floor));
-        DipoleF32 {
+        ProfileF32 {
             sigma_tr,
             z_r,
             z_v,
@@ -88,7 +88,7 @@ impl DipoleF32 {
             off_v,
             near_off,
             cut_off,
-            kernel: Profile32::new(
+            kernel: ProfileLanes::new(
                 [sigma_tr, z_r, z_v, k, off_r, off_v, inv_r_max, r_floor],
                 d.has_analytic(),
                 table,
@@ -125,7 +125,7 @@ pub struct ReceiverSources {
 impl ReceiverSources {
     /// The sources for receiver point `x_o` with unit normal `n_o`.
     #[inline]
-    pub fn new(d: &DipoleF32, x_o: Vec3, n_o: Vec3) -> Self {
+    pub fn new(d: &ProfileF32, x_o: Vec3, n_o: Vec3) -> Self {
         let n = d.normal_weight * n_o;
         ReceiverSources {
             x_r: std::array::from_fn(|c| x_o - d.z_r[c] * n),
@@ -138,7 +138,7 @@ impl ReceiverSources {
     /// `base` of the receiver point whose normals stray by at most `spread` stay `margin` away
     /// from `p` (the distance form's poles do not move with the normal: callers pass 0).
     #[inline]
-    pub fn clear_of(&self, d: &DipoleF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
+    pub fn clear_of(&self, d: &ProfileF32, p: Vec3, margin: f32, base: f32, spread: f32) -> bool {
         let at = self.at(d, p);
         (0..3).all(|c| {
             let rr = margin + base + spread * d.z_r[c];
@@ -150,7 +150,7 @@ impl ReceiverSources {
     /// The squared distances from `p` to the poles, made once where all poles coincide (the
     /// distance form: the receiver point) rather than six times.
     #[inline]
-    fn at(&self, d: &DipoleF32, p: Vec3) -> PoleDistances {
+    fn at(&self, d: &ProfileF32, p: Vec3) -> PoleDistances {
         if d.normal_weight == 0.0 {
             PoleDistances::One((self.x_r[0] - p).length_squared())
         } else {
@@ -164,18 +164,18 @@ impl ReceiverSources {
     /// Distance from `p` to the nearer of the two poles, per channel (with the distance
     /// form's added `z²`): where `R` varies fastest.
     #[inline]
-    pub fn nearest(&self, d: &DipoleF32, p: Vec3) -> [f32; 3] {
+    pub fn nearest(&self, d: &ProfileF32, p: Vec3) -> [f32; 3] {
         let at = self.at(d, p);
         std::array::from_fn(|c| (at.nearer(c) + d.near_off[c]).sqrt())
     }
 
     /// One-point form factor `A R(p)` for an emitter of area `area` at `p`.
     #[inline]
-    pub fn point_sample(&self, d: &DipoleF32, p: Vec3, area: f32) -> [f32; 3] {
+    pub fn point_sample(&self, d: &ProfileF32, p: Vec3, area: f32) -> [f32; 3] {
         let k = &d.kernel;
         match d.isa {
             // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
-            // `DipoleF32::with_isa` check `is_available`).
+            // `ProfileF32::with_isa` check `is_available`).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { kernel::avx512::to_point(k, self, p, area) },
             // SAFETY: as above.
@@ -187,11 +187,11 @@ impl ReceiverSources {
 
     /// [`ReceiverSources::point_sample`] for four emitters at once (pad with area 0).
     #[inline]
-    pub fn point_samples(&self, d: &DipoleF32, p: &[Vec3; 4], area: &[f32; 4]) -> [[f32; 3]; 4] {
+    pub fn point_samples(&self, d: &ProfileF32, p: &[Vec3; 4], area: &[f32; 4]) -> [[f32; 3]; 4] {
         let k = &d.kernel;
         match d.isa {
             // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
-            // `DipoleF32::with_isa` check `is_available`).
+            // `ProfileF32::with_isa` check `is_available`).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { kernel::avx512::to_points(k, self, p, area) },
             // SAFETY: as above.
@@ -207,12 +207,12 @@ impl ReceiverSources {
     /// ([`crate::formfactor::cubature`]): seven dipole points in two batches. The form
     /// factor's own short cut in `f32`, for where `ReceiverSources::smooth_within` holds.
     #[inline]
-    pub fn triangle_cubature(&self, d: &DipoleF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
+    pub fn triangle_cubature(&self, d: &ProfileF32, tri: &[Vec3; 3], area: f32) -> [f32; 3] {
         self.cubature(d, &[(*tri, area)])
     }
 
     /// The sum of [`ReceiverSources::triangle_cubature`] over `pieces` (triangle, area).
-    pub fn cubature(&self, d: &DipoleF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
+    pub fn cubature(&self, d: &ProfileF32, pieces: &[([Vec3; 3], f32)]) -> [f32; 3] {
         let (mut buf, mut sum) = (PointBuf::new(), [0.0f32; 3]);
         for chunk in pieces.chunks((POINT_BUF - 1) / 7) {
             chunk.iter().for_each(|&(tri, area)| buf.push_radon7(tri, area));
@@ -225,7 +225,7 @@ impl ReceiverSources {
     /// `Σ_i w_i R(p_i)` per channel over the points in `buf`, which it empties. On AVX-512
     /// the points go sixteen to a register (`point_kernel_avx512::weighted_sum`), elsewhere
     /// four to a batch.
-    pub(crate) fn weighted_sum(&self, d: &DipoleF32, buf: &mut PointBuf) -> [f32; 3] {
+    pub(crate) fn weighted_sum(&self, d: &ProfileF32, buf: &mut PointBuf) -> [f32; 3] {
         let used = std::mem::take(&mut buf.used);
         #[cfg(target_arch = "x86_64")]
         if d.isa == Isa::Avx512 {
@@ -263,7 +263,7 @@ impl ReceiverSources {
     /// radius and `max` of `bound`: one squared distance against the bound where all poles
     /// coincide, else one per channel (the cubature's pieces ask it dozens of times a link).
     #[inline]
-    pub(crate) fn smooth_within(&self, d: &DipoleF32, mid: Vec3, bound: &SmoothBound) -> bool {
+    pub(crate) fn smooth_within(&self, d: &ProfileF32, mid: Vec3, bound: &SmoothBound) -> bool {
         match self.at(d, mid) {
             PoleDistances::One(s2) => s2 >= bound.s2_max,
             at => (0..3).all(|c| at.nearer(c) >= bound.s2[c]),
@@ -287,7 +287,7 @@ pub(crate) struct SmoothBound {
 impl SmoothBound {
     /// The bound for pieces of radius `radius` and largest `k ρ` `max`.
     #[inline]
-    pub fn new(d: &DipoleF32, radius: f32, max: f32) -> Self {
+    pub fn new(d: &ProfileF32, radius: f32, max: f32) -> Self {
         // Three channels in one vector division: a face's cutting makes several of these.
         let room = Vec3A::splat(max) - Vec3A::from_array(d.sigma_tr) * radius;
         let s2 = Vec3A::splat(9.0 * radius * radius) / (room * room) - Vec3A::from_array(d.cut_off);
@@ -403,11 +403,11 @@ impl PointBuf {
 /// One emitter of area `area` at `p` seen from four receivers' sources:
 /// `[src[j].point_sample(d, p, area); 4]`, batched.
 #[inline]
-pub fn point_samples_from(src: &[ReceiverSources; 4], d: &DipoleF32, p: Vec3, area: f32) -> [[f32; 3]; 4] {
+pub fn point_samples_from(src: &[ReceiverSources; 4], d: &ProfileF32, p: Vec3, area: f32) -> [[f32; 3]; 4] {
     let k = &d.kernel;
     match d.isa {
         // SAFETY: `d.isa` is only ever an instruction set this CPU has (`Isa::best`,
-        // `DipoleF32::with_isa` check `is_available`).
+        // `ProfileF32::with_isa` check `is_available`).
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512 => unsafe { kernel::avx512::from_point(k, src, p, area) },
         // SAFETY: as above.
@@ -425,8 +425,8 @@ mod tests {
     #[test]
     fn batches_match_the_f64_dipole() {
         let m = Material::by_name("skimmilk").unwrap();
-        let dip = Dipole::for_model_scale(&m, 1.0, 0.05);
-        let d = DipoleF32::new(&dip);
+        let dip = Profile::for_model_scale(&m, 1.0, 0.05);
+        let d = ProfileF32::new(&dip);
         let x_o = Vec3::new(0.1, -0.2, 0.05);
         let n_o = Vec3::new(0.3, 0.4, 0.866).normalize();
         let src = ReceiverSources::new(&d, x_o, n_o);
@@ -474,10 +474,10 @@ mod tests {
         for name in ["marble", "skimmilk", "ketchup"] {
             let m = Material::by_name(name).unwrap();
             for kind in ProfileKind::ALL {
-                let dip = Dipole::with_profile(&m, 50.0, kind, kind != ProfileKind::Mertens);
-                let scalar = DipoleF32::new(&dip).with_isa(Isa::Scalar);
+                let dip = Profile::of_kind(&m, 50.0, kind, kind.has_single_scattering());
+                let scalar = ProfileF32::new(&dip).with_isa(Isa::Scalar);
                 for isa in Isa::available().into_iter().skip(1) {
-                    let d = DipoleF32::new(&dip).with_isa(isa);
+                    let d = ProfileF32::new(&dip).with_isa(isa);
                     let mut worst = 0.0f32;
                     for &(x_o, n_o, p) in &trials {
                         let src = ReceiverSources::new(&d, x_o, n_o);
@@ -511,8 +511,8 @@ mod tests {
     #[test]
     fn triangle_cubature_matches_the_f64_rule() {
         let m = Material::by_name("marble").unwrap();
-        let dip = Dipole::for_model_scale(&m, 1.0, 0.01);
-        let d = DipoleF32::new(&dip);
+        let dip = Profile::for_model_scale(&m, 1.0, 0.01);
+        let d = ProfileF32::new(&dip);
         let (x_o, n_o) = (Vec3::new(0.01, 0.02, 0.0), Vec3::new(0.1, -0.2, 1.0).normalize());
         let src = ReceiverSources::new(&d, x_o, n_o);
         let tri = [Vec3::new(0.0, 0.0, 0.001), Vec3::new(0.02, 0.005, 0.0), Vec3::new(0.004, 0.03, -0.002)];
@@ -548,15 +548,15 @@ mod tests {
                 ([o, o + Vec3::new(0.003, 0.0, 0.0), o + Vec3::new(0.0, 0.003, 0.0005)], 4.5e-6)
             })
             .collect();
-        for profile in [ProfileKind::Pbd, ProfileKind::Dipole, ProfileKind::Mertens] {
-            let dip = Dipole::profile_for_model_scale(&m, 1.0, 0.01, profile, true);
-            let portable = DipoleF32::new(&dip).with_isa(Isa::Scalar);
+        for profile in ProfileKind::ALL {
+            let dip = Profile::at_model_scale(&m, 1.0, 0.01, profile, true);
+            let portable = ProfileF32::new(&dip).with_isa(Isa::Scalar);
             let src = ReceiverSources::new(&portable, x_o, n_o);
             // 37 pieces: two full chunks of sixteen on AVX-512, then five.
             for n in [1, 2, 5, 13, 37] {
                 let want = src.cubature(&portable, &pieces[..n]);
                 for isa in Isa::ALL.into_iter().filter(|i| i.is_available()) {
-                    let got = src.cubature(&DipoleF32::new(&dip).with_isa(isa), &pieces[..n]);
+                    let got = src.cubature(&ProfileF32::new(&dip).with_isa(isa), &pieces[..n]);
                     for c in 0..3 {
                         assert!(want[c] > 0.0, "{profile:?}: {want:?}");
                         let rel = (got[c] / want[c] - 1.0).abs();

@@ -35,7 +35,7 @@ pub(super) struct Ctx<'a> {
 
 impl<'a> Ctx<'a> {
     pub(super) fn new(s: &'a HierarchicalSolver) -> Self {
-        let mut ev = Evaluator::new(&s.hierarchy, &s.dipole, s.ff_opts);
+        let mut ev = Evaluator::new(&s.hierarchy, &s.profile, s.ff_opts);
         ev.near_point_sampling = s.near_point_sampling;
         Ctx {
             ev,
@@ -43,7 +43,7 @@ impl<'a> Ctx<'a> {
             // One scale for all channels (the largest `R_d_total`): the oracle bounds absolute
             // errors relative to the brightest channel, not each dim channel on its own.
             inv_rtot: {
-                let r = s.dipole.total_diffuse_reflectance();
+                let r = s.profile.total_diffuse_reflectance();
                 [(1.0 / r[0].max(r[1]).max(r[2]).max(1e-12)) as f32; 3]
             },
             point_samples: 0,

@@ -38,7 +38,7 @@
 //! transmitted light (about the thickness).
 
 use crate::Rgb;
-use crate::bssrdf::Dipole;
+use crate::bssrdf::Profile;
 use crate::bssrdf::slab::SlabTable;
 use crate::mesh::Mesh;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
@@ -112,18 +112,18 @@ pub struct CrossBody {
 }
 
 impl CrossBody {
-    /// The terms of every face of `mesh` for `dipole`, from the body's rays (`offset` inside
+    /// The terms of every face of `mesh` for `profile`, from the body's rays (`offset` inside
     /// the faces) and each face's finite-body gain `gains` (what multiplied the gathered far
     /// side's share).
     pub fn new(
-        dipole: &Dipole,
+        profile: &Profile,
         fb: &FiniteBody,
         mesh: &Mesh,
         rays: &ThicknessRays,
         offset: f32,
         gains: &[Rgb],
     ) -> Self {
-        let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(dipole.alpha_prime[c], dipole.eta));
+        let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
         let rows: Vec<(u32, Rgb, Rgb, f32)> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
@@ -138,7 +138,7 @@ impl CrossBody {
                 let carried = fb.slab_carried(t);
                 let g = gains[f].to_array();
                 let exact: [f64; 3] =
-                    std::array::from_fn(|c| tables[c].at(dipole.sigma_t[c] * t as f64).transmitted);
+                    std::array::from_fn(|c| tables[c].at(profile.sigma_t[c] * t as f64).transmitted);
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
                 let sent =
                     std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
@@ -150,7 +150,7 @@ impl CrossBody {
             coef: rows.iter().map(|r| r.1).collect(),
             transmitted: rows.iter().map(|r| r.2).collect(),
             thickness: rows.iter().map(|r| r.3).collect(),
-            sigma_t: dipole.sigma_t,
+            sigma_t: profile.sigma_t,
             tables,
         }
     }

@@ -7,8 +7,8 @@
 
 use super::HtsmError;
 use super::pipeline::Vertex;
-use crate::camera::bounding_sphere;
 use glam::Vec3;
+use lucent_core::camera::bounding_sphere;
 use lucent_core::mesh::Mesh;
 use wgpu::util::DeviceExt;
 

@@ -65,9 +65,9 @@ pub mod pipeline;
 pub mod reference;
 pub mod renderer;
 
-use crate::camera::CameraView;
 use crate::tonemap::ToneMap;
 use glam::Vec3;
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::DensityVolume;
@@ -254,7 +254,7 @@ pub fn phase_table(g: f32) -> Vec<f32> {
 /// Where the camera is, what lights the object, and the image size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HtsmView {
-    /// The camera (e.g. [`crate::camera::OrbitCamera::frame`]), mesh units.
+    /// The camera (e.g. [`lucent_core::camera::OrbitCamera::frame`]), mesh units.
     pub camera: CameraView,
     /// Point, spot and distant lights (positions in mesh units, outside the object's bounding
     /// sphere), each rendered through its own reference images and added up. May be empty

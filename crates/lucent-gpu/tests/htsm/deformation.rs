@@ -2,7 +2,7 @@
 //! deformed length.
 
 use super::*;
-use lucent_gpu::camera::CameraView;
+use lucent_core::camera::CameraView;
 
 fn hdr_of(
     ctx: &GpuContext,

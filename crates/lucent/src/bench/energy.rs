@@ -4,7 +4,7 @@
 
 use crate::cli::BenchArgs;
 use anyhow::{Context, Result};
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Material, Profile};
 use lucent_core::solver::{Oracle, energy};
 
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -13,15 +13,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let material = Material::by_name(args.material.as_deref().unwrap_or("marble"))?;
     let scale = args.scale.unwrap_or(0.1);
     let kind = args.profile.unwrap_or_default();
-    let dipole = Dipole::profile_for_model_scale(
-        &material,
-        mesh.extent() as f64,
-        scale,
-        kind,
-        kind.single_scattering_by_default(),
-    );
+    let profile =
+        Profile::at_model_scale(&material, mesh.extent() as f64, scale, kind, kind.has_single_scattering());
     let t = std::time::Instant::now();
-    let r = energy::uniform_report(&mesh, &dipole, args.oracle().unwrap_or(Oracle::for_profile(kind)));
+    let r = energy::uniform_report(&mesh, &profile, args.oracle().unwrap_or(Oracle::for_profile(kind)));
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if args.json {
         println!(

@@ -8,7 +8,7 @@
 
 use anyhow::Context;
 use glam::DVec3;
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Material, Profile};
 use lucent_core::formfactor::montecarlo::{adaptive_cubature, monte_carlo, sample_estimate};
 use lucent_core::formfactor::{FormFactorOptions, form_factor, form_factor_counted, point_sample};
 use rayon::prelude::*;
@@ -113,7 +113,7 @@ fn median_ns(tris: &[[DVec3; 3]], rounds: usize, mut f: impl FnMut(&[DVec3; 3]) 
 
 pub fn run(json: bool) -> anyhow::Result<()> {
     let material = Material::by_name("skimmilk").context("bench formfactor: material")?;
-    let dipole = Dipole::new(&material, 1.0);
+    let profile = Profile::new(&material, 1.0);
     let opts = FormFactorOptions::default();
     let (x_o, n_o) = (DVec3::ZERO, DVec3::Z);
     let distances: Vec<f64> = (0..=10).map(f64::from).collect();
@@ -122,13 +122,13 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         .par_iter()
         .map(|&d| {
             let tri = triangle(d);
-            let (f, segments) = form_factor_counted(&tri, x_o, n_o, &dipole, &opts);
-            let mc = monte_carlo(&tri, x_o, n_o, &dipole, MC_SAMPLES, 1000 + d as u64);
-            let cubature = adaptive_cubature(&tri, x_o, n_o, &dipole, 1e-10);
-            let ps = point_sample(&tri, x_o, n_o, &dipole);
+            let (f, segments) = form_factor_counted(&tri, x_o, n_o, &profile, &opts);
+            let mc = monte_carlo(&tri, x_o, n_o, &profile, MC_SAMPLES, 1000 + d as u64);
+            let cubature = adaptive_cubature(&tri, x_o, n_o, &profile, 1e-10);
+            let ps = point_sample(&tri, x_o, n_o, &profile);
             let mut sq = [0.0; 3];
             for seed in 0..SEEDS_12 {
-                let e = rel(sample_estimate(&tri, x_o, n_o, &dipole, 12, seed), cubature);
+                let e = rel(sample_estimate(&tri, x_o, n_o, &profile, 12, seed), cubature);
                 for c in 0..3 {
                     sq[c] += e[c] * e[c];
                 }
@@ -150,8 +150,8 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         .collect();
 
     let tris: Vec<[DVec3; 3]> = distances.iter().map(|&d| triangle(d)).collect();
-    let ns_ff = median_ns(&tris, 21, |t| form_factor(t, x_o, n_o, &dipole, &opts));
-    let ns_ps = median_ns(&tris, 21, |t| point_sample(t, x_o, n_o, &dipole));
+    let ns_ff = median_ns(&tris, 21, |t| form_factor(t, x_o, n_o, &profile, &opts));
+    let ns_ps = median_ns(&tris, 21, |t| point_sample(t, x_o, n_o, &profile));
 
     let report = Report {
         bench: "formfactor",
@@ -178,8 +178,14 @@ pub fn run(json: bool) -> anyhow::Result<()> {
 
     if json {
         println!("{}", serde_json::to_string(&report).context("bench formfactor: JSON")?);
-        return Ok(());
+    } else {
+        print_table(&report);
     }
+    Ok(())
+}
+
+/// The report as a table with a summary, for a reader.
+fn print_table(report: &Report) {
     println!("Form factor, Mertens 2003 fig. 3 set-up ({})", report.setup);
     println!("reference: {}", report.reference);
     println!(
@@ -212,5 +218,4 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         "form_factor: {:.0} ns/call (median, {:.1} segments/call); point_sample: {:.1} ns/call",
         report.ns_per_form_factor, report.mean_segments, report.ns_per_point_sample
     );
-    Ok(())
 }

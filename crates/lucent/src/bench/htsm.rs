@@ -13,8 +13,8 @@ use crate::render::Scene;
 use crate::render::htsm::{build_volume, htsm_params};
 use anyhow::{Context, Result};
 use clap::Parser;
+use lucent_core::camera::bounding_sphere;
 use lucent_gpu::GpuContext;
-use lucent_gpu::camera::bounding_sphere;
 use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView};
 use std::time::{Duration, Instant};
 

@@ -15,7 +15,7 @@
 
 use anyhow::Context;
 use glam::Vec3;
-use lucent_core::bssrdf::{Dipole, Material};
+use lucent_core::bssrdf::{Material, Profile};
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::subdivision::{butterfly, octahedron};
 use lucent_core::irradiance::{Light, face_irradiance};
@@ -147,9 +147,9 @@ fn run_table3(json: bool, oracle: Oracle) -> anyhow::Result<()> {
         }
         let sub = butterfly(&base, levels).context("subdividing the octahedron")?;
         let mesh = sub.mesh;
-        let dipole = Dipole::for_model_scale(&marble, mesh.extent() as f64, 0.025);
-        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
-        let mut solver = HierarchicalSolver::new(mesh.clone(), sub.hierarchy, dipole.clone(), oracle);
+        let profile = Profile::for_model_scale(&marble, mesh.extent() as f64, 0.025);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &profile.entry);
+        let mut solver = HierarchicalSolver::new(mesh.clone(), sub.hierarchy, profile.clone(), oracle);
         let runs = if mesh.triangles.len() > 40_000 { 3 } else { 5 };
         let otf = median_ms(runs, || solver.solve_on_the_fly(&e).stats.total_ms);
         let link_ms = solver.link().total_ms;
@@ -173,7 +173,7 @@ fn run_table3(json: bool, oracle: Oracle) -> anyhow::Result<()> {
             solver.update_incremental(&rest, None);
         }
         let rel = (mesh.triangles.len() <= EXACT_MAX_TRIANGLES).then(|| {
-            let want = exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default());
+            let want = exact::solve(&mesh, &profile, &e, &FormFactorOptions::default());
             let got = solver.solve_render(&e).face_b;
             rel_rmse(&mesh.face_to_vertex(&want), &mesh.face_to_vertex(&got))
         });
@@ -217,9 +217,9 @@ fn run_sweep(json: bool) -> anyhow::Result<()> {
     let name = "octahedron-butterfly-4".to_string();
     for (mat, scale) in [("marble", 0.025), ("skimmilk", 0.1)] {
         let material = Material::by_name(mat).context("preset")?;
-        let dipole = Dipole::for_model_scale(&material, mesh.extent() as f64, scale);
-        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
-        let want = mesh.face_to_vertex(&exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default()));
+        let profile = Profile::for_model_scale(&material, mesh.extent() as f64, scale);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &profile.entry);
+        let want = mesh.face_to_vertex(&exact::solve(&mesh, &profile, &e, &FormFactorOptions::default()));
         let mut oracles = Vec::new();
         for (e1, e2) in [(0.005, 0.01), (0.02, 0.05), (0.05, 0.1), (0.1, 0.3)] {
             oracles.push(Oracle {
@@ -241,7 +241,7 @@ fn run_sweep(json: bool) -> anyhow::Result<()> {
         }
         oracles.push(Oracle::default());
         for o in oracles {
-            let solver = HierarchicalSolver::new(mesh.clone(), h.clone(), dipole.clone(), o);
+            let solver = HierarchicalSolver::new(mesh.clone(), h.clone(), profile.clone(), o);
             let mut links = 0;
             let mut b = Vec::new();
             let ms = median_ms(3, || {
@@ -303,11 +303,11 @@ fn run_table5(json: bool) -> anyhow::Result<()> {
     let mesh = sub.mesh;
     let marble = Material::by_name("marble").context("marble preset")?;
     for scale in [0.05, 0.1, 0.2, 0.4, 0.8] {
-        let dipole = Dipole::for_model_scale(&marble, mesh.extent() as f64, scale);
-        let e = face_irradiance(&mesh, &light_for(&mesh), &dipole.entry);
-        let want = mesh.face_to_vertex(&exact::solve(&mesh, &dipole, &e, &FormFactorOptions::default()));
+        let profile = Profile::for_model_scale(&marble, mesh.extent() as f64, scale);
+        let e = face_irradiance(&mesh, &light_for(&mesh), &profile.entry);
+        let want = mesh.face_to_vertex(&exact::solve(&mesh, &profile, &e, &FormFactorOptions::default()));
         let mut solver =
-            HierarchicalSolver::new(mesh.clone(), sub.hierarchy.clone(), dipole, Oracle::default());
+            HierarchicalSolver::new(mesh.clone(), sub.hierarchy.clone(), profile, Oracle::default());
         let mut run = |ps: bool| {
             solver.near_point_sampling = ps;
             let mut b = Vec::new();

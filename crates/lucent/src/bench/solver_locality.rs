@@ -120,7 +120,7 @@ fn measure(
     scale_m: f64,
     faces: &[usize],
 ) -> anyhow::Result<Case> {
-    let dipole = Transport::new(material, scale_m).dipole(mesh.extent());
+    let profile = Transport::new(material, scale_m).profile_at(mesh.extent());
     let (lo, hi) = mesh.bounds();
     let ext = mesh.extent();
     let light = Light::Point {
@@ -128,9 +128,9 @@ fn measure(
         intensity: Vec3::splat(ext * ext * 4.0),
     };
     let caster = ShadowCaster::new(mesh);
-    let e = face_irradiance_shadowed(mesh, &[SceneLight::from(light)], None, &dipole.entry, Some(&caster));
+    let e = face_irradiance_shadowed(mesh, &[SceneLight::from(light)], None, &profile.entry, Some(&caster));
     let solver =
-        HierarchicalSolver::new(mesh.clone(), h.clone(), dipole.clone(), Oracle::for_profile(dipole.profile));
+        HierarchicalSolver::new(mesh.clone(), h.clone(), profile.clone(), Oracle::for_profile(profile.kind));
     let mut runs: Vec<(f64, SolveStats)> = (0..3)
         .map(|_| {
             let s = solver.solve_on_the_fly(&e).stats;
@@ -140,7 +140,7 @@ fn measure(
     runs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (ms, stats) = runs[1];
     let b = solver.solve_on_the_fly(&e).face_b;
-    let want = exact::solve_receivers(mesh, &dipole, &e, &FormFactorOptions::default(), faces, None);
+    let want = exact::solve_receivers(mesh, &profile, &e, &FormFactorOptions::default(), faces, None);
     let sum = |v: lucent_core::Rgb| (v[0] + v[1] + v[2]) as f64;
     let mut errs: Vec<f64> = faces
         .iter()

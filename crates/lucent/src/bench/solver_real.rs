@@ -27,6 +27,7 @@ use anyhow::Context;
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
+use lucent_core::clock::ms_since;
 use lucent_core::formfactor::FormFactorOptions;
 use lucent_core::hierarchy::face_cluster;
 use lucent_core::irradiance::{Light, SceneLight, ShadowCaster, face_irradiance_shadowed};
@@ -173,9 +174,9 @@ pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
             continue;
         }
         let transport = Transport::new(Material::by_name("marble").context("material preset")?, 0.1);
-        let dipole = transport.dipole(mesh.extent());
-        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
-        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), dipole, oracle);
+        let profile = transport.profile_at(mesh.extent());
+        let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(profile.kind));
+        let solver = HierarchicalSolver::new(mesh.clone(), face_cluster::build(&mesh), profile, oracle);
         let c = solver.census();
         let t = mesh.triangles.len() as f64;
         if json {
@@ -265,10 +266,6 @@ fn peak_rss_mib() -> f64 {
         .map_or(0.0, |kib| kib / 1024.0)
 }
 
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
-}
-
 fn measure(
     name: &str,
     mesh: &Mesh,
@@ -281,16 +278,16 @@ fn measure(
     let rss_reset = reset_peak_rss();
     let big = mesh.triangles.len() > 100_000;
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
-    let dipole = transport.dipole(mesh.extent());
-    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(dipole.profile));
+    let profile = transport.profile_at(mesh.extent());
+    let oracle = oracle.unwrap_or_else(|| Oracle::for_profile(profile.kind));
     let (lights, light_at) = lights(mesh);
     let caster = ShadowCaster::new(mesh);
-    let e = face_irradiance_shadowed(mesh, &lights, None, &dipole.entry, Some(&caster));
+    let e = face_irradiance_shadowed(mesh, &lights, None, &profile.entry, Some(&caster));
 
     let t = Instant::now();
     let h = face_cluster::build(mesh);
     let hierarchy_ms = ms_since(t);
-    let mut solver = HierarchicalSolver::new(mesh.clone(), h, dipole.clone(), oracle);
+    let mut solver = HierarchicalSolver::new(mesh.clone(), h, profile.clone(), oracle);
     solver.progress = Some(watch.progress());
 
     let otf_runs = if std::env::var_os("LUCENT_BENCH_NO_ON_THE_FLY").is_some() {
@@ -310,45 +307,16 @@ fn measure(
     let render_ms = median((0..3).map(|_| solver.solve_render(&e).stats.total_ms).collect());
     let face_b = solver.solve_render(&e).face_b;
 
-    // Incremental: a bump of 1% of the extent on the lit side, on and off; one untimed update
-    // first (the steady state of an animation reuses the last update's buffers).
-    let rest = mesh.positions.clone();
-    let ext = mesh.extent();
-    let bumped = bump(mesh, light_at, 0.05 * ext, 0.01 * ext);
-    solver.update_incremental(&bumped, None);
-    let mut on = true;
-    let incremental_ms = median(
-        (0..3)
-            .map(|_| {
-                on = !on;
-                let t = Instant::now();
-                solver.update_incremental(if on { &bumped } else { &rest }, None);
-                solver.solve_render(&e);
-                ms_since(t)
-            })
-            .collect(),
-    );
+    let incremental_ms = incremental_ms(&mut solver, mesh, light_at, &e);
     let links = solver.links().map_or(0, |l| l.len());
     drop(solver);
 
     let faces = sample_faces(mesh.triangles.len(), samples);
     let t = Instant::now();
     let opts = FormFactorOptions::default();
-    let want = exact::solve_receivers(mesh, &dipole, &e, &opts, &faces, Some(&watch.progress()));
+    let want = exact::solve_receivers(mesh, &profile, &e, &opts, &faces, Some(&watch.progress()));
     let exact_ms = ms_since(t);
-    let sum = |b: Rgb| (b[0] + b[1] + b[2]) as f64;
-    let signed: Vec<f64> = faces
-        .iter()
-        .zip(&want)
-        .filter(|(_, w)| sum(**w) > 0.0)
-        .map(|(&f, &w)| (sum(face_b[f]) - sum(w)) / sum(w))
-        .collect();
-    let errs: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
-    let (median_rel_err, max_rel_err, median_signed_err) = if errs.is_empty() {
-        (f64::NAN, f64::NAN, f64::NAN)
-    } else {
-        (median(errs.clone()), errs.iter().copied().fold(0.0, f64::max), median(signed))
-    };
+    let (median_rel_err, max_rel_err, median_signed_err) = sampled_errors(&faces, &want, &face_b);
     Ok(RealRow {
         bench: "solver_real",
         mesh: name.to_string(),
@@ -374,20 +342,65 @@ fn measure(
         polar_faces: link_stats.polar_faces,
         point_samples: link_stats.point_samples,
         threads: rayon::current_num_threads(),
-        oracle: format!(
-            "{}:{},{},{},{},{}",
-            match (oracle.mode, oracle.linear_receivers, oracle.curved_receivers) {
-                (OracleMode::Transport, false, _) => "transport-constant",
-                (OracleMode::Transport, true, false) => "transport-linear",
-                (OracleMode::Transport, true, true) => "transport",
-                (OracleMode::SolidAngle, ..) => "solid-angle",
-            },
-            oracle.eps1,
-            oracle.eps2,
-            oracle.eps_abs,
-            oracle.eps_share,
-            oracle.irradiance_contrast
-        )
-        .to_lowercase(),
+        oracle: oracle_label(&oracle),
     })
+}
+
+/// Median time of an incremental update and render solve: a bump of 1% of the extent on the
+/// lit side, on and off; one untimed update first (the steady state of an animation reuses the
+/// last update's buffers).
+fn incremental_ms(solver: &mut HierarchicalSolver, mesh: &Mesh, light_at: Vec3, e: &[Rgb]) -> f64 {
+    let rest = mesh.positions.clone();
+    let ext = mesh.extent();
+    let bumped = bump(mesh, light_at, 0.05 * ext, 0.01 * ext);
+    solver.update_incremental(&bumped, None);
+    let mut on = true;
+    median(
+        (0..3)
+            .map(|_| {
+                on = !on;
+                let t = Instant::now();
+                solver.update_incremental(if on { &bumped } else { &rest }, None);
+                solver.solve_render(e);
+                ms_since(t)
+            })
+            .collect(),
+    )
+}
+
+/// Median and largest relative error, and the median signed one, of `face_b` against the
+/// exact `want` over the sampled `faces` (channels summed; unlit faces skipped; NaN for none).
+fn sampled_errors(faces: &[usize], want: &[Rgb], face_b: &[Rgb]) -> (f64, f64, f64) {
+    let sum = |b: Rgb| (b[0] + b[1] + b[2]) as f64;
+    let signed: Vec<f64> = faces
+        .iter()
+        .zip(want)
+        .filter(|(_, w)| sum(**w) > 0.0)
+        .map(|(&f, &w)| (sum(face_b[f]) - sum(w)) / sum(w))
+        .collect();
+    let errs: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
+    if errs.is_empty() {
+        (f64::NAN, f64::NAN, f64::NAN)
+    } else {
+        (median(errs.clone()), errs.iter().copied().fold(0.0, f64::max), median(signed))
+    }
+}
+
+/// The oracle as `--oracle` takes it (`transport:EPS1,EPS2,EPS_ABS,EPS_SHARE,CONTRAST`).
+fn oracle_label(oracle: &Oracle) -> String {
+    format!(
+        "{}:{},{},{},{},{}",
+        match (oracle.mode, oracle.linear_receivers, oracle.curved_receivers) {
+            (OracleMode::Transport, false, _) => "transport-constant",
+            (OracleMode::Transport, true, false) => "transport-linear",
+            (OracleMode::Transport, true, true) => "transport",
+            (OracleMode::SolidAngle, ..) => "solid-angle",
+        },
+        oracle.eps1,
+        oracle.eps2,
+        oracle.eps_abs,
+        oracle.eps_share,
+        oracle.irradiance_contrast
+    )
+    .to_lowercase()
 }

@@ -12,6 +12,7 @@ use crate::cli::{ImageFormat, Method, RenderArgs, SolveMode};
 use crate::scene::{Scene, orbit_lights};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use lucent_core::clock::ms_since;
 use lucent_core::session::{FrameSession, Solved};
 use lucent_gpu::GpuContext;
 use std::path::{Path, PathBuf};
@@ -54,7 +55,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let mut session = scene.session(SolveMode::Incremental);
     let mode = session.settings().mode;
     session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
-    let (center, _) = lucent_gpu::camera::bounding_sphere(&scene.mesh.positions);
+    let (center, _) = lucent_core::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
         if args.orbit_light {
@@ -220,10 +221,6 @@ pub fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

@@ -13,13 +13,12 @@ use crate::render::output::{Frame, HdrImage};
 use crate::render::{Scene, Timings, tone_map};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
+use lucent_core::camera::bounding_sphere;
 use lucent_core::mesh::Mesh;
 use lucent_core::session::FrameSession;
 use lucent_core::volume::{DensityVolume, VolumeSpec};
 use lucent_gpu::GpuContext;
-use lucent_gpu::camera::bounding_sphere;
 use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel, volume_dims_for};
-use std::path::Path;
 use std::time::Instant;
 
 /// Default transport colour `T_c` (a wax-like orange).
@@ -37,7 +36,7 @@ pub struct HtsmFrame {
     ctx: GpuContext,
     renderer: HtsmRenderer,
     params: HtsmParams,
-    camera: lucent_gpu::camera::CameraView,
+    camera: lucent_core::camera::CameraView,
     size: (u32, u32),
     /// The summary line's description of the volume and model.
     pub summary: String,
@@ -50,7 +49,7 @@ impl HtsmFrame {
     /// camera says.
     pub fn new(ctx: GpuContext, scene: &Scene, args: &RenderArgs) -> Result<Self> {
         let gltf = match &scene.mesh_path {
-            Some(path) if is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
+            Some(path) if crate::scene::is_gltf(path) => lucent_core::mesh::load_gltf_volume_params(path)?,
             _ => None,
         };
         let mut params = htsm_params(&args.htsm, &scene.mesh, gltf, args)?;
@@ -140,17 +139,6 @@ fn model_name(m: TransportModel) -> &'static str {
     }
 }
 
-fn is_gltf(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
-}
-
-/// Parses `r,g,b`.
-pub fn parse_rgb(flag: &str, s: &str) -> Result<Vec3> {
-    lucent::scene::parse_three(&format!("{flag} {s:?}"), s, "expected r,g,b")
-}
-
 /// The HTSM parameters from the flags, falling back on the glTF material's
 /// `KHR_materials_volume` (`gltf`) and then on the defaults.
 pub fn htsm_params(
@@ -170,7 +158,9 @@ pub fn htsm_params(
         None => (None, None),
     };
     let transport_colour = match &h.transport_colour {
-        Some(s) => parse_rgb("--transport-colour", s)?,
+        Some(s) => Vec3::from(
+            crate::cli::parse_rgb::<f32>(s).map_err(|e| anyhow::anyhow!("--transport-colour: {e}"))?,
+        ),
         None => gltf_colour.unwrap_or(Vec3::from(DEFAULT_TRANSPORT_COLOUR)),
     };
     let params = HtsmParams {

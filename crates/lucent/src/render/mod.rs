@@ -111,12 +111,13 @@ pub struct Timings {
 
 /// Bytes a stored link set takes per triangle, for the mode choice below: about 210 links a
 /// triangle on scanned meshes (the Stanford dragon, marble at 10 cm) at 13 bytes each, with
-/// room for denser materials (the 871K dragon's render mode peaked at 2.94 GiB in all).
+/// room for denser materials and for the rest of a render-mode solve's peak (hierarchy,
+/// irradiance, bounce rays), which is per triangle too.
 const LINK_BYTES_PER_TRIANGLE: u64 = 4096;
 
 /// The solve mode of one image when `--mode` and the scene leave it open. With bounces
 /// between parts, `render`: the links are made once and each bounce is a gather over them
-/// (on the fly links every bounce anew: the 871K dragon took 25 s for its one bounce), unless
+/// (on the fly links every bounce anew, as costly as the first solve each time), unless
 /// the stored links would not fit in half the memory available; else `on-the-fly`, which
 /// stores none.
 fn one_image_mode(scene: &Scene, mesh: &lucent_core::mesh::Mesh) -> SolveMode {
@@ -148,10 +149,10 @@ fn available_memory() -> Option<u64> {
 
 /// Says so when transport reaches less far than faces are wide: those faces took the local
 /// limit `B = R_d E` (one link each) instead of a refinement.
-fn local_limit_note(mesh: &lucent_core::mesh::Mesh, dipole: &lucent_core::bssrdf::Dipole) {
+fn local_limit_note(mesh: &lucent_core::mesh::Mesh, profile: &lucent_core::bssrdf::Profile) {
     use lucent_core::hierarchy::face_cluster;
     use lucent_core::solver::local::Locality;
-    let loc = Locality::of(dipole);
+    let loc = Locality::of(profile);
     // Only a face wider than twice the reach can be local: skip the hierarchy otherwise.
     let widest = mesh.triangles.iter().enumerate().map(|(f, _)| mesh.face_area(f)).fold(0.0f32, f32::max);
     if widest < 4.0 * loc.reach * loc.reach {
@@ -162,7 +163,7 @@ fn local_limit_note(mesh: &lucent_core::mesh::Mesh, dipole: &lucent_core::bssrdf
     if local > 0 {
         println!(
             "lucent: transport reaches {:.3e} mm, below the faces: {local} of {} faces took the local limit B = R_d E",
-            loc.reach as f64 * dipole.mm_per_unit,
+            loc.reach as f64 * profile.mm_per_unit,
             mesh.triangles.len()
         );
     }
@@ -214,12 +215,12 @@ fn render_mertens(
     session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
-    let dipole = session.dipole().clone();
+    let profile = session.profile().clone();
     let solved = session.solve();
     drop(watch);
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
     if method == Method::Hierarchical {
-        local_limit_note(&mesh, &dipole);
+        local_limit_note(&mesh, &profile);
     }
     let st = &solved.timings;
     log::info!(

@@ -3,13 +3,13 @@
 //! to the worker, draw, take screenshots, advance the script.
 
 use super::core_adapter::EnvCache;
+use super::draw::{self, DrawParams, ViewDrawer};
 use super::framing::Framing;
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::{self, Input, ViewportRect};
 use super::model::ViewModel;
 use super::present::{EguiFrame, Surface, encode_and_submit, save_screenshot, upload_scene};
-use super::render::{self, DrawParams, ViewRenderer};
 use super::screenshot;
 use super::script::{Action, Automation, Step};
 use super::state::{EnvChoice, ViewMethod, ViewState};
@@ -18,7 +18,7 @@ use super::worker::{MeshOrigin, Request, Worker};
 use anyhow::Context as _;
 use glam::Vec2;
 use lucent_core::bssrdf::Material;
-use lucent_gpu::camera::OrbitCamera;
+use lucent_core::camera::OrbitCamera;
 use lucent_gpu::mesh_pass::Shading;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -136,12 +136,12 @@ impl App {
             Some(gfx.ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&gfx.ctx.device, gfx.config.format, Default::default());
-        let mut renderer = ViewRenderer::new(&gfx.ctx, gfx.config.format)?;
+        let mut drawer = ViewDrawer::new(&gfx.ctx, gfx.config.format)?;
         if let Some(texture) = &self.texture {
-            renderer.set_texture(&gfx.ctx, texture)?;
+            drawer.set_texture(&gfx.ctx, texture)?;
         }
         let htsm = HtsmPanel::default();
-        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, renderer, htsm });
+        self.surface = Some(Surface { window, gfx, egui_ctx, egui_state, egui_renderer, drawer, htsm });
         Ok(())
     }
 
@@ -168,9 +168,9 @@ impl App {
             solving: s.solving(),
             solving_for_s: s.solving_for_s(),
             progress: s.solve_progress(),
-            timings: s.solution.timings,
-            links: s.solution.links,
-            solver: s.solution.solver,
+            timings: s.solution.solved.timings,
+            links: s.solution.solved.links,
+            method: s.state.params.settings.method,
             draw_ms: self.stats.draw_ms,
             fps: self.stats.fps,
         }
@@ -201,8 +201,8 @@ impl App {
         }
         self.input.update(&mut self.scene.state);
         let d = &mut self.scene.state.deform;
-        if d.noise_animated && d.noise_amplitude != 0.0 {
-            d.noise_offset += dt * 0.5;
+        if d.noise_animated && d.noise.amplitude != 0.0 {
+            d.noise.offset += glam::Vec3::splat(dt * 0.5);
         }
         let status = self.status();
         let Some(surface) = &mut self.surface else { return Ok(()) };
@@ -240,9 +240,9 @@ impl App {
         let mut params = draw_params(&self.framing, &self.scene.state, viewport, false_colour);
         if !false_colour {
             // The lobe of the profile that made the radiance on screen.
-            params.shading.exit_lobe = self.scene.solution.exit_lobe.clone();
+            params.shading.exit_lobe = self.scene.solution.solved.exit_lobe.clone();
         }
-        if !surface.renderer.reflects() {
+        if !surface.drawer.reflects() {
             params.shading.environment = 0.0;
         }
         if let Some(frame) = surface.gfx.acquire() {
@@ -330,11 +330,11 @@ impl App {
                 Some(l) => l.set_position(p),
                 None => state.params.lights.push(super::ui::point_light(p)),
             },
-            Action::Twist(k) => state.deform.twist = k,
+            Action::Twist(degrees) => state.deform.twist_degrees = degrees,
             Action::Material(name) => {
-                state.params.material = Material::by_name(&name)?;
+                state.params.transport.material = Material::by_name(&name)?;
             }
-            Action::Scale(m) => state.params.scale_m = m,
+            Action::Scale(m) => state.params.transport.scale_m = m,
             Action::Camera(yaw, pitch, distance) => self.framing.place(yaw, pitch, distance),
             Action::Exposure(k) => state.exposure = k,
             Action::Clusters(p) => {
@@ -351,12 +351,13 @@ impl App {
             }
             Action::Albedo(albedo, mfp) => {
                 let (a, d) = (albedo.map(f64::from), mfp.map(f64::from));
-                state.params.material = Material::from_albedo_mfp("colour", a, d, state.params.material.eta)?;
+                let eta = state.params.transport.material.eta;
+                state.params.transport.material = Material::from_albedo_mfp("colour", a, d, eta)?;
                 state.by_colour = super::state::ByColour { albedo, mfp_mm: mfp, error: None };
             }
             Action::Animate(seconds) => {
-                if state.deform.noise_amplitude == 0.0 {
-                    state.deform.noise_amplitude = 0.02;
+                if state.deform.noise.amplitude == 0.0 {
+                    state.deform.noise.amplitude = 0.02;
                 }
                 state.deform.noise_animated = true;
                 if state.params.lights.is_empty() {
@@ -371,7 +372,7 @@ impl App {
     /// Whether frames must keep coming without input.
     fn animating(&self) -> bool {
         let d = &self.scene.state.deform;
-        self.automation.is_some() || self.input.animating() || (d.noise_animated && d.noise_amplitude != 0.0)
+        self.automation.is_some() || self.input.animating() || (d.noise_animated && d.noise.amplitude != 0.0)
     }
 
     fn window_input(&mut self, event: &WindowEvent) {
@@ -435,7 +436,7 @@ fn draw_params(
     DrawParams {
         camera: framing.view(size.x / size.y.max(1.0)),
         shading: Shading {
-            eta: state.params.material.eta as f32,
+            eta: state.params.transport.material.eta as f32,
             lights: state.params.lights.clone(),
             specular: if false_colour { 0.0 } else { 1.0 },
             environment: if false_colour || state.params.env == EnvChoice::None {
@@ -445,7 +446,7 @@ fn draw_params(
             },
             ..Default::default()
         },
-        tone: render::tone_map(if false_colour { 1.0 } else { state.exposure }),
+        tone: draw::tone_map(if false_colour { 1.0 } else { state.exposure }),
     }
 }
 

@@ -2,32 +2,20 @@
 //! solve through the one frame session, so that the viewer follows the core's API in one place.
 
 use super::state::{Deformations, EnvChoice, SolveParams};
-use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::ExitLobe;
 use lucent_core::irradiance::{Environment, SceneLight};
 use lucent_core::mesh::Mesh;
-use lucent_core::mesh::deform::{self, Deformer as _};
-pub use lucent_core::session::Timings;
-use lucent_core::session::{FrameSession, FrameSettings, Method, Transport};
+use lucent_core::mesh::deform::{Deformation, Deformer as _};
+use lucent_core::session::{FrameSession, Solved};
 use lucent_core::solver::{HierarchicalSolver, Progress};
 use std::sync::Arc;
 
-/// What one solve returns.
+/// What one solve returns: the frame session's [`Solved`] and what the viewer adds to it.
 #[derive(Clone, Debug, Default)]
 pub struct Solution {
-    /// Diffuse exitant radiance `B / (c pi)` per vertex (before the exit Fresnel factor).
-    pub vertex_radiance: Vec<Rgb>,
-    /// Single-scattered radiance per vertex (before the exit Fresnel factor; empty for none).
-    pub vertex_single: Vec<Rgb>,
-    /// How `vertex_radiance` leaves over exit angles (the profile's; flat for the paper's).
-    pub exit_lobe: ExitLobe,
-    /// Per-phase times.
-    pub timings: Timings,
-    /// Number of links of the hierarchical solve; `None` for solvers without links.
-    pub links: Option<usize>,
-    /// Name of the solver that ran, for the UI.
-    pub solver: &'static str,
+    /// The session's solve (per-vertex radiance and single scattering, exit lobe, timings,
+    /// links).
+    pub solved: Solved,
     /// Figure 6.9 false colours per vertex: the clusters the picked face gathers from, coloured
     /// by hierarchy level ([`level_colour`]); `None` when that view is off or unsupported.
     pub clusters: Option<Vec<Rgb>>,
@@ -45,23 +33,21 @@ pub fn normalise(mut mesh: Mesh) -> Mesh {
     mesh
 }
 
-/// Spatial frequency of the noise deformation, noise cells per mesh unit (the mesh has extent 1).
-const NOISE_FREQUENCY: f32 = 4.0;
-
 /// `base` with the deformations applied in order: dents (bumps of negative height along the
-/// vertex normal), twist about the vertical axis through the origin, Perlin noise along the
-/// normal (Mertens figures 6.5-6.8).
+/// vertex normal), twist about the vertical axis through the centre of the bounding box, Perlin
+/// noise along the normal (Mertens figures 6.5-6.8).
 pub fn deform(base: &Mesh, d: &Deformations) -> Mesh {
     let mut mesh = base.clone();
     for dent in &d.dents {
-        mesh = deform::bump(dent.center, dent.radius, dent.height).deformed(&mesh);
+        mesh = dent.deformed(&mesh);
     }
-    if d.twist != 0.0 {
-        mesh = deform::twist(Vec3::ZERO, Vec3::Y, d.twist).deformed(&mesh);
+    if d.twist_degrees != 0.0 {
+        let mut positions = Vec::new();
+        Deformation::Twist { degrees: d.twist_degrees }.apply(&mesh, 1.0, &mut positions);
+        mesh = Mesh::new(positions, mesh.triangles);
     }
-    if d.noise_amplitude != 0.0 {
-        let offset = Vec3::splat(d.noise_offset);
-        mesh = deform::noise(d.noise_amplitude, NOISE_FREQUENCY, offset).deformed(&mesh);
+    if d.noise.amplitude != 0.0 {
+        mesh = d.noise.deformed(&mesh);
     }
     mesh
 }
@@ -120,20 +106,7 @@ impl SolverSession {
     /// of it; a new topology starts a new session) under `params`.
     pub fn solve(&mut self, mesh: &Arc<Mesh>, params: &SolveParams) -> Solution {
         let environment = self.environment.get(params);
-        let transport = Transport {
-            material: params.material.clone(),
-            scale_m: params.scale_m,
-            profile: params.profile,
-            single_scattering: params.single_scattering,
-            transmission: Default::default(),
-        };
-        let settings = FrameSettings {
-            method: Method::Hierarchical,
-            mode: params.mode,
-            oracle: Some(params.oracle),
-            environment_shadows: params.shadows,
-            bounces: params.bounces,
-        };
+        let (transport, settings) = (params.transport.clone(), params.settings);
         let same_topology = self.session.as_ref().is_some_and(|s| {
             s.mesh().triangles == mesh.triangles && s.mesh().positions.len() == mesh.positions.len()
         });
@@ -148,7 +121,11 @@ impl SolverSession {
         session.set_transport(transport);
         session.set_settings(settings);
         session.set_lights(
-            params.lights.iter().map(|&light| SceneLight { light, shadows: params.shadows }).collect(),
+            params
+                .lights
+                .iter()
+                .map(|&light| SceneLight { light, shadows: settings.environment_shadows })
+                .collect(),
         );
         session.set_environment(environment);
         session.set_eye(params.eye);
@@ -156,15 +133,7 @@ impl SolverSession {
         let clusters = params
             .cluster_face
             .and_then(|f| session.hierarchical().and_then(|s| cluster_colours(s, f as usize)));
-        Solution {
-            vertex_radiance: solved.vertex_radiance,
-            vertex_single: solved.vertex_single,
-            exit_lobe: solved.exit_lobe,
-            timings: solved.timings,
-            links: solved.links,
-            solver: "hierarchical",
-            clusters,
-        }
+        Solution { solved, clusters }
     }
 }
 
@@ -213,6 +182,7 @@ fn cluster_colours(solver: &HierarchicalSolver, face: usize) -> Option<Vec<Rgb>>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     #[test]
     fn normalise_gives_unit_extent_centred() {

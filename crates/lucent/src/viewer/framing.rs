@@ -5,8 +5,8 @@
 //! mesh, which dents and noise may push past that sphere.
 
 use glam::Vec3;
+use lucent_core::camera::{CameraView, OrbitCamera, bounding_sphere};
 use lucent_core::mesh::Mesh;
-use lucent_gpu::camera::{CameraView, OrbitCamera, bounding_sphere};
 use std::sync::Arc;
 
 /// The home view's eye distance from the centre, mesh units (the viewer's mesh has extent 1):

@@ -10,11 +10,11 @@
 //! settings, viewport size), so an idle window costs nothing.
 
 use glam::Vec3;
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::VolumeSpec;
 use lucent_gpu::GpuContext;
-use lucent_gpu::camera::CameraView;
 use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel, volume_dims_for};
 use lucent_gpu::tonemap::ToneMap;
 use std::sync::Arc;
@@ -40,7 +40,7 @@ impl Default for HtsmSettings {
     }
 }
 
-/// Everything an HTSM image depends on, to know when to render again.
+/// Everything an HTSM image depends on, to know when to draw it again.
 #[derive(Clone, Debug)]
 struct Inputs {
     /// Held (not just its address) so that a freed mesh's address cannot be reused by a new
@@ -92,7 +92,7 @@ pub struct HtsmPanel {
     target: Option<Target>,
     /// CPU time to record and submit the last HTSM frame, milliseconds.
     pub frame_ms: f64,
-    /// Why the last render failed (shown in the panel instead of an image).
+    /// Why the last draw failed (shown in the panel instead of an image).
     pub error: Option<String>,
 }
 
@@ -126,10 +126,10 @@ impl HtsmPanel {
             return;
         }
         self.last = Some(inputs.clone());
-        self.error = self.render(ctx, egui_renderer, &inputs).err().map(|e| format!("{e:#}"));
+        self.error = self.draw(ctx, egui_renderer, &inputs).err().map(|e| format!("{e:#}"));
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &GpuContext,
         egui_renderer: &mut egui_wgpu::Renderer,

@@ -2,10 +2,11 @@
 //! picking. egui sees every event first; only what it does not consume arrives here.
 
 use super::pick::{self, Picker};
-use super::state::{Dent, Tool, ViewState};
+use super::state::{Tool, ViewState};
 use glam::Vec2;
+use lucent_core::camera::{CameraView, OrbitCamera};
 use lucent_core::mesh::Mesh;
-use lucent_gpu::camera::{CameraView, OrbitCamera};
+use lucent_core::mesh::deform::Bump;
 use std::sync::Arc;
 use std::time::Instant;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta};
@@ -68,7 +69,7 @@ impl Input {
                 });
                 match (state.tool, hit) {
                     (Tool::Dent, Some(h)) => {
-                        state.deform.dents.push(Dent { center: h.point, radius: DENT_RADIUS, height: 0.0 });
+                        state.deform.dents.push(Bump { center: h.point, radius: DENT_RADIUS, height: 0.0 });
                         self.dent =
                             Some(DentDrag { index: state.deform.dents.len() - 1, started: Instant::now() });
                     }
@@ -118,6 +119,6 @@ impl Input {
 }
 
 /// A dent made by a script at the surface point nearest `p`, at full depth.
-pub fn scripted_dent(mesh: &Mesh, p: glam::Vec3) -> Option<Dent> {
-    pick::nearest_vertex(mesh, p).map(|center| Dent { center, radius: DENT_RADIUS * 1.5, height: -DENT_MAX })
+pub fn scripted_dent(mesh: &Mesh, p: glam::Vec3) -> Option<Bump> {
+    pick::nearest_vertex(mesh, p).map(|center| Bump { center, radius: DENT_RADIUS * 1.5, height: -DENT_MAX })
 }

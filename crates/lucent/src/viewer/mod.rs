@@ -5,9 +5,9 @@
 //! * [`app`]: the winit application and the per-frame sequence; [`present`]: one frame's GPU
 //!   work (uploads, passes, submit, screenshot).
 //! * [`gfx`]: adapter, device and window surface (format, present mode, resize, minimise).
-//! * [`render`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
+//! * [`draw`]: the 3D view with `lucent-gpu`'s mesh and tone-map passes.
 //! * [`ui`]: the egui side panel.
-//! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_gpu::camera`) frames,
+//! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_core::camera`) frames,
 //!   mouse handling, ray picking through the mesh's BVH.
 //! * [`state`], [`model`]: the editable state and the solve bookkeeping.
 //! * [`worker`]: the solve thread (coalesced requests).
@@ -17,6 +17,7 @@
 
 pub mod app;
 pub mod core_adapter;
+pub mod draw;
 pub mod framing;
 pub mod gfx;
 pub mod htsm;
@@ -24,7 +25,6 @@ pub mod input;
 pub mod model;
 pub mod pick;
 pub mod present;
-pub mod render;
 pub mod scene_file;
 pub mod screenshot;
 pub mod script;

@@ -173,7 +173,7 @@ mod tests {
         let lights = vec![crate::viewer::ui::point_light(glam::Vec3::new(1.0, 1.1, 1.8))];
         let mut scene = ViewModel::new(ViewState::new(Material::by_name("marble").unwrap(), 0.05, lights));
         // No bounces: their rays would be the last stage counted, after the link.
-        scene.state.params.bounces = 0;
+        scene.state.params.settings.bounces = 0;
         let bunny = crate::viewer::core_adapter::normalise(lucent_core::mesh::embedded::bunny());
         worker.send(Request::Load(MeshOrigin::Loaded(Box::new(bunny), None)));
         wait_for(&mut scene, &worker, |s| s.base.is_some());
@@ -181,7 +181,7 @@ mod tests {
         assert!(scene.solving() && !scene.settled());
         wait_for(&mut scene, &worker, |s| !s.solving());
         let n = scene.mesh.as_ref().unwrap().positions.len();
-        assert_eq!(scene.solution.vertex_radiance.len(), n);
+        assert_eq!(scene.solution.solved.vertex_radiance.len(), n);
         // The first solve links every face, counted where the panel's progress bar reads it.
         let (stage, done, total) = worker.progress().snapshot();
         assert_eq!((stage, done), ("link", total), "the link stage counted to its end");
@@ -195,7 +195,7 @@ mod tests {
         let p = scene.state.params.lights[0].position().unwrap();
         scene.state.params.lights[0].set_position(p + glam::Vec3::X * 0.5);
         scene.sync(&worker);
-        scene.state.deform.twist = 1.0;
+        scene.state.deform.twist_degrees = 60.0;
         scene.sync(&worker);
         assert!(!scene.settled());
         wait_for(&mut scene, &worker, |s| !s.solving());

@@ -2,11 +2,11 @@
 //! uploads, the 3D and egui passes recorded and submitted, and the screenshot (the same frame
 //! drawn again offscreen).
 
+use super::draw::{DrawParams, ViewDrawer, Viewport};
 use super::gfx::Gfx;
 use super::htsm::HtsmPanel;
 use super::input::ViewportRect;
 use super::model::ViewModel;
-use super::render::{DrawParams, ViewRenderer, Viewport};
 use super::screenshot::Offscreen;
 use std::sync::Arc;
 use winit::window::Window;
@@ -18,7 +18,7 @@ pub(super) struct Surface {
     pub(super) egui_ctx: egui::Context,
     pub(super) egui_state: egui_winit::State,
     pub(super) egui_renderer: egui_wgpu::Renderer,
-    pub(super) renderer: ViewRenderer,
+    pub(super) drawer: ViewDrawer,
     /// The HTSM image of the 3D view when that method is chosen.
     pub(super) htsm: HtsmPanel,
 }
@@ -63,20 +63,24 @@ pub(super) fn upload_scene(surface: &mut Surface, scene: &mut ViewModel) -> anyh
     let ctx = &surface.gfx.ctx;
     if scene.geometry_dirty {
         if let Some(mesh) = &scene.mesh {
-            surface.renderer.set_geometry(ctx, mesh)?;
+            surface.drawer.set_geometry(ctx, mesh)?;
             // Radiance of the previous geometry still matches vertex for vertex.
             scene.radiance_dirty = true;
         }
         scene.geometry_dirty = false;
     }
     let p = &scene.state.params;
-    surface.renderer.set_environment(ctx, p.env, p.env_rotation_deg);
+    surface.drawer.set_environment(ctx, p.env, p.env_rotation_deg);
     if scene.radiance_dirty {
         // The figure 6.9 false colours replace the radiance while that view is on.
         let solution = &scene.solution;
         match &solution.clusters {
-            Some(colours) => surface.renderer.set_radiance(ctx, colours, &[])?,
-            None => surface.renderer.set_radiance(ctx, &solution.vertex_radiance, &solution.vertex_single)?,
+            Some(colours) => surface.drawer.set_radiance(ctx, colours, &[])?,
+            None => surface.drawer.set_radiance(
+                ctx,
+                &solution.solved.vertex_radiance,
+                &solution.solved.vertex_single,
+            )?,
         }
         scene.radiance_dirty = false;
     }
@@ -96,7 +100,7 @@ pub(super) fn encode_and_submit(
     let mut encoder = gfx.ctx.device.create_command_encoder(&Default::default());
     let viewport = Viewport { x: origin.x, y: origin.y, width: size.x, height: size.y };
     let target_size = (gfx.config.width, gfx.config.height);
-    surface.renderer.draw(&gfx.ctx, &mut encoder, target, target_size, viewport, params)?;
+    surface.drawer.draw(&gfx.ctx, &mut encoder, target, target_size, viewport, params)?;
     let extra =
         surface.egui_renderer.update_buffers(&gfx.ctx.device, &gfx.ctx.queue, &mut encoder, jobs, screen);
     {

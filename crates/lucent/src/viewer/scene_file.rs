@@ -22,7 +22,7 @@ pub struct SceneStart {
     pub texture: Option<lucent_core::mesh::texture::Texture>,
     /// The `[camera]` table as it is: the viewer frames the mesh's bounding sphere as
     /// `lucent render` does (see [`super::framing`]).
-    pub camera: lucent_gpu::camera::OrbitCamera,
+    pub camera: lucent_core::camera::OrbitCamera,
 }
 
 /// Converts `scene` (already validated) for the viewer; an environment the viewer does not
@@ -34,12 +34,13 @@ pub fn start(scene: &Scene) -> anyhow::Result<SceneStart> {
     let lights = scene.lights.iter().map(|l| normalised_light(&l.light, centre, extent)).collect();
     let mut state = ViewState::new(scene.material().clone(), scene.scale(), lights);
     state.exposure = scene.exposure;
-    state.params.profile = scene.transport.profile;
-    state.params.single_scattering = scene.transport.single_scattering;
-    state.params.shadows = scene.lights.first().is_none_or(|l| l.shadows);
-    state.params.bounces = scene.settings.bounces;
+    state.params.transport.profile = scene.transport.profile;
+    state.params.transport.single_scattering = scene.transport.single_scattering;
+    let settings = &mut state.params.settings;
+    settings.environment_shadows = scene.lights.first().is_none_or(|l| l.shadows);
+    settings.bounces = scene.settings.bounces;
     if let Some(mode) = scene.mode {
-        state.params.mode = mode;
+        settings.mode = mode;
     }
     if let Some(env) = &scene.environment {
         state.params.env = env_choice(&env.name).ok_or_else(|| {
@@ -65,16 +66,16 @@ pub fn save_material(state: &ViewState, to: Option<&Path>) -> anyhow::Result<std
         Some(p) => p.to_path_buf(),
         None => free_path(&state.save.path),
     };
-    let p = &state.params;
+    let t = &state.params.transport;
     let text = scene_toml(&SavedScene {
-        material: &p.material,
-        scale_m: p.scale_m,
-        profile: p.profile,
-        single_scattering: p.single_scattering,
+        material: &t.material,
+        scale_m: t.scale_m,
+        profile: t.profile,
+        single_scattering: t.single_scattering,
         exposure: state.exposure,
         mesh: state.save.mesh.clone(),
         refine: state.save.refine,
-        bounces: p.bounces,
+        bounces: state.params.settings.bounces,
     });
     write_new(&path, &text)?;
     Ok(path)

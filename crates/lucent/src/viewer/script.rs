@@ -9,7 +9,7 @@
 //! |---|---|
 //! | `dent:x,y,z` | dent the surface at the vertex nearest to `(x,y,z)` (normalised mesh units) |
 //! | `light:x,y,z` | move the first light to `(x,y,z)` |
-//! | `twist:k` | twist about the vertical axis, `k` radians per mesh unit of height |
+//! | `twist:d` | twist about the vertical axis, `d` degrees from the bottom to the top (as `--deform twist:d`) |
 //! | `material:name` | switch to a material preset |
 //! | `scale:m` | set the model scale, metres |
 //! | `camera:yaw,pitch,distance` | place the camera (degrees, degrees, and mesh units from the point looked at, which the normalised mesh's extent 1 makes model-independent; scene files give radii) |
@@ -33,7 +33,7 @@ pub enum Action {
     Dent(Vec3),
     /// Move the first light.
     Light(Vec3),
-    /// Set the twist rate (radians per mesh unit).
+    /// Set the twist, degrees from the bottom of the mesh to its top.
     Twist(f32),
     /// Switch material preset.
     Material(String),

@@ -5,9 +5,10 @@
 
 use glam::Vec3;
 use lucent_core::bssrdf::Material;
-use lucent_core::bssrdf::ProfileKind;
 use lucent_core::irradiance::Light;
+use lucent_core::mesh::deform::{self, Bump, Noise};
 pub use lucent_core::session::SolveMode;
+use lucent_core::session::{FrameSettings, Method, Transport};
 
 /// Environment map choice (Mertens §5.3 lights with an HDR environment too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,46 +55,60 @@ impl EnvChoice {
     }
 }
 
-/// A dent (a bump of negative height) applied where the user clicked.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Dent {
-    /// Centre on the surface, mesh units.
-    pub center: Vec3,
-    /// Radius of the smooth falloff, mesh units (> 0).
-    pub radius: f32,
-    /// Displacement along the vertex normal at the centre, mesh units (negative: a dent).
-    pub height: f32,
-}
-
-/// Geometry edits, applied in order to the undeformed mesh (Mertens figures 6.5–6.8).
-#[derive(Clone, Debug, PartialEq, Default)]
+/// Geometry edits, applied in order to the undeformed mesh (Mertens figures 6.5–6.8), in the
+/// core's deformation types and units (`lucent_core::mesh::deform`), as `--deform` takes them.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Deformations {
-    /// Dents, in the order they were made.
-    pub dents: Vec<Dent>,
-    /// Twist about the vertical (y) axis, radians per mesh unit of height; 0 = none.
-    pub twist: f32,
-    /// Perlin-noise displacement along the normal, mesh units; 0 = none.
-    pub noise_amplitude: f32,
+    /// Dents (bumps of negative height along the vertex normal, mesh units), in the order they
+    /// were made.
+    pub dents: Vec<Bump>,
+    /// Twist about the vertical axis through the centre of the mesh's bounding box, degrees
+    /// from its bottom to its top (`lucent_core::mesh::deform::Deformation::Twist`, as
+    /// `--deform twist:DEG`); 0 = none.
+    pub twist_degrees: f32,
+    /// Perlin-noise displacement along the normal ([`Noise`]: amplitude in mesh units, 0 =
+    /// none; frequency in noise cells per mesh unit, default 4; `offset` advanced by the app
+    /// when `noise_animated`).
+    pub noise: Noise,
     /// Whether the noise offset advances every frame (figure 6.6).
     pub noise_animated: bool,
-    /// Current noise offset (advanced by the app when `noise_animated`), mesh units.
-    pub noise_offset: f32,
 }
+
+impl Default for Deformations {
+    fn default() -> Self {
+        Deformations {
+            dents: Vec::new(),
+            twist_degrees: 0.0,
+            noise: deform::noise(0.0, NOISE_FREQUENCY, Vec3::ZERO),
+            noise_animated: false,
+        }
+    }
+}
+
+/// Spatial frequency of the panel's noise deformation, noise cells per mesh unit (the viewer's
+/// mesh has extent 1).
+pub const NOISE_FREQUENCY: f32 = 4.0;
 
 impl Deformations {
     /// True when the mesh is the undeformed input.
     pub fn is_identity(&self) -> bool {
-        self.dents.is_empty() && self.twist == 0.0 && self.noise_amplitude == 0.0
+        self.dents.is_empty() && self.twist_degrees == 0.0 && self.noise.amplitude == 0.0
     }
 }
 
-/// Everything the solve depends on except the geometry itself.
+/// Everything the solve depends on except the geometry itself: the frame session's own
+/// [`Transport`] and [`FrameSettings`], and what the viewer turns into its lights, environment
+/// and eye.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveParams {
-    /// Scattering coefficients (mm^-1) and eta; `name` is the preset it started from.
-    pub material: Material,
-    /// Model scale: the mesh's largest bounding-box side, in metres (> 0).
-    pub scale_m: f64,
+    /// Material (scattering coefficients in mm^-1 and eta; `name` is the preset it started
+    /// from), model scale (metres), diffusion profile and single scattering.
+    pub transport: Transport,
+    /// Always the hierarchical method (the HTSM view draws on the GPU without a solve); the
+    /// mode (Mertens §5.5), the oracle (always set: the profile's own at start), the bounces
+    /// (0..=4, default [`crate::ranges::DEFAULT_BOUNCES`]) and `environment_shadows`, which is
+    /// the panel's "shadows" box: the lights follow it too.
+    pub settings: FrameSettings,
     /// The lights, in the viewer's normalised mesh units (the mesh centred with a bounding-box
     /// side of 1).
     pub lights: Vec<Light>,
@@ -103,24 +118,9 @@ pub struct SolveParams {
     pub env_rotation_deg: f32,
     /// Environment strength multiplier (>= 0).
     pub env_strength: f32,
-    /// Solver mode (Mertens §5.5).
-    pub mode: SolveMode,
-    /// Diffusion profile (default [`ProfileKind::default`]: photon beam diffusion).
-    pub profile: ProfileKind,
-    /// Where single scattering is computed (pbd, dipole).
-    pub single_scattering: lucent_core::shading::SingleScattering,
     /// The eye (normalised mesh units) that view-ray single scattering is seen from; set from
     /// the camera before each sync (`None` until the first frame).
     pub eye: Option<glam::Vec3>,
-    /// The refinement oracle (Mertens §5.2): mode and thresholds `eps1` (receiver), `eps2`
-    /// (emitter) and, in transport mode, `eps_abs` (relative to `R_d_total`). Default: the
-    /// profile's own ([`lucent_core::solver::Oracle::for_profile`]).
-    pub oracle: lucent_core::solver::Oracle,
-    /// Whether the mesh shadows the lights and the environment.
-    pub shadows: bool,
-    /// Bounces of subsurface light between parts through the air (0..=4), as `lucent render
-    /// --bounces`. Default [`crate::ranges::DEFAULT_BOUNCES`].
-    pub bounces: u32,
     /// Figure 6.9: the face whose gathered-from clusters are shown, if that view is on (set
     /// from [`ViewState::show_clusters`] and [`ViewState::picked_face`]).
     pub cluster_face: Option<u32>,
@@ -216,24 +216,25 @@ impl ViewState {
     /// The initial state for a material and model scale under `lights` (normalised mesh
     /// units), solved in render mode (lights change more often than shapes here).
     pub fn new(material: Material, scale_m: f64, lights: Vec<Light>) -> Self {
-        let profile = ProfileKind::default();
+        let transport = Transport::new(material, scale_m);
+        let settings = FrameSettings {
+            method: Method::Hierarchical,
+            mode: SolveMode::Render,
+            // The profile's default thresholds (transport oracle), which meet 1% of the
+            // exact solve on the bunny.
+            oracle: Some(lucent_core::solver::Oracle::for_profile(transport.profile)),
+            environment_shadows: true,
+            bounces: crate::ranges::DEFAULT_BOUNCES,
+        };
         ViewState {
             params: SolveParams {
-                material,
-                scale_m,
+                transport,
+                settings,
                 lights,
                 env: EnvChoice::None,
                 env_rotation_deg: 0.0,
                 env_strength: 1.0,
-                mode: SolveMode::Render,
-                profile,
-                single_scattering: Default::default(),
                 eye: None,
-                // The profile's default thresholds (transport oracle), which meet 1% of the
-                // exact solve on the bunny.
-                oracle: lucent_core::solver::Oracle::for_profile(profile),
-                shadows: true,
-                bounces: crate::ranges::DEFAULT_BOUNCES,
                 cluster_face: None,
             },
             deform: Deformations::default(),

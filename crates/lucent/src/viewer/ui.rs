@@ -2,7 +2,7 @@
 //! timings and the figure 6.9 view. It edits a [`ViewState`] in place and reports one-off
 //! requests (screenshot, resets) in [`UiRequests`]; it never touches the GPU or the worker.
 
-use super::core_adapter::{Timings, level_colour};
+use super::core_adapter::level_colour;
 use super::htsm::HtsmPanel;
 use super::state::{EnvChoice, SolveMode, Tool, ViewMethod, ViewState};
 use crate::progress::StageView;
@@ -10,10 +10,11 @@ use egui::{Color32, ComboBox, Slider, SliderClamping, Ui};
 use glam::{Vec2, Vec3};
 use lucent_core::bssrdf::ProfileKind;
 use lucent_core::bssrdf::{Material, PRESETS};
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::{Light, LightKind};
+use lucent_core::session::Timings;
 use lucent_core::solver::Oracle;
 use lucent_core::solver::oracle::OracleMode;
-use lucent_gpu::camera::CameraView;
 
 /// Read-only facts the panel displays.
 #[derive(Clone, Debug, Default)]
@@ -34,8 +35,8 @@ pub struct Status {
     pub timings: Timings,
     /// Link count of the solve shown (hierarchical solver only).
     pub links: Option<usize>,
-    /// Solver that produced the solve shown.
-    pub solver: &'static str,
+    /// Method that produced the solve shown.
+    pub method: lucent_core::session::Method,
     /// CPU time to record and submit the last frame, milliseconds.
     pub draw_ms: f64,
     /// Frames per second, smoothed.
@@ -124,7 +125,7 @@ fn header(ui: &mut Ui, status: &Status, req: &mut UiRequests) {
 
 /// The material editor; true when "save material" was clicked.
 fn material(ui: &mut Ui, state: &mut ViewState) -> bool {
-    let m = &mut state.params.material;
+    let m = &mut state.params.transport.material;
     ComboBox::from_label("preset").selected_text(m.name.clone()).show_ui(ui, |ui| {
         for (name, _, _) in PRESETS {
             if ui.selectable_label(m.name == *name, *name).clicked()
@@ -149,7 +150,7 @@ fn material(ui: &mut Ui, state: &mut ViewState) -> bool {
     }
     by_colour(ui, state);
     ui.add(
-        Slider::new(&mut state.params.scale_m, 0.001..=2.0)
+        Slider::new(&mut state.params.transport.scale_m, 0.001..=2.0)
             .logarithmic(true)
             .text("scale (m)")
             .clamping(SliderClamping::Edits),
@@ -201,9 +202,9 @@ fn by_colour(ui: &mut Ui, state: &mut ViewState) {
         }
         if ui.button("apply").clicked() {
             let (albedo, mfp) = (c.albedo.map(f64::from), c.mfp_mm.map(f64::from));
-            match Material::from_albedo_mfp("colour", albedo, mfp, state.params.material.eta) {
+            match Material::from_albedo_mfp("colour", albedo, mfp, state.params.transport.material.eta) {
                 Ok(m) => {
-                    state.params.material = m;
+                    state.params.transport.material = m;
                     c.error = None;
                 }
                 Err(e) => c.error = Some(e.to_string()),
@@ -321,39 +322,40 @@ fn environment(ui: &mut Ui, state: &mut ViewState) {
     {
         ui.weak(format!("{path} not found (run from the repository root)"));
     }
-    ui.checkbox(&mut p.shadows, "shadows");
+    ui.checkbox(&mut p.settings.environment_shadows, "shadows");
 }
 
 fn solver(ui: &mut Ui, state: &mut ViewState) {
-    let p = &mut state.params;
+    let (t, s) = (&mut state.params.transport, &mut state.params.settings);
     ui.horizontal(|ui| {
         for m in SolveMode::ALL {
-            ui.radio_value(&mut p.mode, m, m.name());
+            ui.radio_value(&mut s.mode, m, m.name());
         }
     });
-    let before = p.profile;
+    let before = t.profile;
     ui.horizontal(|ui| {
         ui.label("profile");
         for k in lucent_core::bssrdf::ProfileKind::ALL {
-            ui.radio_value(&mut p.profile, k, k.name());
+            ui.radio_value(&mut t.profile, k, k.name());
         }
     });
     // As on the command line: `mertens` takes no bounces unless asked.
-    p.bounces = crate::ranges::bounces_after_profile_change(p.bounces, before, p.profile);
-    if p.profile != lucent_core::bssrdf::ProfileKind::Mertens {
+    s.bounces = crate::ranges::bounces_after_profile_change(s.bounces, before, t.profile);
+    if t.profile.has_single_scattering() {
         ui.horizontal(|ui| {
             use lucent_core::shading::SingleScattering as S;
             ui.label("single scattering");
-            for s in [S::ViewRay, S::Profile, S::Off] {
-                ui.radio_value(&mut p.single_scattering, s, s.name());
+            for k in [S::ViewRay, S::Profile, S::Off] {
+                ui.radio_value(&mut t.single_scattering, k, k.name());
             }
         });
     }
-    ui.add(Slider::new(&mut p.bounces, crate::ranges::BOUNCES).text("bounces")).on_hover_text(
+    ui.add(Slider::new(&mut s.bounces, crate::ranges::BOUNCES).text("bounces")).on_hover_text(
         "light one part sends through the air to another: up to 64 rays a face, traced once (refitted as the mesh deforms), and a gather each; none by default for mertens",
     );
     // Transport-oracle thresholds (relative errors): smaller refines more.
-    oracle(ui, &mut p.oracle, p.profile);
+    let profile = t.profile;
+    oracle(ui, s.oracle.get_or_insert_with(|| Oracle::for_profile(profile)), profile);
     ui.checkbox(&mut state.show_clusters, "figure 6.9: clusters gathered by a triangle");
     if state.show_clusters {
         state.tool = Tool::PickTriangle;
@@ -383,8 +385,8 @@ fn deformation(ui: &mut Ui, state: &mut ViewState) {
         ui.radio_value(&mut state.tool, Tool::PickTriangle, "pick");
     });
     let d = &mut state.deform;
-    ui.add(Slider::new(&mut d.twist, -6.0..=6.0).text("twist (rad/unit)"));
-    ui.add(Slider::new(&mut d.noise_amplitude, 0.0..=0.1).text("noise"));
+    ui.add(Slider::new(&mut d.twist_degrees, -360.0..=360.0).text("twist (°, bottom to top)"));
+    ui.add(Slider::new(&mut d.noise.amplitude, 0.0..=0.1).text("noise"));
     ui.checkbox(&mut d.noise_animated, "animate noise");
     ui.horizontal(|ui| {
         ui.label(format!("{} dents", d.dents.len()));
@@ -422,7 +424,7 @@ fn timings(ui: &mut Ui, status: &Status) {
         ui.label(format!("{:.1} fps", status.fps));
         ui.end_row();
     });
-    ui.small(format!("solver: {}", status.solver));
+    ui.small(format!("method: {}", status.method.name()));
 }
 
 /// Draws a marker for every positional light over the 3D view (`rect`, points; `camera`

@@ -94,7 +94,7 @@ fn run(mut session: SolverSession, requests: Receiver<Request>, replies: Sender<
             Request::Load(origin) => Reply::Loaded(load(origin, &mut session)),
             Request::Solve { generation, mesh, params } => {
                 let solution = session.solve(&mesh, &params);
-                let t = &solution.timings;
+                let t = &solution.solved.timings;
                 log::info!(
                     "solve {generation}: {} faces, {:.1} ms (irradiance {:.1}, link {:.1}, gather {:.1}, push {:.1}, bounces {:.1})",
                     mesh.triangles.len(),

@@ -54,10 +54,7 @@ pub const DEFAULT_BOUNCES: u32 = 3;
 /// on thin parts (a face of the bunny at 1 cm returns 15,504 times its light), and bounces
 /// carried that glow on (the 11K dragon's bias +9% at one bounce, +161% at three).
 pub fn default_bounces(profile: lucent_core::bssrdf::ProfileKind) -> u32 {
-    match profile {
-        lucent_core::bssrdf::ProfileKind::Mertens => 0,
-        _ => DEFAULT_BOUNCES,
-    }
+    if profile.bounces_by_default() { DEFAULT_BOUNCES } else { 0 }
 }
 
 /// The bounces after the profile changed from `before` to `after` (the viewer's profile

@@ -7,6 +7,7 @@ use super::{LoadedEnvironment, MeshSource, SceneFile, TexturedMesh};
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::bssrdf::{Material, ProfileKind};
+use lucent_core::camera::OrbitCamera;
 use lucent_core::hierarchy::Hierarchy;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
 use lucent_core::mesh::Mesh;
@@ -15,7 +16,6 @@ use lucent_core::mesh::refine::{self, Refine};
 use lucent_core::mesh::texture::Texture;
 use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Transport};
 use lucent_core::solver::Oracle;
-use lucent_gpu::camera::OrbitCamera;
 use std::path::{Path, PathBuf};
 
 /// Side of the equirect copy of an environment map that the GPU reflects.
@@ -83,7 +83,8 @@ pub struct Overrides {
 
 /// A scene after loading and parsing: everything a frame needs.
 pub struct Scene {
-    /// Where the mesh came from, for messages (`"embedded bunny"`, a built-in name or the path).
+    /// Where the mesh came from, for messages (`"embedded bunny"`, `"built-in candle"` and so
+    /// on for the generated meshes, or the path).
     pub source: String,
     /// The mesh in its rest pose (before [`Scene::deformed`]), mesh units.
     pub mesh: Mesh,
@@ -153,7 +154,7 @@ impl Scene {
                 texture.map(|t| Texture { corner_uvs: refine::split_corner_uvs(&t.corner_uvs, n), ..t }),
             ),
         };
-        let (center, _) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+        let (center, _) = lucent_core::camera::bounding_sphere(&mesh.positions);
         let environment = environment(o, file.as_ref()).map_err(in_file)?;
         let mut lights: Vec<SceneLight> = if !o.lights.is_empty() {
             o.lights.iter().map(|s| parse_light(s, center).map(SceneLight::from)).collect::<Result<_>>()?
@@ -221,8 +222,8 @@ impl Scene {
 
     /// The camera framed on the rest mesh for a `width` x `height` image (fixed over an
     /// animation), as the GPU side draws it and view-ray single scattering sees it.
-    pub fn camera_view(&self, (width, height): (u32, u32)) -> lucent_gpu::camera::CameraView {
-        let (center, radius) = lucent_gpu::camera::bounding_sphere(&self.mesh.positions);
+    pub fn camera_view(&self, (width, height): (u32, u32)) -> lucent_core::camera::CameraView {
+        let (center, radius) = lucent_core::camera::bounding_sphere(&self.mesh.positions);
         self.camera.frame(center, radius, width as f32 / height.max(1) as f32)
     }
 
@@ -269,7 +270,7 @@ fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, Texture
             let mesh = f.load_textured_mesh()?;
             match f.mesh_source() {
                 MeshSource::File(p) => (p.display().to_string(), mesh, Some(p)),
-                MeshSource::Builtin(name) => (format!("built-in {name}"), mesh, None),
+                MeshSource::Builtin(name) => (super::builtin_mesh_label(&name), mesh, None),
             }
         }
         (None, None) => ("embedded bunny".to_string(), (lucent_core::mesh::embedded::bunny(), None), None),
@@ -294,7 +295,7 @@ fn transport(
         (None, None, Some(f)) => f.material()?,
         (None, None, None) => {
             let default = Material::by_name(DEFAULT_MATERIAL)?;
-            match mesh_path.filter(|p| is_gltf(p)) {
+            match mesh_path.filter(|p| super::is_gltf(p)) {
                 Some(path) => gltf_material(path, mesh, scale_m, default)?,
                 None => default,
             }
@@ -319,13 +320,6 @@ fn transport(
     let single_scattering = o.single_scattering.or(from_file).unwrap_or_default();
     let transmission = o.transmission.unwrap_or_default();
     Ok(Transport { material, scale_m, profile, single_scattering, transmission })
-}
-
-/// Whether `path` names a glTF or GLB file.
-fn is_gltf(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
 
 /// The material a glTF file's first material maps to (printing what was approximated and the
@@ -412,7 +406,7 @@ pub fn environment_of(name: &str, map: &EnvMap, rotation: f32, intensity: f32) -
 /// a back light behind and above that shows the translucency of thin parts (Mertens fig. 6.3);
 /// each gives irradiance 1 at the object's centre. The CLI and the viewer both start with these.
 pub fn default_lights(mesh: &Mesh) -> [Light; 2] {
-    let (center, radius) = lucent_gpu::camera::bounding_sphere(&mesh.positions);
+    let (center, radius) = lucent_core::camera::bounding_sphere(&mesh.positions);
     let key = center + Vec3::new(1.0, 1.1, 1.8) * radius;
     let back = center + Vec3::new(-0.3, 0.6, -2.2) * radius;
     [point_light(key, center), point_light(back, center)]

@@ -7,10 +7,10 @@
 
 use super::state::EnvChoice;
 use lucent_core::Rgb;
+use lucent_core::camera::CameraView;
 use lucent_core::irradiance::EnvMap;
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::texture::{Texture, UvSplit};
-use lucent_gpu::camera::CameraView;
 use lucent_gpu::mesh_pass::{AlbedoMap, EnvironmentMap, GpuMesh, MeshPass, Shading};
 use lucent_gpu::tonemap::{ToneMap, ToneMapPass};
 use lucent_gpu::{DEPTH_FORMAT, GpuContext, HDR_FORMAT};
@@ -59,7 +59,7 @@ struct Targets {
 }
 
 /// The view's passes, the mesh on the GPU, and the targets.
-pub struct ViewRenderer {
+pub struct ViewDrawer {
     mesh_pass: MeshPass,
     tone_pass: ToneMapPass,
     mesh: Option<GpuMesh>,
@@ -89,10 +89,10 @@ struct Textured {
 /// beyond this is lost in the Fresnel weight anyway).
 const REFLECTION_SIZE: (usize, usize) = (256, 128);
 
-impl ViewRenderer {
+impl ViewDrawer {
     /// Builds the passes for colour targets of `format`.
     pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> anyhow::Result<Self> {
-        Ok(ViewRenderer {
+        Ok(ViewDrawer {
             mesh_pass: MeshPass::new(ctx, HDR_FORMAT, MSAA_SAMPLES)?,
             tone_pass: ToneMapPass::new(ctx, format)?,
             mesh: None,
@@ -106,7 +106,7 @@ impl ViewRenderer {
     }
 
     /// Draws meshes with `texture` (its UVs must fit the mesh given to
-    /// [`ViewRenderer::set_geometry`]; a mesh of another topology is drawn untextured).
+    /// [`ViewDrawer::set_geometry`]; a mesh of another topology is drawn untextured).
     pub fn set_texture(&mut self, ctx: &GpuContext, texture: &Texture) -> anyhow::Result<()> {
         let image = &texture.image;
         let map = AlbedoMap::from_rgb(ctx, image.width, image.height, &image.texels)?;
@@ -116,7 +116,7 @@ impl ViewRenderer {
         Ok(())
     }
 
-    /// Whether the last [`ViewRenderer::set_environment`] set a map.
+    /// Whether the last [`ViewDrawer::set_environment`] set a map.
     pub fn reflects(&self) -> bool {
         matches!(self.env_map, Some((_, Some(_)))) && self.env_uploaded.is_some()
     }

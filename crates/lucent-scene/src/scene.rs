@@ -45,19 +45,24 @@ use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
+use lucent_core::camera::OrbitCamera;
 use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
-use lucent_core::mesh::texture::Texture;
-use lucent_core::mesh::{Mesh, embedded, generate};
-use lucent_gpu::camera::OrbitCamera;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 pub mod gltf_material;
 mod material;
+mod meshes;
 mod resolve;
 pub mod save;
 pub use material::{CustomMaterial, MaterialSpec, SingleScatteringKey};
+pub use meshes::{
+    BUILTIN_MESHES, MeshSource, TexturedMesh, is_gltf, load_mesh_file, load_named_mesh,
+    load_textured_mesh_file,
+};
+use meshes::{builtin_mesh, builtin_mesh_label};
 
 pub use resolve::{Overrides, Scene, default_lights, orbit_lights, parse_light, parse_three};
 
@@ -276,18 +281,6 @@ impl Default for CameraSpec {
     }
 }
 
-/// Names accepted by [`SceneFile::load_mesh`] for built-in meshes.
-pub const BUILTIN_MESHES: &[&str] = &["bunny", "candle", "cube", "sphere"];
-
-/// Where the mesh comes from.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum MeshSource {
-    /// A built-in mesh or generator, by name.
-    Builtin(String),
-    /// A mesh file (resolved against the scene file's folder).
-    File(PathBuf),
-}
-
 /// An environment ready for the solver and the renderer.
 #[derive(Clone, Debug)]
 pub struct LoadedEnvironment {
@@ -481,62 +474,6 @@ impl SceneFile {
         };
         resolve::environment_of(&spec.path, &map, spec.rotation, spec.intensity).map(Some)
     }
-}
-
-/// A mesh named on the command line: a built-in name, or a file path (any path: the user chose
-/// it, unlike a path inside a scene file).
-pub fn load_named_mesh(name: &str) -> Result<Mesh> {
-    let p = Path::new(name);
-    if p.extension().is_some() || name.contains(['/', '\\']) {
-        load_mesh_file(p)
-    } else {
-        builtin_mesh(&name.trim().to_ascii_lowercase())
-    }
-}
-
-/// A built-in mesh by its lower-case name: `bunny` (embedded Stanford bunny), `candle`, `cube`
-/// (32 x 32 squares per side), `sphere` (icosphere, 5 subdivisions).
-fn builtin_mesh(name: &str) -> Result<Mesh> {
-    Ok(match name {
-        "bunny" => embedded::bunny(),
-        // Finer than the generator's default, so Gouraud shading shows no bands along the side
-        // and a twist bends the side visibly.
-        "candle" => {
-            generate::candle(&generate::CandleParams { segments: 64, side_rings: 32, ..Default::default() })
-        }
-        "cube" => generate::cube(32),
-        "sphere" | "icosphere" => generate::icosphere(5),
-        other => bail!(
-            "unknown built-in mesh {other:?} (known: {}); a file path needs an extension",
-            BUILTIN_MESHES.join(", ")
-        ),
-    })
-}
-
-/// Loads a mesh file and prints one warning line per repair or problem the loader found
-/// (degenerate faces dropped, vertices welded, an open or non-manifold surface, a cut-short
-/// last line), naming the file.
-pub fn load_mesh_file(path: &Path) -> Result<Mesh> {
-    let (mesh, report) = lucent_core::mesh::load_mesh_with_report(path)?;
-    for warning in report.warnings() {
-        eprintln!("lucent: warning: {}: {warning}", path.display());
-    }
-    Ok(mesh)
-}
-
-/// A mesh with its texture, if it has one.
-pub type TexturedMesh = (Mesh, Option<Texture>);
-
-/// Loads a mesh file like [`load_mesh_file`] with its texture (UVs and the decoded colour
-/// image its material names), if it has one. A missing, corrupt or oversized image is an
-/// error naming the image file.
-pub fn load_textured_mesh_file(path: &Path) -> Result<TexturedMesh> {
-    let (mesh, report, texture) = lucent_core::mesh::load_textured_mesh(path)?;
-    for warning in report.warnings() {
-        eprintln!("lucent: warning: {}: {warning}", path.display());
-    }
-    let texture = texture.map(|t| t.load()).transpose()?.flatten();
-    Ok((mesh, texture))
 }
 
 /// toml's error as one line: `line L, column C: message` (its default rendering quotes the
