@@ -35,7 +35,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 /// Photons below this weight play Russian roulette (survivors double).
 const ROULETTE: f64 = 0.05;
 /// Largest cell (mean free paths) of [`multiple_return_exact`]'s collision density.
-pub const CELL_TAU: f64 = 0.1;
+pub const CELL_TAU: f64 = 0.15;
 /// Most cells of one solve (thicker slabs get wider cells).
 const MAX_CELLS: usize = 1000;
 /// Milne's extrapolation length for isotropic scattering (mean free paths).
@@ -206,7 +206,7 @@ fn multiple_collisions(tau: f64, rho: f64, mu: f64) -> Option<(Vec<f64>, Vec<f64
 
 /// Cell edges over `0..tau` for [`multiple_return_exact`]: fine at both faces, where the
 /// first collisions and the escape chances change over a fraction of a mean free path, and
-/// growing by a tenth per cell into the slab up to [`CELL_TAU`] (about 120 cells at 24 mean
+/// growing by 15% per cell into the slab up to [`CELL_TAU`] (about 200 cells at 24 mean
 /// free paths).
 fn cell_edges(tau: f64) -> Vec<f64> {
     let first = (0.004f64).min(tau / 16.0);
@@ -215,7 +215,7 @@ fn cell_edges(tau: f64) -> Vec<f64> {
     let mut h = first;
     while half[half.len() - 1] + h < 0.5 * tau {
         half.push(half[half.len() - 1] + h);
-        h = (h * 1.1).min(CELL_TAU);
+        h = (h * 1.15).min(CELL_TAU);
     }
     let mut edges = half.clone();
     edges.push(0.5 * tau);
@@ -318,7 +318,7 @@ fn walk_out(tau: f64, rho: f64, eta: f64, mut z: f64, rng: &mut Pcg64Mcg) -> Sla
 /// proportion to the thickness.
 const TABLE_MIN_TAU: f64 = 0.02;
 /// Thicknesses of a [`SlabTable`], log-spaced from [`TABLE_MIN_TAU`] to [`WALK_TAU`].
-const TABLE_STEPS: usize = 32;
+const TABLE_STEPS: usize = 24;
 /// Photons per thickness where the boundary reflects (`η ≠ 1`): a standard error of about
 /// 1% of `T` at 20 mean free paths.
 const WALK_PATHS: usize = 16_384;
