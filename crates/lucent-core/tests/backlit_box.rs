@@ -21,10 +21,10 @@ fn backlit_box(material: &str, transmission: Transmission, half: f32) -> [f32; 3
     s.set_lights(vec![SceneLight::from(Light::Directional { direction: Vec3::Z, irradiance: Vec3::ONE })]);
     let b = s.solve().face_b.clone();
     let (mut sum, mut n) = (Rgb::ZERO, 0);
-    for f in 0..mesh.triangles.len() {
+    for (f, b) in b.iter().enumerate() {
         let c = mesh.face_centroid(f);
         if mesh.face_normal(f).z > 0.9 && c.x.abs() < half && c.y.abs() < half {
-            sum += b[f];
+            sum += *b;
             n += 1;
         }
     }

@@ -388,7 +388,7 @@ impl SlabTable {
     /// slab `tau` mean free paths thick (the table's nearest thicknesses; its thinnest and
     /// thickest beyond them), or `None` where the table has no lobe (`η ≠ 1`).
     pub fn lobe(&self, tau: f64, mu: f32) -> Option<f32> {
-        if self.lobe.is_empty() || !(tau > 0.0) {
+        if self.lobe.is_empty() || tau.is_nan() || tau <= 0.0 {
             return None;
         }
         let n = self.tau.len();
@@ -413,7 +413,7 @@ impl SlabTable {
     /// docs).
     pub fn at(&self, tau: f64) -> SlabReturn {
         let n = self.tau.len();
-        if !(tau > 0.0) {
+        if tau.is_nan() || tau <= 0.0 {
             return SlabReturn::default();
         }
         if tau <= self.tau[0] {
