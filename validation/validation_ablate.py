@@ -5,7 +5,9 @@ test cases of cases.json once as it is and once with each correction of ABLATION
 compares every image with the references as `compare` does (`compare_images`, the same
 interior mask and figures), and prints per correction and split (fit, test): the median over
 cases of each case's |median| error (and its change from the default), the median over cases
-of the signed median, of the bias and of each channel's median, and the worst case. A matrix
+of the signed median, of the bias and of each channel's median, the median over cases of the
+worst 8x8 block beyond twice its noise (`8x8`: where a correction acts locally, at a shadow
+edge or a limb, the medians hardly move), and the worst case. A matrix
 of every case's median follows, and `--json` gives every row. docs/corrections.md says what
 each correction is and records these figures.
 
@@ -55,6 +57,7 @@ def split_summary(rows):
         "bias": float(np.nanmedian([x["bias"] for x in f])),
         "channels": [float(np.nanmedian([x["channel_median"][k] for x in f])) for k in range(3)],
         "noise": float(np.nanmedian([x["noise"] for x in f])),
+        "worst_block": float(np.nanmedian([x["worst_block"] for x in f])),
         "worst": float(med[worst]),
         "worst_case": [r["case"] for r in rows if r["full"]["pixels"] > 0][worst],
     }
@@ -99,7 +102,7 @@ def pct(v):
 def print_tables(rows, names):
     """The per-correction summary, then every case's median under each correction."""
     summ = {}
-    print("correction     split  cases  med|err|  change   median    bias        R/G/B median   noise  worst")
+    print("correction     split  cases  med|err|  change   median    bias        R/G/B median   noise  8x8  worst")
     for name in names:
         for split in SPLITS:
             s = split_summary([r for r in rows if r["profile"] == name and r["split"] == split])
@@ -110,7 +113,7 @@ def print_tables(rows, names):
             change = pct(s["median_abs"] - base["median_abs"]) if base and name != "default" else "       "
             rgb = "/".join(f"{100 * c:+.1f}" for c in s["channels"])
             print(f"{name:14s} {split:5s} {s['cases']:5d} {100 * s['median_abs']:8.1f}% {change} {pct(s['median'])} "
-                  f"{pct(s['bias'])} {rgb:>17s}% {100 * s['noise']:5.1f}%  {pct(s['worst'])} ({s['worst_case']})")
+                  f"{pct(s['bias'])} {rgb:>17s}% {100 * s['noise']:5.1f}% {100 * s['worst_block']:4.0f}%  {pct(s['worst'])} ({s['worst_case']})")
     cases = list(dict.fromkeys(r["case"] for r in rows))
     short = [n[:11] for n in names]
     print("\nper case: median error (luminance) under each correction left out")
