@@ -34,9 +34,13 @@ ABLATIONS = [
     ("gain", "the finite-body gain (1 everywhere; the energy bound stays)", ["--ablate", "gain"]),
     ("slab-share", "the gain's division by the profile's slab share", ["--ablate", "slab-share"]),
     ("reach", "the gain's per-channel reach factor", ["--ablate", "reach"]),
+    ("reach-division", "the reach factor's division by its channel mean (fitted): light and hue, as derived",
+     ["--ablate", "reach-division"]),
     ("entry-ratio", "the entry term's albedo ratio A(mu_t)/A(1): Fresnel alone", ["--ablate", "entry-ratio"]),
     ("entry-local", "the entry term's local part: all carried by the profile", ["--ablate", "entry-local"]),
     ("bounces", "bounces between parts (--bounces 0)", ["--bounces", "0"]),
+    ("unbounced-single", "leaving the direct light's single scattering out of the bounces (fitted): bounced",
+     ["--ablate", "unbounced-single"]),
     ("refine", "splitting faces to 6 mean free paths (--refine 0)", ["--refine", "0"]),
     ("env-shadows", "the environment's shadow by the mesh (sky cases only)", ["--ablate", "env-shadows"]),
 ]

@@ -20,6 +20,9 @@ pub struct Ablations {
     pub slab_share: bool,
     /// The gain's per-channel reach factor (the hue a small part's cut takes back).
     pub reach: bool,
+    /// The reach factor's division by its mean over the channels (a choice made on the fit
+    /// cases): each channel takes its whole factor, light and hue, as the sphere derives it.
+    pub reach_division: bool,
     /// The entry term's half-space albedo ratio `A(μ_t)/A(1)` (`bssrdf::Entry`): Fresnel's
     /// transmittance alone, all of it carried by the profile.
     pub entry_ratio: bool,
@@ -36,20 +39,25 @@ pub struct Ablations {
     /// The geometric blend of view-ray single scattering across a face: linear (the mesh
     /// pass, `Solved::linear_single`).
     pub single_blend: bool,
+    /// The exclusion of the direct light's single scattering from the bounces (a choice made
+    /// on the fit cases, `session/bounces.rs`): with this the first bounce sends it on too.
+    pub direct_single_unbounced: bool,
 }
 
 impl Ablations {
     /// The names `--ablate` takes, each with what it switches off.
-    pub const NAMES: [(&'static str, &'static str); 9] = [
+    pub const NAMES: [(&'static str, &'static str); 11] = [
         ("gain", "the finite-body gain (every face's gain 1)"),
         ("slab-share", "the gain's division by the profile's share through a slab-like part"),
         ("reach", "the gain's per-channel reach factor"),
+        ("reach-division", "the reach factor's division by its channel mean: light and hue"),
         ("entry-ratio", "the entry term's albedo ratio A(mu_t)/A(1): Fresnel alone"),
         ("entry-local", "the entry term's local part: all carried by the profile"),
         ("exit-lobe", "the exit lobe T(mu_o): flat"),
         ("chord", "the body's chord along the view ray"),
         ("env-shadows", "the environment's shadow by the mesh"),
         ("single-blend", "the geometric blend of view-ray single scattering: linear"),
+        ("unbounced-single", "the direct light's single scattering left out of the bounces: bounced"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -62,19 +70,21 @@ impl Ablations {
             "gain" => &mut self.gain,
             "slab-share" => &mut self.slab_share,
             "reach" => &mut self.reach,
+            "reach-division" => &mut self.reach_division,
             "entry-ratio" => &mut self.entry_ratio,
             "entry-local" => &mut self.entry_local,
             "exit-lobe" => &mut self.exit_lobe,
             "chord" => &mut self.chord,
             "env-shadows" => &mut self.env_shadows,
             "single-blend" => &mut self.single_blend,
+            "unbounced-single" => &mut self.direct_single_unbounced,
             _ => return None,
         })
     }
 
     /// The finite-body gain's terms beside the sphere's gain.
     pub fn gain_terms(&self) -> GainTerms {
-        GainTerms { slab_share: !self.slab_share, reach: !self.reach }
+        GainTerms { slab_share: !self.slab_share, reach: !self.reach, reach_hue_only: !self.reach_division }
     }
 
     /// `profile` with the entry term's ablated parts left out (unchanged without any, or for a
@@ -134,7 +144,11 @@ mod tests {
         let fresnel = Ablations { entry_ratio: true, ..Default::default() }.applied(p.clone());
         // Fresnel's transmittance alone (the preset's eta, 1.3), in every channel.
         let f_t = Entry::fresnel(p.eta).at(0.3);
-        assert!((fresnel.entry.at(0.3) - f_t).abs().max_element() < 1e-6, "{} vs {f_t}", fresnel.entry.at(0.3));
+        assert!(
+            (fresnel.entry.at(0.3) - f_t).abs().max_element() < 1e-6,
+            "{} vs {f_t}",
+            fresnel.entry.at(0.3)
+        );
         assert!(!fresnel.entry.has_local());
         let carried = Ablations { entry_local: true, ..Default::default() }.applied(p.clone());
         assert!(!carried.entry.has_local());

@@ -95,11 +95,15 @@ pub struct GainTerms {
     pub slab_share: bool,
     /// Multiply each channel by its reach factor over their weighted mean (the hue).
     pub reach: bool,
+    /// Divide the reach factors by their weighted mean, so that they move the hue and not the
+    /// light (chosen on the fit cases); without it each channel takes its whole factor, the
+    /// sphere's derivation.
+    pub reach_hue_only: bool,
 }
 
 impl GainTerms {
     /// Both terms: lucent's gain.
-    pub const ALL: GainTerms = GainTerms { slab_share: true, reach: true };
+    pub const ALL: GainTerms = GainTerms { slab_share: true, reach: true, reach_hue_only: true };
 }
 
 /// Thicknesses of the through-slab table.
@@ -171,7 +175,7 @@ impl FiniteBody {
         // outside what the sphere model knows; the cut is capped there.
         let cut =
             if self.terms.reach { reach.map(|x| 1.0 / (1.0 - (1.0 - s) * x).max(0.1)) } else { [1.0; 3] };
-        let hue = self.weighted(cut);
+        let hue = if self.terms.reach_hue_only { self.weighted(cut) } else { 1.0 };
         let one = gain / (1.0 + s * share);
         Rgb::from_array(std::array::from_fn(|c| (one * cut[c] / hue) as f32))
     }
