@@ -339,11 +339,9 @@ def compare_images(case, ours, a, b, single, heat_path=None):
             "green_or_blue_above_red": chroma_violations(ours, mask, a, b) if case["material"] != "ketchup" else None}
 
 
-def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), only=(), split=None):
-    import mitsuba as mi
-    mi.set_variant("scalar_rgb")
-    os.makedirs(out_dir, exist_ok=True)
-    rows = []
+def comparable_cases(cfg, only=(), split=None):
+    """The cases of `cfg` named in `only` (all when empty) of `split` (all when None) whose mesh
+    and reference are here; a line on stderr for each one that is not."""
     for case in cfg["cases"]:
         if (only and case["name"] not in only) or (split and case.get("split", "fit") != split):
             continue
@@ -353,6 +351,15 @@ def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), o
         if not os.path.exists(os.path.join(REFS, f"{case['name']}.half_a.exr")):
             print(f"{case['name']}: skipped, no reference yet (`lucent_validation.py reference {case['name']}`)", file=sys.stderr)
             continue
+        yield case
+
+
+def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), only=(), split=None):
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    os.makedirs(out_dir, exist_ok=True)
+    rows = []
+    for case in comparable_cases(cfg, only, split):
         a, b, single = reference_parts(case)
         for profile in profiles:
             out = os.path.join(out_dir, f"{case['name']}.{profile}.exr")

@@ -81,16 +81,9 @@ def split_summary(rows):
 
 def render_all(cfg, names, out_dir, reuse, only, split):
     """Every (correction, case) row, rendering what `reuse` does not find in `out_dir`."""
-    from lucent_validation import REFS, SCENES, compare_images, mesh_missing, read_exr, reference_parts, render_lucent
-    cases = [c for c in cfg["cases"] if (not only or c["name"] in only) and (not split or c.get("split", "fit") == split)]
+    from lucent_validation import SCENES, comparable_cases, compare_images, read_exr, reference_parts, render_lucent
     rows = []
-    for case in cases:
-        if mesh_missing(case["mesh"]):
-            print(f"{case['name']}: skipped, {mesh_missing(case['mesh'])}", file=sys.stderr)
-            continue
-        if not os.path.exists(os.path.join(REFS, f"{case['name']}.half_a.exr")):
-            print(f"{case['name']}: skipped, no reference", file=sys.stderr)
-            continue
+    for case in comparable_cases(cfg, only, split):
         a, b, single = reference_parts(case)
         for name, _, args in ABLATIONS:
             if name not in names:
