@@ -276,7 +276,8 @@ fn light_for(mesh: &Mesh) -> [Light; 1] {
 /// alone (the energy bound acts on the ears: the exact solve applies it too).
 #[test]
 fn bunny_accuracy_against_exact() {
-    let failed: Vec<String> = ProfileKind::ALL.into_iter().flat_map(|kind| bunny_accuracy(kind, false)).collect();
+    let failed: Vec<String> =
+        ProfileKind::ALL.into_iter().flat_map(|kind| bunny_accuracy(kind, false)).collect();
     assert!(failed.is_empty(), "over 1% against the exact solve: {}", failed.join(", "));
 }
 

@@ -35,7 +35,10 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
         // The numerical `∫ R dA` of the local limit is the closed form's.
         let closed = d.total_diffuse_reflectance();
         for c in 0..3 {
-            assert!((loc.r_total[c] as f64 / closed[c] - 1.0).abs() < 2e-3, "{kind} ss={single}: {loc:?} vs {closed:?}");
+            assert!(
+                (loc.r_total[c] as f64 / closed[c] - 1.0).abs() < 2e-3,
+                "{kind} ss={single}: {loc:?} vs {closed:?}"
+            );
         }
         let e = face_irradiance(&mesh, &light, &d.entry);
         let want = exact::solve(&mesh, &d, &e, &FormFactorOptions::default());
@@ -52,7 +55,11 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
             100.0 * err_render
         );
         assert!(reach_mm < 0.1, "{kind} ss={single}: reach {reach_mm} mm");
-        assert!(otf.stats.local_faces >= n * 9 / 10, "{kind} ss={single}: {} local faces", otf.stats.local_faces);
+        assert!(
+            otf.stats.local_faces >= n * 9 / 10,
+            "{kind} ss={single}: {} local faces",
+            otf.stats.local_faces
+        );
         assert!(link.links <= 2 * n, "{kind} ss={single}: {} links", link.links);
         assert!(err <= 0.01 && err_render <= 0.01, "{kind} ss={single}: {err} / {err_render}");
     }

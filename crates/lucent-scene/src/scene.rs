@@ -52,8 +52,8 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 pub mod gltf_material;
-mod material;
 mod light;
+mod material;
 mod meshes;
 mod resolve;
 pub mod save;

@@ -1,5 +1,4 @@
 use super::*;
-use glam::Vec3;
 
 fn candle() -> Option<PathBuf> {
     Some(format!("{}/../../examples/scenes/candle.toml", env!("CARGO_MANIFEST_DIR")).into())
