@@ -223,6 +223,9 @@ pub struct Shading {
     /// which keeps the exitance); default flat, the paper's. A solve gives the profile's
     /// (`lucent_core::session::Solved::exit_lobe`).
     pub exit_lobe: ExitLobe,
+    /// Blend single scattering linearly across a face instead of geometrically: only for the
+    /// validation's ablation (`lucent render --ablate single-blend`). Default false.
+    pub linear_single: bool,
 }
 
 impl Default for Shading {
@@ -235,6 +238,7 @@ impl Default for Shading {
             environment: 0.0,
             background: 0.0,
             exit_lobe: ExitLobe::flat(),
+            linear_single: false,
         }
     }
 }
@@ -465,7 +469,7 @@ impl MeshPass {
                 shading.shininess.max(1e-3),
                 shading.environment.max(0.0),
             ],
-            counts: [shading.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            counts: [shading.lights.len().min(MAX_LIGHTS) as u32, shading.linear_single as u32, 0, 0],
             background: [shading.background.max(0.0), 0.0, 0.0, 0.0],
             lights,
             exit_lobe: shading.exit_lobe.samples().map(|[r, g, b]| [r, g, b, 0.0]),

@@ -114,6 +114,11 @@ pub struct RenderArgs {
     /// `refine`, else auto.
     #[arg(long, value_parser = parse_refine)]
     pub refine: Option<Refine>,
+    /// Corrections of the default path left out, for measuring each against the path tracer
+    /// (`validation/lucent_validation.py ablate`, docs/corrections.md): comma-separated names
+    /// of `lucent_core::session::Ablations::NAMES`. Hidden: not for pictures.
+    #[arg(long, hide = true, value_name = "NAME[,NAME]")]
+    pub ablate: Option<lucent_core::session::Ablations>,
     /// Environment light and reflection map: `courtyard`, `forest` (the maps in assets/) or an
     /// equirectangular .hdr/.exr path. Replaces the scene's environment.
     #[arg(long)]
@@ -259,6 +264,7 @@ impl RenderArgs {
             mode: self.mode,
             // Plain `transport` means the profile's own thresholds.
             oracle: (self.oracle != Oracle::default()).then_some(self.oracle),
+            ablate: self.ablate.unwrap_or_default(),
             ..Default::default()
         }
     }

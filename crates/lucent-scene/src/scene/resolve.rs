@@ -14,7 +14,7 @@ use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
 use lucent_core::mesh::refine::{self, Refine};
 use lucent_core::mesh::texture::Texture;
-use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Transport};
+use lucent_core::session::{Ablations, FrameSession, FrameSettings, Method, SolveMode, Transport};
 use lucent_core::solver::Oracle;
 use std::path::{Path, PathBuf};
 
@@ -83,6 +83,8 @@ pub struct Overrides {
     pub mode: Option<SolveMode>,
     /// Refinement thresholds; `None`: the profile's defaults.
     pub oracle: Option<Oracle>,
+    /// Corrections left out, for the validation's ablation (none by default).
+    pub ablate: Ablations,
 }
 
 /// A scene after loading and parsing: everything a frame needs.
@@ -182,11 +184,12 @@ impl Scene {
             method,
             mode: o.mode.unwrap_or_default(),
             oracle: o.oracle,
-            environment_shadows: !o.no_shadows,
+            environment_shadows: !o.no_shadows && !o.ablate.env_shadows,
             bounces: o
                 .bounces
                 .or(file.as_ref().and_then(|f| f.bounces))
                 .unwrap_or(crate::ranges::default_bounces(transport.profile)),
+            ablate: o.ablate,
         };
         Ok(Scene {
             source,
