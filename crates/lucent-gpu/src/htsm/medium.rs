@@ -57,6 +57,10 @@ pub struct HtsmMedium {
     pub scale_m: f32,
 }
 
+/// The largest coefficient [`HtsmMedium::validate`] accepts, mm^-1 (a mean free path of a
+/// micrometre; beyond it every path through an object is black and f32 optical depths overflow).
+pub const MAX_COEFFICIENT: f32 = 1000.0;
+
 /// Default `sigma_d`, mm^-1 (grey): at density 1 a vein absorbs about a hundred times more than
 /// lucent's marble, so that veins read as dark sheets at a few centimetres.
 pub const DEFAULT_DENSITY_SIGMA_A: f32 = 0.5;
@@ -89,8 +93,8 @@ impl HtsmMedium {
             ("sigma_a", self.sigma_a),
             ("density sigma_a", self.density_sigma_a),
         ] {
-            if !(v.is_finite() && v.cmpge(Vec3::ZERO).all()) {
-                return Err(format!("HTSM medium: {name} {v} mm^-1 must be finite and >= 0"));
+            if !(v.cmpge(Vec3::ZERO).all() && v.cmple(Vec3::splat(MAX_COEFFICIENT)).all()) {
+                return Err(format!("HTSM medium: {name} {v} mm^-1 must be within 0..={MAX_COEFFICIENT}"));
             }
         }
         if !(self.scale_m.is_finite() && self.scale_m > 0.0) {
@@ -170,5 +174,9 @@ mod tests {
         assert!(bad.validate().unwrap_err().contains("scale"));
         let bad = HtsmMedium { sigma_a: Vec3::new(-1.0, 0.0, 0.0), ..m };
         assert!(bad.validate().unwrap_err().contains("sigma_a"));
+        for v in [f32::NAN, f32::INFINITY, 1e30] {
+            let bad = HtsmMedium { density_sigma_a: Vec3::splat(v), ..m };
+            assert!(bad.validate().unwrap_err().contains("density sigma_a"), "{v}");
+        }
     }
 }

@@ -319,7 +319,7 @@ mod tests {
         let a = args(&["--transport-distance", "0.3", "--density-absorption", "1"]);
         let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap_err());
         assert!(e.contains("--density-absorption") && e.contains("--transport-distance"), "{e}");
-        for bad in ["-1", "1,2", "x"] {
+        for bad in ["-1", "1,2", "x", "1e30", "nan"] {
             let a = args(&["--density-absorption", bad]);
             let e = format!(
                 "{:#}",
