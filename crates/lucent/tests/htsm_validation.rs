@@ -46,6 +46,12 @@ fn htsm_stays_within_its_recorded_bounds_against_the_path_tracer() {
                 println!("{name}: its mesh is not here ({how}); the committed cases still run");
                 continue;
             }
+            // A fetched mesh's references are made where it was fetched; none is committed yet
+            // for a case whose mesh was not there when they were made.
+            if !root.join(format!("validation/references/{name}.half_a.exr")).exists() {
+                println!("{name}: no reference made yet (htsm_validation.py reference {name})");
+                continue;
+            }
         }
         let part = |p: &str| read_exr(&root.join(format!("validation/references/{name}.{p}.exr"))).2;
         let (a, b) = (part("half_a"), part("half_b"));
