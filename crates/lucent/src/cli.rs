@@ -282,8 +282,8 @@ pub struct HtsmArgs {
     /// Ray-cast steps through the density volume per sample ray.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::HTSM_STEPS), allow_negative_numbers = true, default_value_t = 16, help_heading = "HTSM (--method htsm)")]
     pub steps: u32,
-    /// Absorption the density adds at density 1, mm^-1: one number (grey) or R,G,B, each
-    /// >= 0. The medium is the scene's material (sigma_s', sigma_a, eta) with absorption
+    /// Absorption the density adds at density 1, mm^-1: one number (grey) or R,G,B, each in
+    /// 0..=1000. The medium is the scene's material (sigma_s', sigma_a, eta) with absorption
     /// sigma_a + density * this; HTSM attenuates by its diffusion coefficient (docs/htsm.md).
     /// Default 0.5.
     #[arg(long, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
