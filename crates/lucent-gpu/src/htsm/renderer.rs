@@ -8,6 +8,7 @@
 use super::camera_pass::CameraPass;
 use super::environment::{environment_lights, write_uniforms};
 use super::geometry::Geometry;
+use super::medium::extinction_terms;
 use super::mips::MipPass;
 use super::pipeline::{FrameUniforms, LightUniforms, Uniforms, begin, cleared};
 use super::reference::{LightFrustum, REFERENCE_IMAGES, ReferencePass};
@@ -236,13 +237,16 @@ impl HtsmRenderer {
     /// The uniforms shared by every pass of the frame.
     fn frame_uniforms(&self, view: &HtsmView, params: &HtsmParams) -> FrameUniforms {
         let extent = self.geometry.extent();
+        let (sigma_a, sigma_s, sigma_d) = extinction_terms(params);
         let mut u = FrameUniforms {
             view_proj: view.camera.view_proj.to_cols_array_2d(),
             box_min: self.geometry.box_min.extend(0.0).to_array(),
             box_size: self.geometry.box_size.extend(1.0 / extent).to_array(),
             eye: view.camera.eye.extend(1.0).to_array(),
             transport: params.transport_colour.extend(params.transport_distance).to_array(),
-            sigma: params.sigma().extend(params.density_scale).to_array(),
+            sigma: sigma_a.extend(0.0).to_array(),
+            scatter: sigma_s.extend(0.0).to_array(),
+            density_absorption: sigma_d.extend(0.0).to_array(),
             material: [params.f0(), params.shadow_bias, (self.camera.density_levels - 1) as f32, 0.0],
             shading: [params.diffuse, params.specular, params.shininess, 0.0],
             counts: [
