@@ -43,8 +43,11 @@ mod body;
 mod bounces;
 mod irradiance;
 mod subsurface;
+mod timings;
 mod transport;
 mod view;
+pub use crate::shading::view_basis::ViewTerms;
+pub use timings::Timings;
 pub use transport::Transport;
 
 /// How the subsurface transport is computed.
@@ -143,41 +146,6 @@ pub struct FrameSettings {
     /// off. The `lucent` command line, scenes and viewer default to 3 (`ranges::DEFAULT_BOUNCES`
     /// there).
     pub bounces: u32,
-}
-
-/// Wall-clock times of one solve's stages, milliseconds. Stages that did not run are 0.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Timings {
-    /// Irradiance at the leaves: lights, shadow rays, environment (and the BVH refit), the
-    /// body's thickness rays and, on a new mesh's first hierarchical solve, the solver's
-    /// making (its hierarchy's build), which runs beside them.
-    pub irradiance_ms: f64,
-    /// Profile tables, link creation, refinement or incremental update.
-    pub link_ms: f64,
-    /// Pulling irradiance up the hierarchy.
-    pub pull_ms: f64,
-    /// Gathering along the links (the whole O(N²) sum for the exact solver).
-    pub gather_ms: f64,
-    /// What depends on the eye: single scattering along the view ray
-    /// (`shading::single_scattering`) and the body's chord factor (`shading::exit_chord`).
-    pub single_scattering_ms: f64,
-    /// Pushing `B` down to the leaves and the per-vertex average.
-    pub push_ms: f64,
-    /// Bounces between parts: their rays and solves ([`crate::irradiance::interreflection`]).
-    pub bounces_ms: f64,
-}
-
-impl Timings {
-    /// Sum of the stages, milliseconds.
-    pub fn total_ms(&self) -> f64 {
-        self.irradiance_ms
-            + self.link_ms
-            + self.pull_ms
-            + self.gather_ms
-            + self.push_ms
-            + self.bounces_ms
-            + self.single_scattering_ms
-    }
 }
 
 /// What one solve produced.
@@ -400,6 +368,13 @@ impl FrameSession {
         self.changes.view |= self.view.set_eye(eye);
     }
 
+    /// How the view terms (chord factor, view-ray single scattering) are evaluated: traced per
+    /// eye (the reference, default) or split so that an eye-only change traces no ray
+    /// ([`crate::shading::view_basis`]).
+    pub fn set_view_terms(&mut self, terms: ViewTerms) {
+        self.changes.view |= self.view.set_terms(terms);
+    }
+
     /// Counts the progress of long solves (hierarchical refinement: leaves of finished receiver
     /// subtrees; exact solve: receivers) on `progress`, for a front end to poll; `None` stops.
     pub fn set_progress(&mut self, progress: Option<Arc<Progress>>) {
@@ -438,15 +413,18 @@ impl FrameSession {
         let make = self.subsurface.maker_if_missing(f);
         let t = Instant::now();
         let (irradiance, body) = (&mut self.irradiance, &mut self.body);
-        let (solver, ()) = rayon::join(
+        let (solver, body_ms) = rayon::join(
             || make.map(|make| make()),
             || {
                 irradiance.update(f, &changes);
+                let t = Instant::now();
                 body.update(f, irradiance.caster(), &changes);
+                ms_since(t)
             },
         );
         self.subsurface.keep(solver);
-        timings.irradiance_ms = ms_since(t);
+        timings.body_ms = body_ms;
+        timings.irradiance_ms = ms_since(t) - body_ms;
         let (irradiance, e, gain) = (&self.irradiance, self.irradiance.faces(), self.body.face_gain());
         let (mut face_b, links) =
             self.subsurface.solve(f, gain, &irradiance.carried(e), &changes, f.oracle(), &mut timings);

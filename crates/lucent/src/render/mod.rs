@@ -174,6 +174,7 @@ fn render_mertens(
     let (mesh, mut session) = lucent::still::session(scene, size);
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
+    session.set_view_terms(args.view_terms);
     let profile = session.profile().clone();
     let solved = session.solve();
     drop(watch);
@@ -181,17 +182,7 @@ fn render_mertens(
     if method == Method::Hierarchical {
         local_limit_note(&mesh, &profile);
     }
-    let st = &solved.timings;
-    log::info!(
-        "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms, bounces {:.1} ms, single scattering {:.1} ms",
-        st.irradiance_ms,
-        st.link_ms,
-        st.pull_ms,
-        st.gather_ms,
-        st.push_ms,
-        st.bounces_ms,
-        st.single_scattering_ms
-    );
+    log::info!("{}", solved.timings.line());
 
     let t = Instant::now();
     let tone = tone_map(args, scene.exposure);
