@@ -404,10 +404,20 @@ impl FrameSession {
     /// changed.
     pub fn solve(&mut self) -> &Solved {
         let Some(changes) = self.take_changes() else { return &self.last };
-        let mut timings = Timings::default();
+        let started = Instant::now();
         if !changes.solve() && self.view.has_solve(&self.frame.mesh) {
-            return self.see_again(timings);
+            self.see_again(Timings::default());
+        } else {
+            self.solve_changes(changes);
         }
+        let t = &mut self.last.timings;
+        t.other_ms = (ms_since(started) - t.cpu_ms()).max(0.0);
+        &self.last
+    }
+
+    /// [`FrameSession::solve`] after `changes` that the per-face solve depends on.
+    fn solve_changes(&mut self, changes: Changes) {
+        let mut timings = Timings::default();
         let f = &self.frame;
         // Light and body; a new mesh's solver (one core's greedy contraction) is made beside.
         let make = self.subsurface.maker_if_missing(f);
@@ -436,11 +446,10 @@ impl FrameSession {
         self.view.keep_solve(f, &face_b);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
-        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord());
+        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord(), false);
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = f.profile.exit_lobe.clone();
         self.last = Solved { face_b, vertex_radiance, vertex_single, exit_lobe, timings, links, fresh: true };
-        &self.last
     }
 
     /// The changes the next solve must follow, or `None` where it has nothing to compute: nothing
@@ -463,14 +472,13 @@ impl FrameSession {
 
     /// Only the eye moved: the last solve's `B / (c π)` stands, seen along new view rays (HTSM
     /// leaves none, but leaving HTSM is a method change, which solves).
-    fn see_again(&mut self, mut timings: Timings) -> &Solved {
+    fn see_again(&mut self, mut timings: Timings) {
         let t = Instant::now();
-        let seen = self.view.seen(&self.frame, &self.irradiance, self.body.exit_chord());
+        let seen = self.view.seen(&self.frame, &self.irradiance, self.body.exit_chord(), true);
         (self.last.vertex_radiance, self.last.vertex_single) = seen;
         timings.single_scattering_ms = ms_since(t);
         self.last.timings = timings;
         self.last.fresh = true;
-        &self.last
     }
 }
 

@@ -61,12 +61,15 @@ impl View {
     /// current: the solve refits it first): the kept diffuse radiance times the chord factor
     /// of `exit_chord` (the lobe's weights and mean factors, if the lobe is not flat), and
     /// view-ray single scattering where the transport asks for it (else empty). Without an
-    /// eye: `B / (c π)` as solved, and no single scattering.
+    /// eye: `B / (c π)` as solved, and no single scattering. With the split view terms a
+    /// solve is still seen per eye (its image is the reference's); the split's eye-independent
+    /// part is made on the first `eye_only` change after it and serves until the next solve.
     pub(super) fn seen(
         &mut self,
         f: &Frame,
         irradiance: &Irradiance,
         exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
+        eye_only: bool,
     ) -> (Vec<Rgb>, Vec<Rgb>) {
         let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
             return (self.diffuse.clone(), Vec::new());
@@ -75,7 +78,7 @@ impl View {
         if exit_chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
         }
-        if self.terms == ViewTerms::Split {
+        if self.terms == ViewTerms::Split && (eye_only || self.basis.is_some()) {
             return self.seen_split(f, irradiance, exit_chord, eye, single);
         }
         let normals = f.mesh.vertex_normals();

@@ -303,7 +303,13 @@ fn light_flux_at(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, c:
 
 /// [`light_flux_at`] for the three channels at once (extinctions `sigma_t`, mesh units): one
 /// ray to the surface and one shadow ray.
-pub(crate) fn light_flux_rgb(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, sigma_t: [f32; 3]) -> Rgb {
+pub(crate) fn light_flux_rgb(
+    scene: &ViewRayScene,
+    light: &SceneLight,
+    p: Vec3,
+    eta: f32,
+    sigma_t: [f32; 3],
+) -> Rgb {
     let Some(inc) = light.light.incident(p) else { return Rgb::ZERO };
     let Some((s, face)) = scene.bvh.closest_hit(p, inc.to_light, 0.0, inc.distance) else {
         // `p` lies outside the body (an open mesh): no material on the way.
@@ -323,7 +329,9 @@ pub(crate) fn light_flux_rgb(scene: &ViewRayScene, light: &SceneLight, p: Vec3, 
     let mu_t = (1.0 - (1.0 - mu_i * mu_i) / (eta * eta)).max(1e-4).sqrt();
     let f_t = fresnel_transmittance(mu_i as f64, eta as f64) as f32;
     let s_refracted = s * mu_i / mu_t;
-    Rgb::from_array(std::array::from_fn(|c| inc.irradiance[c] * f_t * mu_i / mu_t * (-sigma_t[c] * s_refracted).exp()))
+    Rgb::from_array(std::array::from_fn(|c| {
+        inc.irradiance[c] * f_t * mu_i / mu_t * (-sigma_t[c] * s_refracted).exp()
+    }))
 }
 
 /// Directions per view ray for the environment's single scattering through the body (a 4 × 4

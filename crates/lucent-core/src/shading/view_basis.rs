@@ -10,8 +10,9 @@
 //!   scatters towards any view ray is `α'/(4π)` times the uncollided flux that reaches it,
 //!   `S(p) = Σ_lights F_in e^{-σ_t s'(p)}` (the module docs of `single_scattering`), a scalar
 //!   field per channel. Under each face it is taken as `S(p) = A e^{g·(p - x)}` (x the
-//!   centroid), fitted through four points of a small tetrahedron below the face (one ray to
-//!   the surface towards each light and one shadow ray each). The view ray's integral is then
+//!   centroid), fitted per channel through four points of a small tetrahedron below the face,
+//!   scaled to the channel's mean free path (one ray to the surface towards each light and one
+//!   shadow ray each; channels of similar mean free paths share the points). The view ray's integral is then
 //!   in closed form:
 //!
 //!   ```text
@@ -38,8 +39,11 @@
 //! Per eye then: per face that faces the eye, the refracted direction, the interpolated chord,
 //! three exponentials for the chord factor and three for the single scattering; then the
 //! area-weighted mean over each vertex's facing faces and the neighbour floor, as the per-eye
-//! evaluation does. The per-eye evaluation stays the reference (`lucent render` stills use
-//! it); `docs/speed.md` gives the difference on the validation scenes.
+//! evaluation does. The per-eye evaluation stays the reference: `lucent render` uses it, and
+//! a session with the split terms (the viewer's) still sees every solve (light, pose,
+//! material) per eye and makes the eye-independent part only on the first camera move after
+//! it, so that light moves and deformations cost what they did and a still camera shows the
+//! reference's image; `docs/speed.md` gives the difference on the validation scenes.
 
 use crate::Rgb;
 use crate::irradiance::SceneLight;
@@ -50,8 +54,8 @@ use std::f32::consts::PI;
 
 use super::exit_chord::{ExitChord, MAX_FACTOR};
 use super::single_scattering::{
-    ENV_MU_SAMPLES, EnvironmentKernel, NEIGHBOUR_FLOOR, ViewRay, ViewRayScene, environment_through_body, light_flux_rgb,
-    refract_inward,
+    ENV_MU_SAMPLES, EnvironmentKernel, NEIGHBOUR_FLOOR, ViewRay, ViewRayScene, environment_through_body,
+    light_flux_rgb, refract_inward,
 };
 
 /// The tilted chord directions' angle from the inward normal, as a share of the refracted
@@ -173,54 +177,52 @@ impl ViewBasis {
             (terms.a, terms.g, terms.cap) = self.fit_source(scene, scene.lights, fr);
         }
         if let Some(env) = scene.environment {
-            let ray = ViewRay { site: f, origin: fr.centroid, normal: fr.n, w_t: -fr.n, mu_o: 1.0, exit: fr.chords[0] };
+            let ray = ViewRay {
+                site: f,
+                origin: fr.centroid,
+                normal: fr.n,
+                w_t: -fr.n,
+                mu_o: 1.0,
+                exit: fr.chords[0],
+            };
             terms.env_body = environment_through_body(scene, env, &ray);
         }
         terms
     }
 
-    /// `(A, g, cap)` of the lights' source under the face of frame `fr` (module docs).
-    fn fit_source(&self, scene: &ViewRayScene, lights: &[SceneLight], fr: &FaceFrame) -> (Rgb, [Vec3; 3], Rgb) {
-        // The depth scale: the middle channel's mean free path, inside half the body's
-        // thickness under the face.
-        let mut s = self.sigma_t;
-        s.sort_by(f32::total_cmp);
-        let depth = (1.0 / s[1]).min(0.5 * fr.chords[0]);
-        let ring = |k: usize| {
-            let phi = k as f32 * std::f32::consts::TAU / 3.0;
-            (fr.t1 * phi.cos() + fr.t2 * phi.sin()) * (RING_RADIUS * depth) - fr.n * (RING_DEPTH * depth)
-        };
-        let offsets = [-fr.n * (AXIS_DEPTH * depth), ring(0), ring(1), ring(2)];
-        let flux = offsets.map(|o| {
-            let p = fr.centroid + o;
-            lights.iter().map(|l| light_flux_rgb(scene, l, p, self.eta, self.sigma_t)).sum::<Rgb>()
-        });
-        let max = flux.iter().fold(Rgb::ZERO, |m, v| m.max(*v));
-        let mut a = Rgb::ZERO;
-        let mut g = [Vec3::ZERO; 3];
+    /// `(A, g, cap)` of the lights' source under the face of frame `fr` (module docs), each
+    /// channel fitted on a tetrahedron scaled to its own mean free path (channels within a
+    /// factor [`SHARED_SCALE`] of each other share one), inside half the body's thickness under
+    /// the face.
+    fn fit_source(
+        &self,
+        scene: &ViewRayScene,
+        lights: &[SceneLight],
+        fr: &FaceFrame,
+    ) -> (Rgb, [Vec3; 3], Rgb) {
+        let mut stencils: Vec<(f32, [Vec3; 4], [Rgb; 4])> = Vec::with_capacity(3);
+        let (mut a, mut g, mut cap) = (Rgb::ZERO, [Vec3::ZERO; 3], Rgb::ZERO);
         for c in 0..3 {
-            if max[c] <= 0.0 {
-                continue;
-            }
-            if flux.iter().any(|v| v[c] <= 0.0) {
-                // A shadow's edge (or the body's) crosses the tetrahedron: no exponential
-                // fits a step; the mean of the points, even along the ray.
-                a[c] = flux.iter().map(|v| v[c]).sum::<f32>() / 4.0;
-                continue;
-            }
-            let ln = flux.map(|v| v[c].ln());
-            let b = [ln[1] - ln[0], ln[2] - ln[0], ln[3] - ln[0]];
-            // The tetrahedron's system in closed form (the ring is symmetric).
-            let (cos, sin) = ([1.0, -0.5, -0.5], [0.0, 0.866_025_4, -0.866_025_4]);
-            let gu = (0..3).map(|k| b[k] * cos[k]).sum::<f32>() / (1.5 * RING_RADIUS * depth);
-            let gv = (0..3).map(|k| b[k] * sin[k]).sum::<f32>() / (1.5 * RING_RADIUS * depth);
-            let gw = -(b[0] + b[1] + b[2]) / (3.0 * (RING_DEPTH - AXIS_DEPTH) * depth);
-            g[c] = fr.t1 * gu + fr.t2 * gv + fr.n * gw;
-            a[c] = (ln[0] - g[c].dot(offsets[0])).exp();
+            let depth = (1.0 / self.sigma_t[c]).min(0.5 * fr.chords[0]);
+            let k = match stencils.iter().position(|(d, ..)| (depth / d).max(d / depth) < SHARED_SCALE) {
+                Some(k) => k,
+                None => {
+                    let offsets = tetrahedron(fr, depth);
+                    let flux = offsets.map(|o| {
+                        let p = fr.centroid + o;
+                        lights
+                            .iter()
+                            .map(|l| light_flux_rgb(scene, l, p, self.eta, self.sigma_t))
+                            .sum::<Rgb>()
+                    });
+                    stencils.push((depth, offsets, flux));
+                    stencils.len() - 1
+                }
+            };
+            let (depth, offsets, flux) = &stencils[k];
+            (a[c], g[c], cap[c]) = fit_channel(fr, *depth, offsets, &flux.map(|v| v[c]));
         }
-        // The field's largest value along a view ray: at the surface where it falls inward,
-        // else past the fit points, where growth is capped at `e` times the largest seen.
-        (a, g, a.max(max) * std::f32::consts::E)
+        (a, g, cap)
     }
 
     /// `(chord factor, single)` per vertex seen from `eye` (mesh units), as the per-eye
@@ -312,11 +314,7 @@ impl ViewBasis {
         let mu_o = mu_o.clamp(1e-3, 1.0);
         let w_t = refract_inward(w_o, fr.n, mu_o, self.eta);
         let t = self.chord(fr, w_t);
-        let kept = if chord {
-            Rgb::from_array(self.sigma_t.map(|s| -(-s * t).exp_m1()))
-        } else {
-            Rgb::ZERO
-        };
+        let kept = if chord { Rgb::from_array(self.sigma_t.map(|s| -(-s * t).exp_m1())) } else { Rgb::ZERO };
         let l = if single { self.single(f, w_t, t, mu_o) } else { Rgb::ZERO };
         (fr.area, kept, l)
     }
@@ -399,10 +397,17 @@ fn face_frames(scene: &ViewRayScene, sin_tilt: f32) -> Vec<FaceFrame> {
     let mesh = scene.mesh;
     let cos_tilt = (1.0 - sin_tilt * sin_tilt).sqrt();
     scene.bvh.map_faces(|f| {
-        let n = mesh.triangles[f].iter().map(|&v| scene.normals[v as usize]).sum::<Vec3>().normalize_or_zero();
+        let n =
+            mesh.triangles[f].iter().map(|&v| scene.normals[v as usize]).sum::<Vec3>().normalize_or_zero();
         let centroid = mesh.face_centroid(f);
         let (t1, t2) = if n == Vec3::ZERO { (Vec3::ZERO, Vec3::ZERO) } else { n.any_orthonormal_pair() };
-        let dirs = [-n, -n * cos_tilt + t1 * sin_tilt, -n * cos_tilt - t1 * sin_tilt, -n * cos_tilt + t2 * sin_tilt, -n * cos_tilt - t2 * sin_tilt];
+        let dirs = [
+            -n,
+            -n * cos_tilt + t1 * sin_tilt,
+            -n * cos_tilt - t1 * sin_tilt,
+            -n * cos_tilt + t2 * sin_tilt,
+            -n * cos_tilt - t2 * sin_tilt,
+        ];
         let chords = dirs.map(|d| {
             if n == Vec3::ZERO {
                 return 0.0;
@@ -411,6 +416,48 @@ fn face_frames(scene: &ViewRayScene, sin_tilt: f32) -> Vec<FaceFrame> {
         });
         FaceFrame { centroid, facing: mesh.face_normal(f), n, t1, t2, area: mesh.face_area(f), chords }
     })
+}
+
+/// Channels whose mean free paths are within this factor of each other share one fit
+/// tetrahedron.
+const SHARED_SCALE: f32 = 1.5;
+
+/// The fit tetrahedron's points below the face of frame `fr` at depth scale `depth`, relative
+/// to its centroid: one on the axis, three on a ring.
+fn tetrahedron(fr: &FaceFrame, depth: f32) -> [Vec3; 4] {
+    let ring = |k: usize| {
+        let phi = k as f32 * std::f32::consts::TAU / 3.0;
+        (fr.t1 * phi.cos() + fr.t2 * phi.sin()) * (RING_RADIUS * depth) - fr.n * (RING_DEPTH * depth)
+    };
+    [-fr.n * (AXIS_DEPTH * depth), ring(0), ring(1), ring(2)]
+}
+
+/// One channel's `(A, g, cap)` from its flux at the [`tetrahedron`] points `offsets` (depth
+/// scale `depth`): `ln S` linear through the four, or their mean where a shadow's edge crosses
+/// them.
+fn fit_channel(fr: &FaceFrame, depth: f32, offsets: &[Vec3; 4], flux: &[f32; 4]) -> (f32, Vec3, f32) {
+    let max = flux.iter().fold(0.0f32, |m, v| m.max(*v));
+    if max <= 0.0 {
+        return (0.0, Vec3::ZERO, 0.0);
+    }
+    if flux.iter().any(|v| *v <= 0.0) {
+        // A shadow's edge (or the body's) crosses the tetrahedron: no exponential fits a
+        // step; the mean of the points, even along the ray.
+        let mean = flux.iter().sum::<f32>() / 4.0;
+        return (mean, Vec3::ZERO, max * std::f32::consts::E);
+    }
+    let ln = flux.map(f32::ln);
+    let b = [ln[1] - ln[0], ln[2] - ln[0], ln[3] - ln[0]];
+    // The tetrahedron's system in closed form (the ring is symmetric).
+    let (cos, sin) = ([1.0, -0.5, -0.5], [0.0, 0.866_025_4, -0.866_025_4]);
+    let gu = (0..3).map(|k| b[k] * cos[k]).sum::<f32>() / (1.5 * RING_RADIUS * depth);
+    let gv = (0..3).map(|k| b[k] * sin[k]).sum::<f32>() / (1.5 * RING_RADIUS * depth);
+    let gw = -(b[0] + b[1] + b[2]) / (3.0 * (RING_DEPTH - AXIS_DEPTH) * depth);
+    let g = fr.t1 * gu + fr.t2 * gv + fr.n * gw;
+    let a = (ln[0] - g.dot(offsets[0])).exp();
+    // The field's largest value along a view ray: at the surface where it falls inward, else
+    // past the fit points, where growth is capped at `e` times the largest seen.
+    (a, g, a.max(max) * std::f32::consts::E)
 }
 
 /// How the view terms are evaluated.
@@ -442,8 +489,9 @@ impl std::str::FromStr for ViewTerms {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         let t = s.trim().to_ascii_lowercase();
-        ViewTerms::ALL.into_iter().find(|v| v.name() == t).ok_or_else(|| {
-            format!("unknown view terms {s:?}; expected per-eye or split")
-        })
+        ViewTerms::ALL
+            .into_iter()
+            .find(|v| v.name() == t)
+            .ok_or_else(|| format!("unknown view terms {s:?}; expected per-eye or split"))
     }
 }

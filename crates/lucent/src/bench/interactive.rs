@@ -10,8 +10,8 @@
 //! * `light`: the light turns 10° about the vertical through the mesh's centre;
 //! * `camera`: the eye turns 10° about the vertical (split view terms), and `camera-per-eye`
 //!   the same with the view terms traced per eye (the reference);
-//! * `material`: the model scale alternates between its value and 5% more;
-//! * `bump`: a bump over 2% of the extent grows and shrinks on the lit side;
+//! * `material`: the model scale grows by 5% of its value each time;
+//! * `bump`: a bump 0.1 of the extent wide grows on the lit side, to 1% of the extent;
 //! * `twist`: 30° of twist over eight frames (the frames of `lucent render --frames 8`).
 //!
 //! Each row: the median milliseconds of every stage ([`Timings::stages`]; no raster: the
@@ -33,7 +33,9 @@ use lucent_core::bssrdf::Material;
 use lucent_core::irradiance::{Light, SceneLight};
 use lucent_core::mesh::deform::Deformation;
 use lucent_core::mesh::{Mesh, embedded, load_mesh};
-use lucent_core::session::{FrameSession, FrameSettings, Method, SolveMode, Solved, Timings, Transport, ViewTerms};
+use lucent_core::session::{
+    FrameSession, FrameSettings, Method, SolveMode, Solved, Timings, Transport, ViewTerms,
+};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -77,8 +79,21 @@ pub fn run(json: bool) -> anyhow::Result<()> {
     if !json {
         println!(
             "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8}",
-            "mesh", "T", "material", "action", "irrad", "body", "link", "solve", "bounces", "view", "wall",
-            "B med", "B p95", "view med", "view p95"
+            "mesh",
+            "T",
+            "material",
+            "action",
+            "irrad",
+            "body",
+            "link",
+            "solve",
+            "bounces",
+            "view",
+            "wall",
+            "B med",
+            "B p95",
+            "view med",
+            "view p95"
         );
     }
     for (name, path) in meshes(json) {
@@ -130,7 +145,13 @@ fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
 }
 
 /// A session as the viewer makes it, solved once (its first image).
-fn session(mesh: &Mesh, transport: Transport, lights: Vec<SceneLight>, eye: Vec3, terms: ViewTerms) -> FrameSession {
+fn session(
+    mesh: &Mesh,
+    transport: Transport,
+    lights: Vec<SceneLight>,
+    eye: Vec3,
+    terms: ViewTerms,
+) -> FrameSession {
     let settings = FrameSettings {
         method: Method::Hierarchical,
         mode: SolveMode::Incremental,
@@ -152,14 +173,20 @@ fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> any
     let (lo, hi) = rest.bounds();
     let centre = 0.5 * (lo + hi);
     let mut eye = centre + Vec3::new(0.0, 0.3, 2.5) * rest.extent();
-    let mut state = State { positions: rest.positions.clone(), lights: lights.clone(), transport: transport.clone(), eye };
+    let mut state = State {
+        positions: rest.positions.clone(),
+        lights: lights.clone(),
+        transport: transport.clone(),
+        eye,
+    };
     let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
     s.solve();
     let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
     let mut rows = Vec::new();
     let mut row = |action: &'static str, s: &mut FrameSession, state: &State, times: Vec<(Timings, f64)>| {
         let (b, view) = errors(rest, s, state);
-        let wall: Vec<Timings> = times.iter().map(|(_, w)| Timings { irradiance_ms: *w, ..Timings::default() }).collect();
+        let wall: Vec<Timings> =
+            times.iter().map(|(_, w)| Timings { irradiance_ms: *w, ..Timings::default() }).collect();
         let t: Vec<Timings> = times.iter().map(|(t, _)| *t).collect();
         rows.push(Row {
             bench: "interactive",
@@ -196,21 +223,20 @@ fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> any
         row(action, &mut s, &state, times);
     }
     s.set_view_terms(ViewTerms::Split);
-    // The material.
-    let mut larger = false;
+    // The material: the scale grows by 5% each time.
+    let mut step = 0;
     let times = repeat(&mut s, |s| {
-        larger = !larger;
-        let scale = if larger { scale_m * 1.05 } else { scale_m };
-        s.set_transport(Transport { scale_m: scale, ..transport.clone() });
+        step += 1;
+        s.set_transport(Transport { scale_m: scale_m * (1.0 + 0.05 * step as f64), ..transport.clone() });
     });
     state.transport = s.transport().clone();
     row("material", &mut s, &state, times);
-    // A local bump, on and off, then a global twist, frame by frame.
-    let bumped = bump(rest, light_at, 0.1 * rest.extent(), 0.01 * rest.extent());
-    let mut on = false;
+    // A local bump growing on the lit side, then a global twist, frame by frame.
+    let (mut step, top) = (0, 0.01 * rest.extent());
     let times = repeat(&mut s, |s| {
-        on = !on;
-        s.set_positions(if on { &bumped } else { &rest.positions });
+        step += 1;
+        let h = top * step as f32 / (REPS + 1) as f32;
+        s.set_positions(&bump(rest, light_at, 0.1 * rest.extent(), h));
     });
     state.positions = s.mesh().positions.clone();
     row("bump", &mut s, &state, times);
@@ -253,7 +279,8 @@ fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(
 fn errors(rest: &Mesh, s: &mut FrameSession, state: &State) -> ((f64, f64), (f64, f64)) {
     let mut mesh = rest.clone();
     mesh.positions.clone_from(&state.positions);
-    let mut fresh = session(&mesh, state.transport.clone(), state.lights.clone(), state.eye, ViewTerms::PerEye);
+    let mut fresh =
+        session(&mesh, state.transport.clone(), state.lights.clone(), state.eye, ViewTerms::PerEye);
     let want = fresh.solve().clone();
     let got = s.solve().clone();
     let sum = |v: &Rgb| (v.x + v.y + v.z) as f64;

@@ -403,7 +403,12 @@ fn timings(ui: &mut Ui, status: &Status) {
     let t = &status.timings;
     egui::Grid::new("timings").num_columns(2).show(ui, |ui| {
         let total = ("CPU total", t.cpu_ms());
-        for (name, ms) in t.stages().into_iter().filter(|(n, _)| !matches!(*n, "raster" | "write")).chain([total, ("draw (CPU)", status.draw_ms)]) {
+        for (name, ms) in t
+            .stages()
+            .into_iter()
+            .filter(|(n, _)| !matches!(*n, "raster" | "write"))
+            .chain([total, ("draw (CPU)", status.draw_ms)])
+        {
             ui.label(name);
             ui.label(format!("{ms:8.2} ms"));
             ui.end_row();
