@@ -161,8 +161,8 @@ pub struct RenderArgs {
     pub single_scattering: Option<SingleScattering>,
     /// How the view terms (the body's chord along the view ray, view-ray single scattering)
     /// are evaluated: `per-eye` (default; rays traced for the eye, the reference) or `split`
-    /// (the viewer's: an eye-independent part per pose and light, closed forms per eye;
-    /// docs/speed.md gives the difference).
+    /// (what the viewer shows while the camera moves: an eye-independent part per pose and
+    /// light, closed forms per eye; docs/speed.md gives the difference).
     #[arg(long, default_value = "per-eye", value_parser = |s: &str| s.parse::<lucent_core::session::ViewTerms>())]
     pub view_terms: lucent_core::session::ViewTerms,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`

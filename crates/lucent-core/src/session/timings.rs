@@ -132,9 +132,10 @@ mod tests {
             "solve 2.0",
             "bounces 5.0",
             "view 6.0",
+            "other 0.5",
             "raster 7.0",
             "write 8.0",
-            "total 34.0",
+            "total 34.5",
         ] {
             assert!(line.contains(name), "{name} missing from {line}");
         }

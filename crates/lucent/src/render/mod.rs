@@ -176,6 +176,15 @@ fn render_mertens(
     session.set_progress(Some(watch.progress()));
     session.set_view_terms(args.view_terms);
     let profile = session.profile().clone();
+    session.solve();
+    if args.view_terms == lucent_core::session::ViewTerms::Split {
+        // A solve is seen per eye; the split serves the camera moves after one. Arrive at the
+        // eye by such a move, so that the image is the split's (docs/speed.md compares them).
+        let eye = scene.camera_view(size).eye;
+        session.set_eye(Some(eye + glam::Vec3::X * (1e-3 * mesh.extent())));
+        session.solve();
+        session.set_eye(Some(eye));
+    }
     let solved = session.solve();
     drop(watch);
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
