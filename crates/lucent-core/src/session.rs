@@ -44,9 +44,12 @@ mod body;
 mod bounces;
 mod irradiance;
 mod subsurface;
+mod timings;
 mod transport;
 mod view;
+pub use crate::shading::view_basis::ViewTerms;
 pub use ablate::Ablations;
+pub use timings::Timings;
 pub use transport::Transport;
 
 /// How the subsurface transport is computed.
@@ -148,41 +151,6 @@ pub struct FrameSettings {
     /// Corrections left out, for measuring each (none by default: `lucent render --ablate`,
     /// docs/corrections.md).
     pub ablate: Ablations,
-}
-
-/// Wall-clock times of one solve's stages, milliseconds. Stages that did not run are 0.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Timings {
-    /// Irradiance at the leaves: lights, shadow rays, environment (and the BVH refit), the
-    /// body's thickness rays and, on a new mesh's first hierarchical solve, the solver's
-    /// making (its hierarchy's build), which runs beside them.
-    pub irradiance_ms: f64,
-    /// Profile tables, link creation, refinement or incremental update.
-    pub link_ms: f64,
-    /// Pulling irradiance up the hierarchy.
-    pub pull_ms: f64,
-    /// Gathering along the links (the whole O(N²) sum for the exact solver).
-    pub gather_ms: f64,
-    /// What depends on the eye: single scattering along the view ray
-    /// (`shading::single_scattering`) and the body's chord factor (`shading::exit_chord`).
-    pub single_scattering_ms: f64,
-    /// Pushing `B` down to the leaves and the per-vertex average.
-    pub push_ms: f64,
-    /// Bounces between parts: their rays and solves ([`crate::irradiance::interreflection`]).
-    pub bounces_ms: f64,
-}
-
-impl Timings {
-    /// Sum of the stages, milliseconds.
-    pub fn total_ms(&self) -> f64 {
-        self.irradiance_ms
-            + self.link_ms
-            + self.pull_ms
-            + self.gather_ms
-            + self.push_ms
-            + self.bounces_ms
-            + self.single_scattering_ms
-    }
 }
 
 /// What one solve produced.
@@ -415,6 +383,13 @@ impl FrameSession {
         self.changes.view |= self.view.set_eye(eye);
     }
 
+    /// How the view terms (chord factor, view-ray single scattering) are evaluated: traced per
+    /// eye (the reference, default) or split so that an eye-only change traces no ray
+    /// ([`crate::shading::view_basis`]).
+    pub fn set_view_terms(&mut self, terms: ViewTerms) {
+        self.changes.view |= self.view.set_terms(terms);
+    }
+
     /// Counts the progress of long solves (hierarchical refinement: leaves of finished receiver
     /// subtrees; exact solve: receivers) on `progress`, for a front end to poll; `None` stops.
     pub fn set_progress(&mut self, progress: Option<Arc<Progress>>) {
@@ -444,24 +419,37 @@ impl FrameSession {
     /// changed.
     pub fn solve(&mut self) -> &Solved {
         let Some(changes) = self.take_changes() else { return &self.last };
-        let mut timings = Timings::default();
+        let started = Instant::now();
         if !changes.solve() && self.view.has_solve(&self.frame.mesh) {
-            return self.see_again(timings);
+            self.see_again(Timings::default());
+        } else {
+            self.solve_changes(changes);
         }
+        let t = &mut self.last.timings;
+        t.other_ms = (ms_since(started) - t.cpu_ms()).max(0.0);
+        &self.last
+    }
+
+    /// [`FrameSession::solve`] after `changes` that the per-face solve depends on.
+    fn solve_changes(&mut self, changes: Changes) {
+        let mut timings = Timings::default();
         let f = &self.frame;
         // Light and body; a new mesh's solver (one core's greedy contraction) is made beside.
         let make = self.subsurface.maker_if_missing(f);
         let t = Instant::now();
         let (irradiance, body) = (&mut self.irradiance, &mut self.body);
-        let (solver, ()) = rayon::join(
+        let (solver, body_ms) = rayon::join(
             || make.map(|make| make()),
             || {
                 irradiance.update(f, &changes);
+                let t = Instant::now();
                 body.update(f, irradiance.caster(), &changes);
+                ms_since(t)
             },
         );
         self.subsurface.keep(solver);
-        timings.irradiance_ms = ms_since(t);
+        timings.body_ms = body_ms;
+        timings.irradiance_ms = ms_since(t) - body_ms;
         let (irradiance, e, gain) = (&self.irradiance, self.irradiance.faces(), self.body.face_gain());
         let (mut face_b, links) =
             self.subsurface.solve(f, gain, &irradiance.carried(e), &changes, f.oracle(), &mut timings);
@@ -473,7 +461,7 @@ impl FrameSession {
         self.view.keep_solve(f, &face_b);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
-        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord());
+        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord(), false);
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = if f.settings.ablate.exit_lobe {
             crate::bssrdf::ExitLobe::flat()
@@ -491,7 +479,6 @@ impl FrameSession {
             links,
             fresh: true,
         };
-        &self.last
     }
 
     /// The changes the next solve must follow, or `None` where it has nothing to compute: nothing
@@ -514,14 +501,13 @@ impl FrameSession {
 
     /// Only the eye moved: the last solve's `B / (c π)` stands, seen along new view rays (HTSM
     /// leaves none, but leaving HTSM is a method change, which solves).
-    fn see_again(&mut self, mut timings: Timings) -> &Solved {
+    fn see_again(&mut self, mut timings: Timings) {
         let t = Instant::now();
-        let seen = self.view.seen(&self.frame, &self.irradiance, self.body.exit_chord());
+        let seen = self.view.seen(&self.frame, &self.irradiance, self.body.exit_chord(), true);
         (self.last.vertex_radiance, self.last.vertex_single) = seen;
         timings.single_scattering_ms = ms_since(t);
         self.last.timings = timings;
         self.last.fresh = true;
-        &self.last
     }
 }
 

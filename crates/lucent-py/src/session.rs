@@ -37,7 +37,7 @@ pub struct Solution {
     /// the exit Fresnel factor; (0, 3) when single scattering is not along the view ray.
     #[pyo3(get)]
     vertex_single: Py<PyArray2<f32>>,
-    /// Wall-clock milliseconds of the solve's stages (irradiance_ms, link_ms, pull_ms,
+    /// Wall-clock milliseconds of the solve's stages (irradiance_ms, body_ms, link_ms, pull_ms,
     /// gather_ms, single_scattering_ms, push_ms, bounces_ms; 0 for a stage that did not run),
     /// their sum total_ms, and wall_ms, the whole call as Python waited for it.
     #[pyo3(get)]
@@ -62,6 +62,7 @@ impl Solution {
         let timings = PyDict::new(py);
         for (k, v) in [
             ("irradiance_ms", t.irradiance_ms),
+            ("body_ms", t.body_ms),
             ("link_ms", t.link_ms),
             ("pull_ms", t.pull_ms),
             ("gather_ms", t.gather_ms),

@@ -164,6 +164,12 @@ pub struct RenderArgs {
     /// Scene key `single_scattering`.
     #[arg(long, value_parser = parse_single_scattering)]
     pub single_scattering: Option<SingleScattering>,
+    /// How the view terms (the body's chord along the view ray, view-ray single scattering)
+    /// are evaluated: `per-eye` (default; rays traced for the eye, the reference) or `split`
+    /// (what the viewer shows while the camera moves: an eye-independent part per pose and
+    /// light, closed forms per eye; docs/speed.md gives the difference).
+    #[arg(long, default_value = "per-eye", value_parser = |s: &str| s.parse::<lucent_core::session::ViewTerms>())]
+    pub view_terms: lucent_core::session::ViewTerms,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
     /// (every face against every face, O(N^2): the reference) or `htsm` (Heterogeneous
     /// Translucent Shadow Maps on the GPU, Shopf 2007).
@@ -431,6 +437,10 @@ pub enum BenchTarget {
     /// 10 mm) at eta 1.3 and 1.0, the albedo a large flat slab renders (hierarchical solve, and
     /// the exact solve beside it), and the relative errors.
     Albedo,
+    /// What a user's action costs (light, camera, material, bump, twist) per stage on the bunny
+    /// and the fetched dragons, and its error against a fresh solve (LUCENT_BENCH_MAX_TRIANGLES,
+    /// default 60000; LUCENT_BENCH_MIN_TRIANGLES, LUCENT_BENCH_MATERIAL as for `solver --real`).
+    Interactive,
     /// Energy under uniform irradiance 1: the largest B per face with and without the energy
     /// bound (`max_b_uniform` must not exceed 1) on `--mesh`.
     Energy,

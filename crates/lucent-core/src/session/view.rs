@@ -10,6 +10,7 @@ use crate::mesh::Mesh;
 use crate::shading::diffuse_radiance;
 use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use crate::shading::view_basis::{ViewBasis, ViewTerms};
 use glam::Vec3;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
@@ -19,6 +20,12 @@ pub(super) struct View {
     eye: Option<Vec3>,
     /// The last solve's diffuse radiance `B / (c π)` per vertex, before the chord factor.
     diffuse: Vec<Rgb>,
+    /// How the view terms are evaluated: traced per eye, or split (`shading::view_basis`).
+    terms: ViewTerms,
+    /// The split's eye-independent part for the last solve (made on the first eye after it),
+    /// and the one before, whose chords serve while the mesh has not moved.
+    basis: Option<ViewBasis>,
+    stale: Option<ViewBasis>,
 }
 
 impl View {
@@ -36,21 +43,33 @@ impl View {
         self.diffuse.len() == mesh.positions.len()
     }
 
-    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`.
+    /// Sets how the view terms are evaluated; whether that changed.
+    pub(super) fn set_terms(&mut self, terms: ViewTerms) -> bool {
+        let changed = self.terms != terms;
+        self.terms = terms;
+        changed
+    }
+
+    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`; the split's
+    /// eye-independent part is made again on the next eye.
     pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb]) {
         self.diffuse = diffuse_radiance(&f.mesh.face_to_vertex(face_b), &f.profile);
+        self.stale = self.basis.take().or(self.stale.take());
     }
 
     /// `(radiance, single)` per vertex as seen from the eye (the shadow BVH of `irradiance` is
     /// current: the solve refits it first): the kept diffuse radiance times the chord factor
     /// of `exit_chord` (the lobe's weights and mean factors, if the lobe is not flat), and
     /// view-ray single scattering where the transport asks for it (else empty). Without an
-    /// eye: `B / (c π)` as solved, and no single scattering.
+    /// eye: `B / (c π)` as solved, and no single scattering. With the split view terms a
+    /// solve is still seen per eye (its image is the reference's); the split's eye-independent
+    /// part is made on the first `eye_only` change after it and serves until the next solve.
     pub(super) fn seen(
-        &self,
+        &mut self,
         f: &Frame,
         irradiance: &Irradiance,
         exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
+        eye_only: bool,
     ) -> (Vec<Rgb>, Vec<Rgb>) {
         let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
             return (self.diffuse.clone(), Vec::new());
@@ -59,6 +78,9 @@ impl View {
         let exit_chord = exit_chord.filter(|_| !f.settings.ablate.chord);
         if exit_chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
+        }
+        if self.terms == ViewTerms::Split && (eye_only || self.basis.is_some()) {
+            return self.seen_split(f, irradiance, exit_chord, eye, single);
         }
         let normals = f.mesh.vertex_normals();
         let scene = ViewRayScene {
@@ -79,5 +101,43 @@ impl View {
         };
         let single = if single { view_ray_radiance(&scene, eye) } else { Vec::new() };
         (diffuse, single)
+    }
+}
+
+impl View {
+    /// [`View::seen`] by the split evaluation (`shading::view_basis`), making its
+    /// eye-independent part first where the last solve left none.
+    fn seen_split(
+        &mut self,
+        f: &Frame,
+        irradiance: &Irradiance,
+        exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
+        eye: Vec3,
+        single: bool,
+    ) -> (Vec<Rgb>, Vec<Rgb>) {
+        let caster = irradiance.caster().expect("checked by seen");
+        let basis = match self.basis.take() {
+            Some(b) => b,
+            None => {
+                let normals = f.mesh.vertex_normals();
+                let scene = ViewRayScene {
+                    mesh: &f.mesh,
+                    normals: &normals,
+                    bvh: caster.bvh(),
+                    offset: caster.offset(),
+                    profile: &f.profile,
+                    lights: irradiance.lights(),
+                    environment: irradiance.environment(),
+                };
+                ViewBasis::new(&scene, single, self.stale.take())
+            }
+        };
+        let (factors, radiance) = basis.seen(&f.mesh, eye, exit_chord.map(|(c, n)| (c, n.as_slice())));
+        self.basis = Some(basis);
+        let diffuse = match factors {
+            Some(c) => self.diffuse.iter().zip(c).map(|(d, c)| *d * c).collect(),
+            None => self.diffuse.clone(),
+        };
+        (diffuse, radiance)
     }
 }

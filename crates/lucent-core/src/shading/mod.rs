@@ -25,3 +25,4 @@ pub fn diffuse_radiance(b: &[Rgb], profile: &Profile) -> Vec<Rgb> {
 pub mod exit_chord;
 pub mod single_scattering;
 pub use single_scattering::{SingleScattering, UnknownSingleScattering};
+pub mod view_basis;

@@ -113,7 +113,7 @@ const GAUSS_4: [(f32, f32); 4] = [
 pub const NEIGHBOUR_FLOOR: f32 = 1e-3;
 
 /// Exit cosines at which the environment's band weights are tabulated (`μ_o = k / (N - 1)`).
-const ENV_MU_SAMPLES: usize = 17;
+pub(crate) const ENV_MU_SAMPLES: usize = 17;
 
 /// What [`view_ray_radiance`] reads.
 pub struct ViewRayScene<'a> {
@@ -287,7 +287,7 @@ fn front_facing_vertices(mesh: &Mesh, eye: Vec3) -> Vec<bool> {
 
 /// The refracted direction into the material for a view direction `w_o` (unit, towards the eye)
 /// at a surface with unit outward normal `n`, `μ_o = n·w_o > 0`.
-fn refract_inward(w_o: Vec3, n: Vec3, mu_o: f32, eta: f32) -> Vec3 {
+pub(crate) fn refract_inward(w_o: Vec3, n: Vec3, mu_o: f32, eta: f32) -> Vec3 {
     let cos_t = (1.0 - (1.0 - mu_o * mu_o) / (eta * eta)).max(0.0).sqrt();
     (-w_o / eta + (mu_o / eta - cos_t) * n).normalize_or_zero()
 }
@@ -296,10 +296,24 @@ fn refract_inward(w_o: Vec3, n: Vec3, mu_o: f32, eta: f32) -> Vec3 {
 /// refracted in where the straight ray from `p` towards it leaves the surface, attenuated
 /// along the refracted path back to `p`.
 fn light_flux_at(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, c: usize, sigma_t: f32) -> f32 {
-    let Some(inc) = light.light.incident(p) else { return 0.0 };
+    let mut s = [0.0; 3];
+    s[c] = sigma_t;
+    light_flux_rgb(scene, light, p, eta, s)[c]
+}
+
+/// [`light_flux_at`] for the three channels at once (extinctions `sigma_t`, mesh units): one
+/// ray to the surface and one shadow ray.
+pub(crate) fn light_flux_rgb(
+    scene: &ViewRayScene,
+    light: &SceneLight,
+    p: Vec3,
+    eta: f32,
+    sigma_t: [f32; 3],
+) -> Rgb {
+    let Some(inc) = light.light.incident(p) else { return Rgb::ZERO };
     let Some((s, face)) = scene.bvh.closest_hit(p, inc.to_light, 0.0, inc.distance) else {
         // `p` lies outside the body (an open mesh): no material on the way.
-        return 0.0;
+        return Rgb::ZERO;
     };
     let mut n_h = scene.mesh.face_normal(face as usize);
     if n_h.dot(inc.to_light) < 0.0 {
@@ -309,13 +323,15 @@ fn light_flux_at(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, c:
     if light.shadows {
         let entry = p + inc.to_light * s + n_h * scene.offset;
         if scene.bvh.occluded(entry, inc.to_light, 0.0, inc.distance - s - scene.offset) {
-            return 0.0;
+            return Rgb::ZERO;
         }
     }
     let mu_t = (1.0 - (1.0 - mu_i * mu_i) / (eta * eta)).max(1e-4).sqrt();
     let f_t = fresnel_transmittance(mu_i as f64, eta as f64) as f32;
     let s_refracted = s * mu_i / mu_t;
-    inc.irradiance[c] * f_t * mu_i / mu_t * (-sigma_t * s_refracted).exp()
+    Rgb::from_array(std::array::from_fn(|c| {
+        inc.irradiance[c] * f_t * mu_i / mu_t * (-sigma_t[c] * s_refracted).exp()
+    }))
 }
 
 /// Directions per view ray for the environment's single scattering through the body (a 4 × 4
@@ -339,7 +355,7 @@ const BODY_STRATA: (usize, usize) = (4, 4);
 /// by the channels (Gauss-Legendre in the attenuation of the channel that reaches farthest,
 /// the others weighted by their extra attenuation), so each direction costs four rays to the
 /// surface and one shadow ray.
-fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewRay) -> Rgb {
+pub(crate) fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewRay) -> Rgb {
     let n = ray.normal;
     let d = scene.profile;
     let eta = d.eta as f32;
@@ -421,13 +437,13 @@ fn environment_through_body(scene: &ViewRayScene, env: &Environment, ray: &ViewR
 
 /// Band weights of the half-space single-scattering kernel for the environment, per channel,
 /// over the exit cosine.
-struct EnvironmentKernel {
+pub(crate) struct EnvironmentKernel {
     /// `[μ_o sample][channel]` band weights (sr).
     weights: Vec<[BandWeights; 3]>,
 }
 
 impl EnvironmentKernel {
-    fn new(d: &Profile) -> Self {
+    pub(crate) fn new(d: &Profile) -> Self {
         let eta = d.eta;
         let refracted = |mu: f64| (1.0 - (1.0 - mu * mu) / (eta * eta)).max(1e-6).sqrt();
         let weights = (0..ENV_MU_SAMPLES)
@@ -453,12 +469,16 @@ impl EnvironmentKernel {
         let x = mu_o * (ENV_MU_SAMPLES - 1) as f32;
         let k = (x as usize).min(ENV_MU_SAMPLES - 2);
         let f = x - k as f32;
-        let d = env.to_map_frame(n);
-        let at = |k: usize| {
-            let w = &self.weights[k];
-            Rgb::new(env.sh.convolve(d, &w[0]).x, env.sh.convolve(d, &w[1]).y, env.sh.convolve(d, &w[2]).z)
-        };
+        let at = |k: usize| self.radiance_at(env, n, k);
         ((at(k) * (1.0 - f) + at(k + 1) * f) * env.intensity).max(Rgb::ZERO)
+    }
+
+    /// [`Self::radiance`] at the `k`-th tabulated exit cosine `k / (ENV_MU_SAMPLES - 1)`, before
+    /// the environment's intensity and the clamp at 0.
+    pub(crate) fn radiance_at(&self, env: &Environment, n: Vec3, k: usize) -> Rgb {
+        let d = env.to_map_frame(n);
+        let w = &self.weights[k];
+        Rgb::new(env.sh.convolve(d, &w[0]).x, env.sh.convolve(d, &w[1]).y, env.sh.convolve(d, &w[2]).z)
     }
 }
 

@@ -134,7 +134,7 @@ class Solution:
     """Single-scattered radiance along the view ray per vertex, (vertices, 3), before the exit
     Fresnel factor; (0, 3) when single scattering is not along the view ray."""
     timings: dict[str, float]
-    """Milliseconds: irradiance_ms, link_ms, pull_ms, gather_ms, single_scattering_ms, push_ms,
+    """Milliseconds: irradiance_ms, body_ms, link_ms, pull_ms, gather_ms, single_scattering_ms, push_ms,
     bounces_ms (0 for a stage that did not run), total_ms (their sum) and wall_ms (the call)."""
     links: Optional[int]
     """Links of the hierarchical solve (None for the exact solver)."""

@@ -6,6 +6,7 @@ mod albedo;
 mod energy;
 mod formfactor;
 mod htsm;
+mod interactive;
 mod solver;
 mod solver_locality;
 mod solver_real;
@@ -16,6 +17,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Energy => energy::run(args),
         BenchTarget::Formfactor => formfactor::run(args.json),
         BenchTarget::Htsm => htsm::run(args),
+        BenchTarget::Interactive => interactive::run(args.json),
         BenchTarget::Solver if args.real => {
             if args.sweep || args.table5 {
                 anyhow::bail!("--real takes neither --sweep nor --table5");

@@ -79,7 +79,7 @@ struct RealRow {
 }
 
 /// The meshes: the embedded bunny, then each dragon resolution found.
-fn meshes(json: bool) -> Vec<(String, PathBuf)> {
+pub(super) fn meshes(json: bool) -> Vec<(String, PathBuf)> {
     let dirs =
         [PathBuf::from("target/meshes"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/meshes")];
     let mut out = vec![("bunny".to_string(), PathBuf::new())];
@@ -203,7 +203,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// A point light above, in front and to the side of `mesh`, casting shadows.
-fn lights(mesh: &Mesh) -> (Vec<SceneLight>, Vec3) {
+pub(super) fn lights(mesh: &Mesh) -> (Vec<SceneLight>, Vec3) {
     let (lo, hi) = mesh.bounds();
     let c = 0.5 * (lo + hi);
     let ext = mesh.extent();
@@ -214,7 +214,7 @@ fn lights(mesh: &Mesh) -> (Vec<SceneLight>, Vec3) {
 
 /// The mesh with a smooth bump of height `h` along the direction to `toward`, on the vertices
 /// within `radius` of the vertex nearest `toward`.
-fn bump(mesh: &Mesh, toward: Vec3, radius: f32, h: f32) -> Vec<Vec3> {
+pub(super) fn bump(mesh: &Mesh, toward: Vec3, radius: f32, h: f32) -> Vec<Vec3> {
     let p = &mesh.positions;
     let at = *p
         .iter()

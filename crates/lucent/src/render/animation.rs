@@ -13,7 +13,7 @@ use crate::scene::{Scene, orbit_lights};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lucent_core::clock::ms_since;
-use lucent_core::session::{FrameSession, Solved};
+use lucent_core::session::{FrameSession, Solved, Timings};
 use lucent_gpu::GpuContext;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -55,6 +55,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let mut session = scene.session(SolveMode::Incremental);
     let mode = session.settings().mode;
     session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
+    session.set_view_terms(args.view_terms);
     let (center, _) = lucent_core::camera::bounding_sphere(&scene.mesh.positions);
     let frame_at = |i: u32| {
         let t = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 1.0 };
@@ -68,7 +69,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     };
 
     let mut drawer: Option<Drawer> = None;
-    let mut times = Times::default();
+    let mut times: Vec<Timings> = Vec::new();
     let bar = ProgressBar::new(frames as u64).with_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} (eta {eta}) {msg}")
             .expect("valid template"),
@@ -97,7 +98,7 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
             created_dir = true;
         }
         image.write(&out.join(frame_name(i, format)))?;
-        times.push(&solved, render_ms, ms_since(t));
+        times.push(Timings { raster_ms: render_ms, write_ms: ms_since(t), ..solved.timings });
         bar.set_message(format!("solve {:.0} ms", solved.timings.total_ms()));
         bar.inc(1);
     }
@@ -116,16 +117,10 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
         adapter,
         out.join(frame_name(0, format)).display(),
     );
-    // Before the medians sort the columns.
-    let first_link_ms = times.link.first().copied().unwrap_or(0.0);
+    let first_link_ms = times.first().map_or(0.0, |t| t.link_ms);
     println!(
-        "lucent: per frame (median of {frames}): irradiance {:.1} ms, link/update {:.1} ms, solve {:.1} ms, \
-         render {:.1} ms, write {:.1} ms; first frame link/update {:.1} ms{}",
-        median(&mut times.irradiance),
-        median(&mut times.link),
-        median(&mut times.solve),
-        median(&mut times.render),
-        median(&mut times.write),
+        "lucent: per frame (median of {frames}): {}; first frame link/update {:.1} ms{}",
+        Timings::median(&times).line(),
         first_link_ms,
         first_links.map(|l| format!(", {l} links")).unwrap_or_default(),
     );
@@ -192,37 +187,6 @@ pub fn default_out() -> PathBuf {
     PathBuf::from("frames")
 }
 
-/// Per-frame times, milliseconds, in frame order.
-#[derive(Default)]
-struct Times {
-    irradiance: Vec<f64>,
-    link: Vec<f64>,
-    solve: Vec<f64>,
-    render: Vec<f64>,
-    write: Vec<f64>,
-}
-
-impl Times {
-    fn push(&mut self, s: &Solved, render_ms: f64, write_ms: f64) {
-        let t = &s.timings;
-        self.irradiance.push(t.irradiance_ms);
-        self.link.push(t.link_ms);
-        self.solve.push(t.pull_ms + t.gather_ms + t.push_ms + t.bounces_ms);
-        self.render.push(render_ms);
-        self.write.push(write_ms);
-    }
-}
-
-/// The median (the mean of the middle two for an even count); 0 when empty. Sorts `v`.
-pub fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,12 +207,5 @@ mod tests {
         assert_eq!(ImageFormat::resolve(None, None, false), ImageFormat::Png);
         assert_eq!(ImageFormat::resolve(None, exr, true), ImageFormat::Png, "a directory");
         assert_eq!(ImageFormat::resolve(Some(ImageFormat::Exr), None, true), ImageFormat::Exr);
-    }
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
-        assert_eq!(median(&mut []), 0.0);
     }
 }

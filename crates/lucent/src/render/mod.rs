@@ -174,24 +174,24 @@ fn render_mertens(
     let (mesh, mut session) = lucent::still::session(scene, size);
     let watch = crate::progress::Watch::new();
     session.set_progress(Some(watch.progress()));
+    session.set_view_terms(args.view_terms);
     let profile = session.profile().clone();
+    session.solve();
+    if args.view_terms == lucent_core::session::ViewTerms::Split {
+        // A solve is seen per eye; the split serves the camera moves after one. Arrive at the
+        // eye by such a move, so that the image is the split's (docs/speed.md compares them).
+        let eye = scene.camera_view(size).eye;
+        session.set_eye(Some(eye + glam::Vec3::X * (1e-3 * mesh.extent())));
+        session.solve();
+        session.set_eye(Some(eye));
+    }
     let solved = session.solve();
     drop(watch);
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
     if method == Method::Hierarchical {
         local_limit_note(&mesh, &profile);
     }
-    let st = &solved.timings;
-    log::info!(
-        "irradiance {:.1} ms, link {:.1} ms, pull {:.1} ms, gather {:.1} ms, push {:.1} ms, bounces {:.1} ms, single scattering {:.1} ms",
-        st.irradiance_ms,
-        st.link_ms,
-        st.pull_ms,
-        st.gather_ms,
-        st.push_ms,
-        st.bounces_ms,
-        st.single_scattering_ms
-    );
+    log::info!("{}", solved.timings.line());
 
     let t = Instant::now();
     let tone = tone_map(args, scene.exposure);

@@ -6,7 +6,7 @@ use lucent_core::Rgb;
 use lucent_core::irradiance::{Environment, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::{Deformation, Deformer as _};
-use lucent_core::session::{FrameSession, Solved};
+use lucent_core::session::{FrameSession, Solved, ViewTerms};
 use lucent_core::solver::{HierarchicalSolver, Progress};
 use std::sync::Arc;
 
@@ -113,6 +113,8 @@ impl SolverSession {
         if !same_topology {
             let mut session = FrameSession::new((**mesh).clone(), None, transport.clone(), settings);
             session.set_progress(self.progress.clone());
+            // Orbiting the camera re-evaluates closed forms, no ray (`shading::view_basis`).
+            session.set_view_terms(ViewTerms::Split);
             session.set_entry_factors(self.entry.clone().filter(|e| e.len() == mesh.triangles.len()));
             self.session = Some(session);
         }

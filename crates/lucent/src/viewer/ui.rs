@@ -402,17 +402,13 @@ fn deformation(ui: &mut Ui, state: &mut ViewState) {
 fn timings(ui: &mut Ui, status: &Status) {
     let t = &status.timings;
     egui::Grid::new("timings").num_columns(2).show(ui, |ui| {
-        for (name, ms) in [
-            ("irradiance", t.irradiance_ms),
-            ("linking", t.link_ms),
-            ("pull", t.pull_ms),
-            ("gather", t.gather_ms),
-            ("push", t.push_ms),
-            ("bounces", t.bounces_ms),
-            ("single scattering", t.single_scattering_ms),
-            ("solve total", t.total_ms()),
-            ("draw (CPU)", status.draw_ms),
-        ] {
+        let total = ("CPU total", t.cpu_ms());
+        for (name, ms) in t
+            .stages()
+            .into_iter()
+            .filter(|(n, _)| !matches!(*n, "raster" | "write"))
+            .chain([total, ("draw (CPU)", status.draw_ms)])
+        {
             ui.label(name);
             ui.label(format!("{ms:8.2} ms"));
             ui.end_row();

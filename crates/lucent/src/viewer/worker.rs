@@ -95,16 +95,7 @@ fn run(mut session: SolverSession, requests: Receiver<Request>, replies: Sender<
             Request::Solve { generation, mesh, params } => {
                 let solution = session.solve(&mesh, &params);
                 let t = &solution.solved.timings;
-                log::info!(
-                    "solve {generation}: {} faces, {:.1} ms (irradiance {:.1}, link {:.1}, gather {:.1}, push {:.1}, bounces {:.1})",
-                    mesh.triangles.len(),
-                    t.total_ms(),
-                    t.irradiance_ms,
-                    t.link_ms,
-                    t.gather_ms,
-                    t.push_ms,
-                    t.bounces_ms
-                );
+                log::info!("solve {generation}: {} faces, {}", mesh.triangles.len(), t.line());
                 Reply::Solved { generation, solution }
             }
         };

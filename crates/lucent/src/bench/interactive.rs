@@ -1,0 +1,306 @@
+//! `lucent bench interactive`: what a user's action costs from the action to the next image's
+//! per-vertex radiance, stage by stage (issue 51 item 5), on the meshes of `bench solver
+//! --real` (the embedded bunny and the dragons `scripts/fetch_dragon.sh` fetched), marble at
+//! 10 cm and skim milk at 5 cm, one shadowing point light, three bounces, incremental mode and
+//! the viewer's split view terms (`shading::view_basis`), as the viewer solves.
+//!
+//! Actions, each repeated [`REPS`] times after one warm-up repetition, from the pose the
+//! previous action left:
+//!
+//! * `light`: the light turns 10° about the vertical through the mesh's centre;
+//! * `camera`: the eye turns 10° about the vertical (split view terms), and `camera-per-eye`
+//!   the same with the view terms traced per eye (the reference);
+//! * `material`: the model scale grows by 5% of its value each time;
+//! * `bump`: a bump 0.1 of the extent wide grows on the lit side, to 1% of the extent;
+//! * `twist`: 30° of twist over eight frames (the frames of `lucent render --frames 8`).
+//!
+//! Each row: the median milliseconds of every stage ([`Timings::stages`]; no raster: the
+//! bench draws nothing) and of the whole solve, and the last repetition's error against a
+//! fresh session solving the same pose, light, material and eye from nothing with the view
+//! terms per eye: of `B` per face (`|ΣB - ΣB_fresh| / ΣB_fresh` over the channel sums, faces
+//! with light), and of the radiance the mesh pass draws per vertex (`radiance + single` against
+//! the fresh one's, vertices seen), median and 95th percentile.
+//!
+//! `LUCENT_BENCH_MAX_TRIANGLES` (default 60,000: the bunny, the 11K and the 48K dragons, a few
+//! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
+//! for `bench solver --real`.
+
+use super::solver_real::{bump, lights, meshes};
+use anyhow::Context;
+use glam::{Quat, Vec3};
+use lucent_core::Rgb;
+use lucent_core::bssrdf::Material;
+use lucent_core::irradiance::{Light, SceneLight};
+use lucent_core::mesh::deform::Deformation;
+use lucent_core::mesh::{Mesh, embedded, load_mesh};
+use lucent_core::session::{
+    FrameSession, FrameSettings, Method, SolveMode, Solved, Timings, Transport, ViewTerms,
+};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Timed repetitions of each action (after one warm-up).
+const REPS: usize = 3;
+
+#[derive(Serialize)]
+struct Row {
+    bench: &'static str,
+    mesh: String,
+    triangles: usize,
+    material: &'static str,
+    scale_m: f64,
+    action: &'static str,
+    reps: usize,
+    /// Median per-stage milliseconds.
+    timings: Timings,
+    /// Median wall-clock milliseconds of the whole `solve`.
+    wall_ms: f64,
+    /// `B` per face against a fresh solve: median and 95th percentile relative difference.
+    b_err_median: f64,
+    b_err_p95: f64,
+    /// The drawn radiance per vertex against a fresh solve with per-eye view terms.
+    view_err_median: f64,
+    view_err_p95: f64,
+    threads: usize,
+}
+
+/// The state a fresh session is given to solve the same frame from nothing.
+struct State {
+    positions: Vec<Vec3>,
+    lights: Vec<SceneLight>,
+    transport: Transport,
+    eye: Vec3,
+}
+
+pub fn run(json: bool) -> anyhow::Result<()> {
+    let env = |k: &str, d: usize| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
+    let (max_t, min_t) = (env("LUCENT_BENCH_MAX_TRIANGLES", 60_000), env("LUCENT_BENCH_MIN_TRIANGLES", 0));
+    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
+    if !json {
+        println!(
+            "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8}",
+            "mesh",
+            "T",
+            "material",
+            "action",
+            "irrad",
+            "body",
+            "link",
+            "solve",
+            "bounces",
+            "view",
+            "wall",
+            "B med",
+            "B p95",
+            "view med",
+            "view p95"
+        );
+    }
+    for (name, path) in meshes(json) {
+        let mesh = if path.as_os_str().is_empty() {
+            embedded::bunny()
+        } else {
+            load_mesh(&path).with_context(|| format!("loading {}", path.display()))?
+        };
+        if mesh.triangles.len() > max_t || mesh.triangles.len() < min_t {
+            continue;
+        }
+        for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
+            if only.as_deref().is_some_and(|m| m != material) {
+                continue;
+            }
+            for row in measure(&name, &mesh, material, scale_m)? {
+                print_row(&row, json)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(r)?);
+        return Ok(());
+    }
+    let t = &r.timings;
+    println!(
+        "{:<12} {:>7} {:<9} {:<15} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>7.3}% {:>7.3}% {:>7.3}% {:>7.3}%",
+        r.mesh,
+        r.triangles,
+        r.material,
+        r.action,
+        t.irradiance_ms,
+        t.body_ms,
+        t.link_ms,
+        t.solve_ms(),
+        t.bounces_ms,
+        t.single_scattering_ms,
+        r.wall_ms,
+        100.0 * r.b_err_median,
+        100.0 * r.b_err_p95,
+        100.0 * r.view_err_median,
+        100.0 * r.view_err_p95
+    );
+    Ok(())
+}
+
+/// A session as the viewer makes it, solved once (its first image).
+fn session(
+    mesh: &Mesh,
+    transport: Transport,
+    lights: Vec<SceneLight>,
+    eye: Vec3,
+    terms: ViewTerms,
+) -> FrameSession {
+    let settings = FrameSettings {
+        method: Method::Hierarchical,
+        mode: SolveMode::Incremental,
+        oracle: None,
+        environment_shadows: false,
+        bounces: 3,
+        ablate: Default::default(),
+    };
+    let mut s = FrameSession::new(mesh.clone(), None, transport, settings);
+    s.set_lights(lights);
+    s.set_eye(Some(eye));
+    s.set_view_terms(terms);
+    s
+}
+
+/// Every action's row for one mesh and material.
+fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> anyhow::Result<Vec<Row>> {
+    let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
+    let (mut lights, light_at) = lights(rest);
+    let (lo, hi) = rest.bounds();
+    let centre = 0.5 * (lo + hi);
+    let mut eye = centre + Vec3::new(0.0, 0.3, 2.5) * rest.extent();
+    let mut state = State {
+        positions: rest.positions.clone(),
+        lights: lights.clone(),
+        transport: transport.clone(),
+        eye,
+    };
+    let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
+    s.solve();
+    let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
+    let mut rows = Vec::new();
+    let mut row = |action: &'static str, s: &mut FrameSession, state: &State, times: Vec<(Timings, f64)>| {
+        let (b, view) = errors(rest, s, state);
+        let mut wall: Vec<f64> = times.iter().map(|(_, w)| *w).collect();
+        wall.sort_by(f64::total_cmp);
+        let t: Vec<Timings> = times.iter().map(|(t, _)| *t).collect();
+        rows.push(Row {
+            bench: "interactive",
+            mesh: name.to_string(),
+            triangles: rest.triangles.len(),
+            material,
+            scale_m,
+            action,
+            reps: REPS,
+            timings: Timings::median(&t),
+            wall_ms: wall[wall.len() / 2],
+            b_err_median: b.0,
+            b_err_p95: b.1,
+            view_err_median: view.0,
+            view_err_p95: view.1,
+            threads: rayon::current_num_threads(),
+        });
+    };
+    // The light.
+    let times = repeat(&mut s, |s| {
+        lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
+        s.set_lights(lights.clone());
+    });
+    state.lights = lights.clone();
+    row("light", &mut s, &state, times);
+    // The camera, split and per eye.
+    for (action, terms) in [("camera", ViewTerms::Split), ("camera-per-eye", ViewTerms::PerEye)] {
+        s.set_view_terms(terms);
+        let times = repeat(&mut s, |s| {
+            eye = turn(eye);
+            s.set_eye(Some(eye));
+        });
+        state.eye = eye;
+        row(action, &mut s, &state, times);
+    }
+    s.set_view_terms(ViewTerms::Split);
+    // The material: the scale grows by 5% each time.
+    let mut step = 0;
+    let times = repeat(&mut s, |s| {
+        step += 1;
+        s.set_transport(Transport { scale_m: scale_m * (1.0 + 0.05 * step as f64), ..transport.clone() });
+    });
+    state.transport = s.transport().clone();
+    row("material", &mut s, &state, times);
+    // A local bump growing on the lit side, then a global twist, frame by frame.
+    let (mut step, top) = (0, 0.01 * rest.extent());
+    let times = repeat(&mut s, |s| {
+        step += 1;
+        let h = top * step as f32 / (REPS + 1) as f32;
+        s.set_positions(&bump(rest, light_at, 0.1 * rest.extent(), h));
+    });
+    state.positions = s.mesh().positions.clone();
+    row("bump", &mut s, &state, times);
+    let (twist, mut frame, mut out) = (Deformation::Twist { degrees: 30.0 }, 0, Vec::new());
+    let times = repeat(&mut s, |s| {
+        frame += 1;
+        twist.apply(rest, frame as f32 / 8.0, &mut out);
+        s.set_positions(&out);
+    });
+    state.positions = s.mesh().positions.clone();
+    row("twist", &mut s, &state, times);
+    Ok(rows)
+}
+
+/// `light` turned by `turn` (positions about the centre, directions about the vertical).
+fn turn_light(l: &SceneLight, turn: &impl Fn(Vec3) -> Vec3) -> SceneLight {
+    let light = match l.light {
+        Light::Point { position, intensity } => Light::Point { position: turn(position), intensity },
+        other => other,
+    };
+    SceneLight { light, ..*l }
+}
+
+/// One warm-up and [`REPS`] timed repetitions of `act` then a solve: `(stages, wall ms)`.
+fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(Timings, f64)> {
+    act(s);
+    s.solve();
+    (0..REPS)
+        .map(|_| {
+            act(s);
+            let t = Instant::now();
+            let timings = s.solve().timings;
+            (timings, lucent_core::clock::ms_since(t))
+        })
+        .collect()
+}
+
+/// `((median, p95) of B's error, (median, p95) of the drawn radiance's)` of `s`'s last solve
+/// against a fresh session's solve of `state` with per-eye view terms.
+fn errors(rest: &Mesh, s: &mut FrameSession, state: &State) -> ((f64, f64), (f64, f64)) {
+    let mut mesh = rest.clone();
+    mesh.positions.clone_from(&state.positions);
+    let mut fresh =
+        session(&mesh, state.transport.clone(), state.lights.clone(), state.eye, ViewTerms::PerEye);
+    let want = fresh.solve().clone();
+    let got = s.solve().clone();
+    let sum = |v: &Rgb| (v.x + v.y + v.z) as f64;
+    let b = relative(got.face_b.iter().map(sum), want.face_b.iter().map(sum));
+    let drawn = |x: &Solved| -> Vec<f64> {
+        let single = |i: usize| x.vertex_single.get(i).copied().unwrap_or(Rgb::ZERO);
+        x.vertex_radiance.iter().enumerate().map(|(i, r)| sum(&(*r + single(i)))).collect()
+    };
+    let view = relative(drawn(&got).into_iter(), drawn(&want).into_iter());
+    (b, view)
+}
+
+/// Median and 95th percentile of `|a - b| / b` where `b > 0`.
+fn relative(a: impl Iterator<Item = f64>, b: impl Iterator<Item = f64>) -> (f64, f64) {
+    let mut e: Vec<f64> = a.zip(b).filter(|(_, b)| *b > 1e-12).map(|(a, b)| (a - b).abs() / b).collect();
+    if e.is_empty() {
+        return (0.0, 0.0);
+    }
+    e.sort_by(f64::total_cmp);
+    let at = |q: f64| e[((e.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.95))
+}
