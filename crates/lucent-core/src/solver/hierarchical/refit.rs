@@ -168,12 +168,14 @@ struct Scratch {
     /// The oracle's links, when it decided again.
     decided: Vec<(usize, LinkKind, Vec3A, f32)>,
     cands: Vec<(u32, Option<[f32; 3]>)>,
+    /// The task's counts.
+    tally: Tally,
 }
 
 impl Refit<'_> {
     /// Receiver `r`'s stored links into `sc.links`, the moved ones refitted (see the module
     /// documentation); false if none moved.
-    fn refit_receiver(&self, ctx: &mut Ctx, r: usize, sc: &mut Scratch, tally: &mut Tally) -> bool {
+    fn refit_receiver(&self, ctx: &mut Ctx, r: usize, sc: &mut Scratch) -> bool {
         let (s, h) = (self.s, &self.s.hierarchy);
         sc.links.clear();
         let mut any = false;
@@ -222,7 +224,7 @@ impl Refit<'_> {
             if !moved {
                 continue;
             }
-            tally.refitted += 1;
+            sc.tally.refitted += 1;
             if kind == LinkKind::FormFactor {
                 sc.fresh.push(i);
                 continue;
@@ -299,9 +301,8 @@ impl Refit<'_> {
         sc: &mut Scratch,
         chunk: &mut LinkChunk,
         defer: &mut Deferred,
-        tally: &mut Tally,
     ) {
-        let moved = self.refit_receiver(ctx, r, sc, tally);
+        let moved = self.refit_receiver(ctx, r, sc);
         let has_extra = extra.iter().next().is_some();
         let decide = has_extra || (moved && (self.all || self.redo.binary_search(&(r as u32)).is_ok()));
         if !decide {
@@ -311,7 +312,7 @@ impl Refit<'_> {
             chunk.close_receiver();
             return;
         }
-        tally.decided_receivers += 1;
+        sc.tally.decided_receivers += 1;
         self.decide_receiver(ctx, r, extra, sc, defer);
         for &(e, kind, c, slope, _) in sc.links.iter().filter(|l| !l.4) {
             chunk.push(r, e, kind, c, slope, false);
@@ -320,25 +321,17 @@ impl Refit<'_> {
             chunk.push(r, e, kind, c, slope, false);
         }
         let kept = |l: &&RefitLink| sc.decided.iter().any(|d| d.0 == l.0 && d.1 == l.1);
-        tally.opened += sc.links.iter().filter(|l| l.4).filter(|l| !kept(l)).count();
+        sc.tally.opened += sc.links.iter().filter(|l| l.4).filter(|l| !kept(l)).count();
         chunk.close_receiver();
     }
 
     /// Receiver `r` and its subtree into `chunks` (in preorder, parallel over large subtrees
     /// as [`HierarchicalSolver::relink`] is), `extra` the candidates its parent handed down.
-    fn subtree(
-        &self,
-        ctx: &mut Ctx,
-        r: usize,
-        extra: Cands,
-        sc: &mut Scratch,
-        chunks: &mut Vec<LinkChunk>,
-        tally: &mut Tally,
-    ) {
+    fn subtree(&self, ctx: &mut Ctx, r: usize, extra: Cands, sc: &mut Scratch, chunks: &mut Vec<LinkChunk>) {
         let (s, n) = (self.s, self.s.hierarchy.nodes[r]);
         let mut defer = Deferred::default();
         let chunk = chunks.last_mut().expect("a chunk");
-        self.receiver(ctx, r, extra, sc, chunk, &mut defer, tally);
+        self.receiver(ctx, r, extra, sc, chunk, &mut defer);
         if n.is_leaf() {
             return;
         }
@@ -348,22 +341,22 @@ impl Refit<'_> {
                 .par_iter()
                 .enumerate()
                 .map(|(k, &c)| {
-                    let (mut sub, mut sc, mut tally) = (Ctx::new(s), Scratch::default(), Tally::default());
+                    let (mut sub, mut sc) = (Ctx::new(s), Scratch::default());
                     let mut sub_chunks = vec![s.chunk_pool.take(ChunkPool::subtree(c as usize))];
                     let cands = Cands::of_child(&defer, k);
-                    self.subtree(&mut sub, c as usize, cands, &mut sc, &mut sub_chunks, &mut tally);
+                    self.subtree(&mut sub, c as usize, cands, &mut sc, &mut sub_chunks);
                     s.tick_progress(Some(r), c as usize);
-                    (tally, sub_chunks)
+                    (sc.tally, sub_chunks)
                 })
                 .collect();
             for (t, c) in subs {
-                tally.absorb(&t);
+                sc.tally.absorb(&t);
                 chunks.extend(c);
             }
             chunks.push(s.chunk_pool.take(ChunkPool::after(r)));
         } else {
             for (k, &c) in n.children().iter().enumerate() {
-                self.subtree(ctx, c as usize, Cands::of_child(&defer, k), sc, chunks, tally);
+                self.subtree(ctx, c as usize, Cands::of_child(&defer, k), sc, chunks);
                 s.tick_progress(Some(r), c as usize);
             }
         }
@@ -377,9 +370,9 @@ impl Refit<'_> {
         sample
             .par_iter()
             .map_init(
-                || (Ctx::new(s), Scratch::default(), Tally::default()),
-                |(ctx, sc, tally), &r| {
-                    if !self.refit_receiver(ctx, r, sc, tally) {
+                || (Ctx::new(s), Scratch::default()),
+                |(ctx, sc), &r| {
+                    if !self.refit_receiver(ctx, r, sc) {
                         return None;
                     }
                     let mut defer = Deferred::default();
@@ -465,8 +458,9 @@ impl HierarchicalSolver {
         let mut tally = Tally::default();
         if !self.hierarchy.is_empty() {
             let (mut ctx, mut sc) = (Ctx::new(self), Scratch::default());
-            refit.subtree(&mut ctx, 0, Cands::NONE, &mut sc, &mut chunks, &mut tally);
+            refit.subtree(&mut ctx, 0, Cands::NONE, &mut sc, &mut chunks);
             self.tick_progress(None, 0);
+            tally = sc.tally;
         }
         st.pass_ms = ms(t.elapsed());
         let set = LinkSet::build(&mut chunks, Some(&old), self.spare.take(), self.hierarchy.len());
