@@ -5,6 +5,7 @@
     python3 validation/lucent_validation.py reference   # Mitsuba references (minutes a case)
     python3 validation/lucent_validation.py compare     # render lucent, print the table
     python3 validation/lucent_validation.py sweep --seed 1 --count 24   # random draws, both renderers
+    python3 validation/lucent_validation.py ablate      # lucent with each correction left out
 
 Every case in cases.json is rendered by both from one description: the same mesh placed the
 same way (lucent scales the mesh so that the largest side of its bounding box is `scale`
@@ -338,11 +339,9 @@ def compare_images(case, ours, a, b, single, heat_path=None):
             "green_or_blue_above_red": chroma_violations(ours, mask, a, b) if case["material"] != "ketchup" else None}
 
 
-def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), only=(), split=None):
-    import mitsuba as mi
-    mi.set_variant("scalar_rgb")
-    os.makedirs(out_dir, exist_ok=True)
-    rows = []
+def comparable_cases(cfg, only=(), split=None):
+    """The cases of `cfg` named in `only` (all when empty) of `split` (all when None) whose mesh
+    and reference are here; a line on stderr for each one that is not."""
     for case in cfg["cases"]:
         if (only and case["name"] not in only) or (split and case.get("split", "fit") != split):
             continue
@@ -352,6 +351,15 @@ def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), o
         if not os.path.exists(os.path.join(REFS, f"{case['name']}.half_a.exr")):
             print(f"{case['name']}: skipped, no reference yet (`lucent_validation.py reference {case['name']}`)", file=sys.stderr)
             continue
+        yield case
+
+
+def cmd_compare(cfg, profiles, out_dir, as_json, write, reuse=False, extra=(), only=(), split=None):
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    os.makedirs(out_dir, exist_ok=True)
+    rows = []
+    for case in comparable_cases(cfg, only, split):
         a, b, single = reference_parts(case)
         for profile in profiles:
             out = os.path.join(out_dir, f"{case['name']}.{profile}.exr")
@@ -422,6 +430,13 @@ def main():
     w.add_argument("--spp", type=int, default=64, help="Mitsuba's samples per pixel in each of the two halves")
     w.add_argument("--out", default=os.path.join(ROOT, "target", "validation"))
     w.add_argument("--json", action="store_true")
+    a = sub.add_parser("ablate", help="lucent with each correction of its default path left out, fit and test cases")
+    a.add_argument("--only", default="", help="comma-separated corrections (default: all; `default` is always rendered)")
+    a.add_argument("--cases", default="", help="comma-separated case names (default: all)")
+    a.add_argument("--split", choices=["fit", "test"], help="only the cases of this split")
+    a.add_argument("--out", default=os.path.join(ROOT, "target", "validation"))
+    a.add_argument("--reuse", action="store_true", help="compare the images an earlier run left in OUT/ablate instead of rendering")
+    a.add_argument("--json", action="store_true")
     args = p.parse_args()
     cfg = load_cases()
     if args.cmd == "scenes":
@@ -432,6 +447,10 @@ def main():
     elif args.cmd == "sweep":
         from validation_sweep import cmd_sweep
         cmd_sweep(cfg, args.seed, args.count, args.spp, args.out, args.json)
+    elif args.cmd == "ablate":
+        from validation_ablate import ABLATIONS, cmd_ablate
+        names = [n for n in args.only.split(",") if n] or [n for n, _, _ in ABLATIONS]
+        cmd_ablate(cfg, names, args.out, args.reuse, [c for c in args.cases.split(",") if c], args.split, args.json)
     elif args.cmd == "reference":
         cmd_reference(cfg, set(args.cases))
     else:

@@ -39,12 +39,14 @@ use glam::Vec3;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod ablate;
 mod body;
 mod bounces;
 mod irradiance;
 mod subsurface;
 mod transport;
 mod view;
+pub use ablate::Ablations;
 pub use transport::Transport;
 
 /// How the subsurface transport is computed.
@@ -151,6 +153,9 @@ pub struct FrameSettings {
     /// off. The `lucent` command line, scenes and viewer default to 3 (`ranges::DEFAULT_BOUNCES`
     /// there).
     pub bounces: u32,
+    /// Corrections left out, for measuring each (none by default: `lucent render --ablate`,
+    /// docs/corrections.md).
+    pub ablate: Ablations,
 }
 
 /// Wall-clock times of one solve's stages, milliseconds. Stages that did not run are 0.
@@ -206,6 +211,9 @@ pub struct Solved {
     /// How `vertex_radiance` leaves over exit angles: the mesh pass multiplies it by
     /// `T(μ_o)` besides `F_t` ([`crate::bssrdf::ExitLobe`]; flat for Mertens' profile and HTSM).
     pub exit_lobe: crate::bssrdf::ExitLobe,
+    /// Whether the mesh pass blends `vertex_single` linearly across a face rather than
+    /// geometrically: only under the ablation [`Ablations::single_blend`].
+    pub linear_single: bool,
     /// Per-stage times of the solve that made this (zero when it was reused).
     pub timings: Timings,
     /// Links of the hierarchical solve (`None` for the exact solver and HTSM).
@@ -305,7 +313,7 @@ impl FrameSession {
         settings: FrameSettings,
     ) -> Self {
         let rest_extent = mesh.extent();
-        let profile = transport.profile_at(rest_extent);
+        let profile = settings.ablate.applied(transport.profile_at(rest_extent));
         FrameSession {
             subsurface: subsurface::Subsurface::new(mesh.positions.clone(), hierarchy),
             frame: Frame { mesh, rest_extent, transport, profile, settings, progress: None },
@@ -376,7 +384,8 @@ impl FrameSession {
     /// changed).
     pub fn set_transport(&mut self, transport: Transport) {
         if self.frame.transport != transport {
-            self.frame.profile = transport.profile_at(self.frame.rest_extent);
+            self.frame.profile =
+                self.frame.settings.ablate.applied(transport.profile_at(self.frame.rest_extent));
             self.frame.transport = transport;
             self.changes.transport = true;
         }
@@ -389,6 +398,12 @@ impl FrameSession {
         self.changes.method |= s.method != settings.method || s.mode != settings.mode;
         self.changes.light |=
             s.environment_shadows != settings.environment_shadows || s.bounces != settings.bounces;
+        if s.ablate != settings.ablate {
+            // The entry term is the profile's, and the gain's terms the body's.
+            self.frame.profile =
+                settings.ablate.applied(self.frame.transport.profile_at(self.frame.rest_extent));
+            self.changes.transport = true;
+        }
         self.frame.settings = settings;
     }
 
@@ -468,8 +483,22 @@ impl FrameSession {
         let t = Instant::now();
         let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord());
         timings.single_scattering_ms = ms_since(t);
-        let exit_lobe = f.profile.exit_lobe.clone();
-        self.last = Solved { face_b, vertex_radiance, vertex_single, exit_lobe, timings, links, fresh: true };
+        let exit_lobe = if f.settings.ablate.exit_lobe {
+            crate::bssrdf::ExitLobe::flat()
+        } else {
+            f.profile.exit_lobe.clone()
+        };
+        let linear_single = f.settings.ablate.single_blend;
+        self.last = Solved {
+            face_b,
+            vertex_radiance,
+            vertex_single,
+            exit_lobe,
+            linear_single,
+            timings,
+            links,
+            fresh: true,
+        };
         &self.last
     }
 

@@ -117,6 +117,7 @@ fn torus_filmic() {
             environment: 0.0,
             background: 0.0,
             exit_lobe: Default::default(),
+            linear_single: false,
         },
         tone: ToneMap { exposure: 1.5, operator: ToneOperator::AcesFilmic, ..Default::default() },
     };

@@ -114,6 +114,11 @@ pub struct RenderArgs {
     /// `refine`, else auto.
     #[arg(long, value_parser = parse_refine)]
     pub refine: Option<Refine>,
+    /// Corrections of the default path left out, for measuring each against the path tracer
+    /// (`validation/lucent_validation.py ablate`, docs/corrections.md): comma-separated names
+    /// of `lucent_core::session::Ablations::NAMES`. Hidden: not for pictures.
+    #[arg(long, hide = true, value_name = "NAME[,NAME]")]
+    pub ablate: Option<lucent_core::session::Ablations>,
     /// Environment light and reflection map: `courtyard`, `forest` (the maps in assets/) or an
     /// equirectangular .hdr/.exr path. Replaces the scene's environment.
     #[arg(long)]
@@ -261,6 +266,7 @@ impl RenderArgs {
             mode: self.mode,
             // Plain `transport` means the profile's own thresholds.
             oracle: (self.oracle != Oracle::default()).then_some(self.oracle),
+            ablate: self.ablate.unwrap_or_default(),
             ..Default::default()
         }
     }
@@ -284,20 +290,34 @@ pub struct HtsmArgs {
     /// Ray-cast steps through the density volume per sample ray.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::HTSM_STEPS), allow_negative_numbers = true, default_value_t = 16, help_heading = "HTSM (--method htsm)")]
     pub steps: u32,
-    /// Transport colour r,g,b (each in (0, 1]): the colour light takes after the transport
-    /// distance. Default 0.9,0.6,0.3, or the glTF file's KHR_materials_volume attenuationColor.
+    /// Absorption the density adds at density 1, mm^-1: one number (grey) or R,G,B, each in
+    /// 0..=1000. The medium is the scene's material (sigma_s', sigma_a, eta) with absorption
+    /// sigma_a + density * this; HTSM attenuates by its diffusion coefficient (docs/htsm.md).
+    /// Default 0.5.
+    #[arg(long, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
+    pub density_absorption: Option<String>,
+    /// Former input (no physical medium; replaces the scene's material for HTSM): transport
+    /// colour r,g,b (each in (0, 1]), the colour light takes after the transport distance.
+    /// Default 0.9,0.6,0.3, or the glTF file's KHR_materials_volume attenuationColor.
     #[arg(long, alias = "transport-color", help_heading = "HTSM (--method htsm)")]
     pub transport_colour: Option<String>,
-    /// Transport distance, object units (> 0). Default 0.5, or the glTF file's
-    /// KHR_materials_volume attenuationDistance divided by the mesh's largest side.
+    /// Former input (as --transport-colour): transport distance, object units (> 0). Default
+    /// 0.5, or the glTF file's KHR_materials_volume attenuationDistance divided by the mesh's
+    /// largest side.
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::TRANSPORT_DISTANCE), allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
     pub transport_distance: Option<f32>,
-    /// Henyey-Greenstein asymmetry g in (-1, 1) of the phase function.
-    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::PHASE_G), allow_negative_numbers = true, default_value_t = 0.3, allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
-    pub phase_g: f32,
-    /// Extra absorption of density 1, per object unit (sigma_at = sigma_a + scale * density).
-    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::DENSITY_SCALE), allow_negative_numbers = true, default_value_t = 20.0, help_heading = "HTSM (--method htsm)")]
-    pub density_scale: f32,
+    /// Henyey-Greenstein asymmetry g in (-1, 1) of HTSM's phase weight. Default 0 with the
+    /// scene's material (its sigma_s' is the isotropic equivalent), 0.3 with the former inputs.
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::PHASE_G), allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
+    pub phase_g: Option<f32>,
+    /// Former input (as --transport-colour): extra absorption of density 1, per object unit
+    /// (sigma_at = sigma_a + scale * density). Default 20.
+    #[arg(long, value_parser = crate::ranges::parser(crate::ranges::DENSITY_SCALE), allow_negative_numbers = true, help_heading = "HTSM (--method htsm)")]
+    pub density_scale: Option<f32>,
+    /// Also write the density volume HTSM renders to PATH in lucent's LVOL format (e.g. for a
+    /// path tracer's grid volume).
+    #[arg(long, value_name = "PATH", help_heading = "HTSM (--method htsm)")]
+    pub volume_out: Option<std::path::PathBuf>,
     /// Transport model: `thesis` (Shopf table 4.1) or `beer-lambert` (exp(-sigma D - alpha)).
     #[arg(long, value_enum, default_value_t = HtsmModel::BeerLambert, help_heading = "HTSM (--method htsm)")]
     pub htsm_model: HtsmModel,

@@ -115,6 +115,7 @@ impl GpuFrame {
         self.mesh.update_radiance(&self.ctx, &radiance, &UvSplit::through(split, &solved.vertex_single))?;
         self.shading.lights = lights.iter().map(|l| l.light).collect();
         self.shading.exit_lobe = solved.exit_lobe.clone();
+        self.shading.linear_single = solved.linear_single;
         if hdr {
             // The background would cover alpha and bleed into the object's edge pixels.
             let shading = Shading { background: 0.0, ..self.shading.clone() };

@@ -42,6 +42,23 @@ use std::f64::consts::PI;
 /// Samples of the entry term over `μ_i = k / SAMPLES`, `k = 0..=SAMPLES`.
 pub(super) const SAMPLES: usize = 32;
 
+/// Which parts of the half-space entry term [`Entry::half_space_parts`] keeps: both in
+/// lucent's default ([`EntryParts::ALL`]); the validation's ablation drops one at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EntryParts {
+    /// The albedo ratio `A(μ_t) / A(1)`; without it the profile carries Fresnel's `F_t` alone
+    /// (Mertens §5.3) and nothing returns locally (the single-scattered part is kept).
+    pub ratio: bool,
+    /// The split into a carried and a local part; without it the profile carries all of
+    /// `F_t A(μ_t) / A(1)` with its normal-incidence shape.
+    pub local: bool,
+}
+
+impl EntryParts {
+    /// Every part: lucent's entry term.
+    pub const ALL: EntryParts = EntryParts { ratio: true, local: true };
+}
+
 /// The entry term `F_t(η, μ_i) A(μ_t) / A(1)` per channel, over the cosine `μ_i` between the
 /// surface normal and the direction to the light (outside the material), split into the part
 /// the profile carries and the part returned locally (see the module docs).
@@ -81,6 +98,12 @@ impl Entry {
     /// albedos less their direct single scattering, most of what rises at grazing incidence,
     /// and that single scattering is the third part (Hanrahan & Krueger's, through the boundary).
     pub fn half_space(rho: &[f64; 3], eta: f64, with_single: bool) -> Self {
+        Self::half_space_parts(rho, eta, with_single, EntryParts::ALL)
+    }
+
+    /// [`Entry::half_space`] with only the `parts` asked for: what the validation's ablation
+    /// (`lucent render --ablate`, docs/corrections.md) measures each part by.
+    pub fn half_space_parts(rho: &[f64; 3], eta: f64, with_single: bool, parts: EntryParts) -> Self {
         let spaces: [(HalfSpace, f64, BeyondOneMfp); 3] = std::array::from_fn(|c| {
             let hs = HalfSpace::new(rho[c], eta);
             let normal = albedo_of(&hs, 1.0, with_single);
@@ -94,8 +117,14 @@ impl Entry {
             let mut local = [0.0; 3];
             let mut single = [0.0; 3];
             for (c, (hs, normal, far)) in spaces.iter().enumerate() {
-                let ratio = if *normal > 1e-12 { albedo_of(hs, mu_t, with_single) / normal } else { 1.0 };
-                let g = far.share(mu_t).min(ratio);
+                let ratio = if !parts.ratio {
+                    1.0
+                } else if *normal > 1e-12 {
+                    albedo_of(hs, mu_t, with_single) / normal
+                } else {
+                    1.0
+                };
+                let g = if parts.ratio && parts.local { far.share(mu_t).min(ratio) } else { ratio };
                 carried[c] = f_t * g;
                 local[c] = f_t * (ratio - g);
                 if !with_single {

@@ -17,7 +17,7 @@ mod quadrature;
 pub mod tables;
 pub mod walk;
 
-pub use entry::{Entry, zonal_band_weights};
+pub use entry::{Entry, EntryParts, zonal_band_weights};
 pub use exit::ExitLobe;
 pub use fresnel::{
     boundary_a, fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_moment1, fresnel_moment2,

@@ -58,7 +58,9 @@ impl Body {
         self.exit_chord = None;
         let Some(caster) = caster.filter(|_| f.profile.bounds_energy()) else { return };
         let (mesh, profile) = (&f.mesh, &f.profile);
-        let fb = self.finite_body.get_or_insert_with(|| FiniteBody::new(profile));
+        let ablate = &f.settings.ablate;
+        let fb =
+            self.finite_body.get_or_insert_with(|| FiniteBody::new(profile).with_terms(ablate.gain_terms()));
         // Traced once; a small deformation moves the hits with the mesh.
         let rays = match self.thickness_rays.take() {
             Some(mut rays) if rays.fits(mesh) => {
@@ -67,7 +69,11 @@ impl Body {
             }
             _ => ThicknessRays::trace(mesh, caster.bvh(), caster.offset()),
         };
-        self.face_gain = Some(Arc::new(fb.gains_along(mesh, &rays, caster.offset())));
+        let gains = match ablate.gain {
+            true => vec![Rgb::ONE; mesh.triangles.len()],
+            false => fb.gains_along(mesh, &rays, caster.offset()),
+        };
+        self.face_gain = Some(Arc::new(gains));
         self.exit_chord = ExitChord::new(profile).map(|chord| {
             let means = mesh.face_to_vertex(&chord.face_means(mesh, &rays, caster.offset()));
             (chord, means)

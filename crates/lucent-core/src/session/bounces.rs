@@ -46,6 +46,10 @@ impl Bounces {
     ) {
         self.moved |= changes.geometry;
         let mut last = face_b.to_vec();
+        if f.settings.ablate.direct_single_unbounced {
+            // The ablation of the exclusion: the direct light's single scattering leaves too.
+            irradiance.add_single(f, &mut last, irradiance.faces());
+        }
         self.make_rays_current(f, irradiance.caster());
         let oracle = bounce_oracle(f);
         for _ in 0..f.settings.bounces {

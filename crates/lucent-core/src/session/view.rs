@@ -56,6 +56,7 @@ impl View {
             return (self.diffuse.clone(), Vec::new());
         };
         let single = f.transport.single_scattering_along_view();
+        let exit_chord = exit_chord.filter(|_| !f.settings.ablate.chord);
         if exit_chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
         }

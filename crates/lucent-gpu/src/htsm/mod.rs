@@ -60,6 +60,7 @@
 pub mod camera_pass;
 pub mod environment;
 pub mod geometry;
+pub mod medium;
 pub mod mips;
 pub mod pipeline;
 pub mod reference;
@@ -73,6 +74,7 @@ use lucent_core::mesh::Mesh;
 use lucent_core::volume::DensityVolume;
 
 pub use environment::{ENVIRONMENT_LIGHTS, environment_lights};
+pub use medium::{HtsmCoefficients, HtsmMedium};
 pub use reference::{LightFrustum, REFERENCE_IMAGES};
 pub use renderer::HtsmRenderer;
 
@@ -117,9 +119,11 @@ pub enum TransportModel {
     /// The printed equation has neither the sample irradiance `E_i` nor the clamp; both are
     /// needed (the shader says why).
     Thesis,
-    /// Physically based: `L = (1/n) sum_i E_i exp(-sigma D_i - alpha_i) f(theta_i)` with
-    /// `sigma = -ln(T_c) / T_d` per channel, glTF `KHR_materials_volume`'s definition of
-    /// attenuation colour and distance.
+    /// Physically based: `L = (1/n) sum_i E_i exp(-sigma D_i - alpha_i) f(theta_i)`, the
+    /// exponent being the optical depth along the ray: with a [`HtsmParams::medium`], the
+    /// integral of the diffusion transport coefficient ([`medium`]); without, `sigma =
+    /// -ln(T_c) / T_d` per channel (glTF `KHR_materials_volume`'s definition of attenuation
+    /// colour and distance) and `alpha_i` the density times `density_scale`.
     #[default]
     BeerLambert,
 }
@@ -139,8 +143,14 @@ pub struct HtsmParams {
     /// Henyey-Greenstein asymmetry `g` in `(-1, 1)`: > 0 forward scattering. Default 0.3.
     pub phase_g: f32,
     /// Extra absorption of density 1, per object unit: the density term of `sigma_at`
-    /// (eq. 4.1) is `density_scale * density`. Default 20.
+    /// (eq. 4.1) is `density_scale * density`. Default 20. Unused when [`HtsmParams::medium`]
+    /// is set.
     pub density_scale: f32,
+    /// The medium in physical coefficients ([`medium`]), or `None` (the default): the
+    /// attenuation then comes from `transport_colour`, `transport_distance` and
+    /// `density_scale` as [`medium`]'s last section says. Set it with [`HtsmMedium::apply`],
+    /// which also derives `transport_colour` and `transport_distance` from it.
+    pub medium: Option<HtsmCoefficients>,
     /// Transport model. Default [`TransportModel::BeerLambert`]: it keeps the thesis's inputs
     /// but ties colour to path length (thin parts pale, thick parts saturated, the correlation
     /// §4.1.1 asks for); [`TransportModel::Thesis`] tints everything with `T_c` alike.
@@ -172,6 +182,7 @@ impl Default for HtsmParams {
             transport_distance: 0.5,
             phase_g: 0.3,
             density_scale: 20.0,
+            medium: None,
             model: TransportModel::BeerLambert,
             kernel_radius: 0.04,
             eta: 1.3,
@@ -214,6 +225,13 @@ impl HtsmParams {
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(format!("{name} {v} must be finite and >= 0"));
+            }
+        }
+        if let Some(m) = self.medium {
+            for v in [m.sigma_a, m.sigma_s_prime, m.density_sigma_a] {
+                if !(v.is_finite() && v.cmpge(Vec3::ZERO).all()) {
+                    return bad(format!("medium coefficient {v} per object unit must be finite and >= 0"));
+                }
             }
         }
         if !(self.eta.is_finite() && self.eta >= 1.0) {

@@ -15,6 +15,8 @@ pub(super) struct FrameUniforms {
     pub eye: [f32; 4],
     pub transport: [f32; 4],
     pub sigma: [f32; 4],
+    pub scatter: [f32; 4],
+    pub density_absorption: [f32; 4],
     pub material: [f32; 4],
     pub shading: [f32; 4],
     pub counts: [f32; 4],

@@ -14,9 +14,14 @@ struct Frame {
     eye: vec4<f32>,
     // rgb: transport colour T_c; w: transport distance T_d (object units).
     transport: vec4<f32>,
-    // rgb: Beer-Lambert attenuation sigma = -ln(T_c) / T_d (1 / object units); w: density scale
-    // (extra absorption of density 1, 1 / object units).
+    // The medium (htsm/medium.rs), 1 / object units: the ray cast integrates
+    // sigma_tr(rho) = sqrt(3 a (a + s)) with a = sigma.rgb + rho * density_absorption.rgb and
+    // s = scatter.rgb. rgb: base absorption; w: unused.
     sigma: vec4<f32>,
+    // rgb: reduced scattering sigma_s'; w: unused.
+    scatter: vec4<f32>,
+    // rgb: absorption added at density 1; w: unused.
+    density_absorption: vec4<f32>,
     // x: Schlick F0; y: shadow bias (object units); z: largest mip level of the density volume;
     // w: unused.
     material: vec4<f32>,

@@ -110,13 +110,20 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         // filtering the thesis could not have, §5.1).
         let step_voxels = length(dir) * g.counts.w / f32(steps);
         let lod = clamp(log2(max(step_voxels, 1.0)), 0.0, g.material.z);
-        var sum = 0.0;
+        let a0 = g.sigma.rgb;
+        let s0 = g.scatter.rgb;
+        let sigma0 = sqrt(3.0 * a0 * (a0 + s0));
+        var sum = vec3<f32>(0.0);
         for (var j = 0; j < steps; j = j + 1) {
             let t = (f32(j) + 0.5) / f32(steps);
-            sum = sum + textureSampleLevel(density, density_sampler, tc + dir * t, lod).r;
+            let rho = textureSampleLevel(density, density_sampler, tc + dir * t, lod).r;
+            let a = a0 + rho * g.density_absorption.rgb;
+            sum = sum + sqrt(3.0 * a * (a + s0));
         }
-        // alpha_i: density integrated along the ray, as absorption (1 / object units * length).
-        let alpha_i = g.sigma.w * sum * d_i / f32(steps);
+        // Optical depth along the ray (the medium's sigma_tr integrated, htsm/medium.rs), and
+        // alpha_i, the density's part of it (eq. 4.1's extra absorption).
+        let tau = sum * d_i / f32(steps);
+        let alpha_i = max(tau - sigma0 * d_i, vec3<f32>(0.0));
 
         // theta_i: between the sample ray and -N (§4.3.4).
         var cos_theta = 1.0;
@@ -126,15 +133,15 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         let phase = textureSampleLevel(phase_table, ref_sampler, vec2<f32>(cos_theta * 0.5 + 0.5, 0.5), 0.0).r;
 
         if (beer_lambert) {
-            // Transmittance exp(-sigma D_i - alpha_i), sigma from KHR_materials_volume's
-            // attenuation colour and distance.
-            transport = transport + irr.rgb * exp(-g.sigma.rgb * d_i - alpha_i) * phase;
+            // Transmittance exp(-sigma D_i - alpha_i): the optical depth of the medium's
+            // transport coefficient along the ray.
+            transport = transport + irr.rgb * exp(-tau) * phase;
         } else {
             // Table 4.1. The printed equation has no irradiance term, yet light that reaches a
             // lit surface must scale what comes out: each ray carries its sample's irradiance.
             // The bracket is negative once D_i + alpha_i > 2 T_d, which would subtract light,
             // so it is clamped at zero: paths that long transmit nothing.
-            let bracket = max((2.0 * t_d - (d_i + alpha_i)) / t_d, 0.0);
+            let bracket = max((2.0 * t_d - (d_i + alpha_i)) / t_d, vec3<f32>(0.0));
             transport = transport + irr.rgb * bracket * phase;
         }
     }

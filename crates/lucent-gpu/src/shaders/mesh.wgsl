@@ -31,7 +31,8 @@ struct Uniforms {
     // x: eta (relative index), y: specular strength (0 = none), z: Blinn-Phong exponent,
     // w: environment reflection strength (0 = none).
     params: vec4<f32>,
-    // x: number of lights in use (<= MAX_LIGHTS).
+    // x: number of lights in use (<= MAX_LIGHTS); y: 1 to blend single scattering linearly
+    // (the validation's ablation of the geometric blend), 0 geometrically.
     counts: vec4<u32>,
     // x: scale of the environment drawn behind the mesh (0 = none).
     background: vec4<f32>,
@@ -72,6 +73,8 @@ struct VertexOut {
     // Centroid: with multisampling a pixel centre outside the face would extrapolate the
     // logarithm, and its exponential overshoots without bound.
     @location(4) @interpolate(perspective, centroid) log_single: vec3<f32>,
+    // The same linearly, for the ablation of the geometric blend only.
+    @location(5) single: vec3<f32>,
 };
 
 @vertex
@@ -83,6 +86,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.radiance = v.radiance;
     o.uv = v.uv;
     o.log_single = log(max(v.single, vec3<f32>(SINGLE_FLOOR)));
+    o.single = v.single;
     return o;
 }
 
@@ -131,7 +135,11 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     // L = F_t(eta, w_o) (T(mu_o) B / (c pi) + L_single) (Mertens eq. 3, §5.4, with the exit
     // lobe), times sqrt(texture) at exit.
     let albedo = sqrt(max(textureSampleLevel(albedo_map, albedo_sampler, in.uv, 0.0).rgb, vec3<f32>(0.0)));
-    let subsurface = max(in.radiance, vec3<f32>(0.0)) * exit_lobe(cos_o) + exp(in.log_single);
+    var single = exp(in.log_single);
+    if (u.counts.y == 1u) {
+        single = max(in.single, vec3<f32>(0.0));
+    }
+    let subsurface = max(in.radiance, vec3<f32>(0.0)) * exit_lobe(cos_o) + single;
     var l = (1.0 - fresnel_dielectric(cos_o, eta)) * subsurface * albedo;
 
     // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the

@@ -10,7 +10,7 @@
 
 use crate::cli::{BenchArgs, Cli, Command, RenderArgs};
 use crate::render::Scene;
-use crate::render::htsm::{build_volume, htsm_params};
+use crate::render::htsm::{build_volume, htsm_medium, htsm_params};
 use anyhow::{Context, Result};
 use clap::Parser;
 use lucent_core::camera::bounding_sphere;
@@ -36,7 +36,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     let scene = Scene::resolve(&render_args.overrides())?;
     let light = scene.lights.first().context("the default scene has a light")?.light;
-    let base = htsm_params(&render_args.htsm, &scene.mesh, None, &render_args)?;
+    let medium = htsm_medium(&render_args.htsm, scene.material(), scene.scale())?;
+    let base = htsm_params(
+        &render_args.htsm,
+        &scene.mesh,
+        None,
+        (medium, scene.material().eta as f32),
+        &render_args,
+    )?;
     let volume = build_volume(&render_args.htsm, &scene.mesh)?;
     let ctx = GpuContext::new()?;
     let adapter = ctx.describe();

@@ -225,6 +225,7 @@ impl ViewState {
             oracle: Some(lucent_core::solver::Oracle::for_profile(transport.profile)),
             environment_shadows: true,
             bounces: crate::ranges::DEFAULT_BOUNCES,
+            ablate: Default::default(),
         };
         ViewState {
             params: SolveParams {

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod figures;
+
 use std::path::PathBuf;
 
 /// Whether a GPU adapter exists for the `lucent` binary the test runs (searched once per test

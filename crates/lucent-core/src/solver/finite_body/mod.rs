@@ -81,6 +81,29 @@ pub struct FiniteBody {
     /// The profile's half-space return `R_d` per channel (unitless, 0..1): the weights of the
     /// channels' one gain.
     rd: [f64; 3],
+    /// Whether the gain is divided by the profile's slab share and times the reach factor
+    /// (both on by default; [`FiniteBody::with_terms`]).
+    terms: GainTerms,
+}
+
+/// Which terms of the finite-body gain [`FiniteBody::face_gain`] applies beside the sphere's
+/// gain: both in lucent's default; the validation's ablation (`lucent render --ablate`,
+/// docs/corrections.md) drops one at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GainTerms {
+    /// Divide by `1 + s X(t) / R_d`, the profile's own share through a slab-like part.
+    pub slab_share: bool,
+    /// Multiply each channel by its reach factor over their weighted mean (the hue).
+    pub reach: bool,
+    /// Divide the reach factors by their weighted mean, so that they move the hue and not the
+    /// light (chosen on the fit cases); without it each channel takes its whole factor, the
+    /// sphere's derivation.
+    pub reach_hue_only: bool,
+}
+
+impl GainTerms {
+    /// Both terms: lucent's gain.
+    pub const ALL: GainTerms = GainTerms { slab_share: true, reach: true, reach_hue_only: true };
 }
 
 /// Thicknesses of the through-slab table.
@@ -108,7 +131,13 @@ impl FiniteBody {
             slab_t_mm,
             slab_reach,
             rd: profile.total_diffuse_reflectance(),
+            terms: GainTerms::ALL,
         }
+    }
+
+    /// The same table applying only `terms` beside the sphere's gain.
+    pub fn with_terms(self, terms: GainTerms) -> Self {
+        FiniteBody { terms, ..self }
     }
 
     /// `X_c(t) / R_d,c` per channel for a slab `thickness` mesh units thick (see the module
@@ -141,11 +170,12 @@ impl FiniteBody {
     pub fn face_gain(&self, thickness: f32, s: f64) -> Rgb {
         let gain = self.weighted(self.gain(0.5 * thickness).to_array().map(f64::from));
         let reach = self.slab_reach(thickness);
-        let share = self.weighted(reach);
+        let share = if self.terms.slab_share { self.weighted(reach) } else { 0.0 };
         // A face on a thin sphere-like part whose profile lost nine tenths of a channel is far
         // outside what the sphere model knows; the cut is capped there.
-        let cut = reach.map(|x| 1.0 / (1.0 - (1.0 - s) * x).max(0.1));
-        let hue = self.weighted(cut);
+        let cut =
+            if self.terms.reach { reach.map(|x| 1.0 / (1.0 - (1.0 - s) * x).max(0.1)) } else { [1.0; 3] };
+        let hue = if self.terms.reach_hue_only { self.weighted(cut) } else { 1.0 };
         let one = gain / (1.0 + s * share);
         Rgb::from_array(std::array::from_fn(|c| (one * cut[c] / hue) as f32))
     }
