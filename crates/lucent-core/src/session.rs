@@ -95,6 +95,12 @@ pub enum SolveMode {
     /// Links stored and updated after a deformation or material change: only the links that
     /// the change touched are re-evaluated, promoted or demoted.
     Incremental,
+    /// Links stored and kept after a deformation: the moved links' coefficients are
+    /// re-evaluated at the new pose, and the oracle decides a sample of receivers again (all
+    /// of them where the sample's error exceeds its tolerance), refining only where it opens a
+    /// link ([`crate::solver::HierarchicalSolver::update_refit`]). Relinks after a material
+    /// change.
+    Refit,
     /// No stored links: refine from the root and gather while traversing, every solve. Default
     /// for single images (nothing to reuse).
     #[default]
@@ -103,13 +109,15 @@ pub enum SolveMode {
 
 impl SolveMode {
     /// Every mode, in the order the CLI and the viewer list them.
-    pub const ALL: [SolveMode; 3] = [SolveMode::Render, SolveMode::Incremental, SolveMode::OnTheFly];
+    pub const ALL: [SolveMode; 4] =
+        [SolveMode::Render, SolveMode::Incremental, SolveMode::Refit, SolveMode::OnTheFly];
 
     /// The name the CLI and the viewer use.
     pub fn name(self) -> &'static str {
         match self {
             SolveMode::Render => "render",
             SolveMode::Incremental => "incremental",
+            SolveMode::Refit => "refit",
             SolveMode::OnTheFly => "on-the-fly",
         }
     }

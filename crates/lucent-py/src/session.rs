@@ -169,8 +169,9 @@ impl Session {
         };
         let size = image_size(width, height)?;
         let scene = resolve(py, args.overrides()?)?;
-        // Poses are the point of a session: links on the rest pose, updated to each new one
-        // (as `lucent render --frames`), unless `mode` says otherwise.
+        // Poses are the point of a session: links on the rest pose, updated to each new one as
+        // a fresh link would be (`lucent render --frames` refits them instead), unless `mode`
+        // says otherwise.
         let mut session = scene.session(SolveMode::Incremental);
         session.set_eye(Some(scene.camera_view(size).eye));
         if !scene.deform.is_empty() {
@@ -335,7 +336,7 @@ impl Session {
         self.scene.refine_levels
     }
 
-    /// The solve mode in use: ``render``, ``incremental`` or ``on-the-fly``.
+    /// The solve mode in use: ``render``, ``incremental``, ``refit`` or ``on-the-fly``.
     #[getter]
     fn mode(&self) -> &'static str {
         self.session.settings().mode.name()

@@ -194,10 +194,12 @@ pub struct RenderArgs {
     pub oracle: Oracle,
     /// Mode of the hierarchical solve (Mertens §5.5): `on-the-fly` (refine and gather from
     /// scratch, no stored links), `render` (store the links, then pull, gather and push over
-    /// them) or `incremental` (link on the rest mesh, then update the links to the deformed
-    /// one). Default for one image: render with bounces between parts (links made once,
-    /// each bounce a gather; on the fly if the links would not fit in half the free memory),
-    /// on-the-fly without; incremental for an animation.
+    /// them), `incremental` (link on the rest mesh, then update the links to the deformed
+    /// one) or `refit` (link on the rest mesh, keep the links and re-evaluate their
+    /// coefficients on the deformed one, relinking where a sampled error estimate asks).
+    /// Default for one image: render with bounces between parts (links made once, each bounce
+    /// a gather; on the fly if the links would not fit in half the free memory), on-the-fly
+    /// without; refit for an animation.
     #[arg(long, value_parser = names::<SolveMode>(&SolveMode::ALL.map(SolveMode::name)))]
     pub mode: Option<SolveMode>,
     /// Deform the mesh before solving: `twist:DEGREES`, `bump:x,y,z,radius,height` (mesh

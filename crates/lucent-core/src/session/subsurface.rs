@@ -122,8 +122,8 @@ fn hierarchical(
     let oracle_changed = changes.oracle || s.oracle != oracle;
     let relink = moved || profile_changed || oracle_changed;
     s.oracle = oracle;
-    // Render mode never updates its links incrementally: it stores no candidates.
-    s.keep_candidates = mode != SolveMode::Render;
+    // Only an incremental update reads the candidates.
+    s.keep_candidates = !matches!(mode, SolveMode::Render | SolveMode::Refit);
     let solution = match mode {
         SolveMode::OnTheFly => {
             if moved {
@@ -153,6 +153,17 @@ fn hierarchical(
                 s.link();
             }
             s.update_incremental(&mesh.positions, None);
+            timings.link_ms += ms_since(t);
+            s.solve_render(e)
+        }
+        SolveMode::Refit => {
+            if profile_changed {
+                s.set_profile(profile.clone());
+            }
+            if profile_changed || oracle_changed || s.links().is_none() {
+                s.link();
+            }
+            s.update_refit(&mesh.positions, solver::RefitOptions::default());
             timings.link_ms += ms_since(t);
             s.solve_render(e)
         }

@@ -164,7 +164,7 @@ fn names_parse_and_bad_ones_list_the_choices() {
         assert_eq!(m.name().to_uppercase().parse::<Method>(), Ok(m));
     }
     let e = "fast".parse::<SolveMode>().unwrap_err();
-    assert_eq!(e, "unknown mode \"fast\"; expected one of render, incremental, on-the-fly");
+    assert_eq!(e, "unknown mode \"fast\"; expected one of render, incremental, refit, on-the-fly");
 }
 
 /// Moving the eye redoes what depends on it (view-ray single scattering and the body's chord

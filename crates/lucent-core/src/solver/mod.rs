@@ -48,6 +48,6 @@ pub mod point_sample;
 
 pub use crate::progress::Progress;
 pub use hierarchical::census;
-pub use hierarchical::{HierarchicalSolver, Solution, SolveStats};
+pub use hierarchical::{HierarchicalSolver, RefitOptions, RefitStats, Solution, SolveStats};
 pub use link_set::{Link, LinkSet};
 pub use oracle::{LinkKind, Oracle};

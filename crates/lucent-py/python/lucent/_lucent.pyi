@@ -211,7 +211,7 @@ class Session:
         """Times every input face was split into four before the solve."""
     @property
     def mode(self) -> str:
-        """The solve mode: render, incremental or on-the-fly."""
+        """The solve mode: render, incremental, refit or on-the-fly."""
 
 def read_exr(path: PathLike) -> npt.NDArray[np.float32]:
     """The first RGBA layer of an OpenEXR file, (height, width, 4) float32."""

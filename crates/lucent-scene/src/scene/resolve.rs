@@ -79,7 +79,7 @@ pub struct Overrides {
     pub no_surface: bool,
     /// Hierarchical, exact or HTSM.
     pub method: Option<Method>,
-    /// Render, incremental or on-the-fly.
+    /// Render, incremental, refit or on-the-fly.
     pub mode: Option<SolveMode>,
     /// Refinement thresholds; `None`: the profile's defaults.
     pub oracle: Option<Oracle>,

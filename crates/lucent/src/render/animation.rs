@@ -2,7 +2,7 @@
 //! `DIR/frame_0001.png`, ... (each written atomically). Either the scene's deformation ramps
 //! from the rest pose (frame 1) to full (frame N), or with `--orbit-light` the lights make one
 //! turn about the vertical axis through the object. The hierarchical solver keeps its links
-//! across frames (Mertens §5.5: incremental mode by default, render mode for lighting alone).
+//! across frames (Mertens §5.5: refit mode by default, render mode for lighting alone).
 
 use super::frame::GpuFrame;
 use super::htsm::HtsmFrame;
@@ -51,8 +51,9 @@ pub fn run(args: &RenderArgs, scene: &Scene, frames: u32, out: &Path) -> Result<
     let format = image_format(args);
     let mut ctx = Some(GpuContext::new()?);
     let started = Instant::now();
-    // Incremental by default: the links made on the first frame are updated, not rebuilt.
-    let mut session = scene.session(SolveMode::Incremental);
+    // Refit by default: the links made on the first frame are kept and their coefficients
+    // re-evaluated, not rebuilt (`--mode incremental` updates them as a fresh link would).
+    let mut session = scene.session(SolveMode::Refit);
     let mode = session.settings().mode;
     session.set_eye(Some(scene.camera_view((args.width, args.height)).eye));
     session.set_view_terms(args.view_terms);

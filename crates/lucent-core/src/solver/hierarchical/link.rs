@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicI64, Ordering};
 
 /// Per-task state of a traversal.
 pub(super) struct Ctx<'a> {
-    ev: Evaluator<'a>,
+    pub(super) ev: Evaluator<'a>,
     /// Candidate emitters of the current receiver still to decide, with their one-point
     /// estimate when the decision that opened their parent made it.
     stack: Vec<(u32, Option<[f32; 3]>)>,
@@ -184,6 +184,13 @@ pub(super) struct Deferred {
     at_children: Vec<Option<[[f32; 3]; 4]>>,
 }
 
+impl Deferred {
+    /// The deferred emitters.
+    pub(super) fn emitters(&self) -> &[u32] {
+        &self.emitters
+    }
+}
+
 /// The candidates of a receiver: child `child`'s share of its parent's [`Deferred`].
 #[derive(Clone, Copy)]
 pub(super) struct Cands<'a> {
@@ -195,6 +202,9 @@ pub(super) struct Cands<'a> {
 impl<'a> Cands<'a> {
     /// The root's: its self-link.
     pub(super) const ROOT: Cands<'static> = Cands { emitters: &[0], at_children: &[None], child: 0 };
+
+    /// None.
+    pub(super) const NONE: Cands<'static> = Cands { emitters: &[], at_children: &[], child: 0 };
 
     pub(super) fn of_child(d: &'a Deferred, child: usize) -> Self {
         Cands { emitters: &d.emitters, at_children: &d.at_children, child }

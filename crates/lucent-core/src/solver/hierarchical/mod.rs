@@ -41,6 +41,9 @@ mod expansion;
 mod gather;
 mod gather_linear;
 mod link;
+mod refit;
+
+pub use refit::{RefitOptions, RefitStats};
 
 /// Counters and timings of one solve or update. Times in milliseconds (wall clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -218,27 +221,19 @@ impl HierarchicalSolver {
             self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
             return self.link();
         }
-        let moved_vertex: Vec<bool> =
-            self.mesh.positions.iter().zip(positions).map(|(a, b)| a != b).collect();
-        let any_moved = moved_vertex.iter().any(|&m| m);
+        let moved = refit::moved_clusters(self, &self.mesh.positions, positions);
+        let any_moved = moved.is_some();
         let old = self.links.take().expect("links stored");
-        let any_dirty = old.has_dirty();
         let h = &self.hierarchy;
-        let mut changed = vec![false; h.len()];
+        let changed = moved.unwrap_or_else(|| vec![false; h.len()]);
         let mut stale = vec![false; h.len()];
-        for i in (0..h.len()).rev() {
-            let n = &h.nodes[i];
-            if n.is_leaf() && any_moved {
-                let t = self.mesh.triangles[h.leaf_faces[n.leaf_start as usize] as usize];
-                changed[i] |= t.iter().any(|&v| moved_vertex[v as usize]);
-            }
-            if any_dirty {
+        if old.has_dirty() {
+            for i in (0..h.len()).rev() {
                 stale[i] |= old.is_stale(i);
-            }
-            if n.parent != crate::hierarchy::NO_NODE {
-                let p = n.parent as usize;
-                changed[p] |= changed[i];
-                stale[p] |= stale[i];
+                let p = h.nodes[i].parent;
+                if p != crate::hierarchy::NO_NODE {
+                    stale[p as usize] |= stale[i];
+                }
             }
         }
         if any_moved {
