@@ -1,15 +1,18 @@
 //! The view terms of a [`super::FrameSession`]: what depends on the eye. The diffuse radiance
 //! `B / (c π)` per vertex as it leaves towards the eye, times the body's chord factor where the
-//! profile has one (`shading::exit_chord`), and single scattering along the view ray where the
-//! transport asks for it (`shading::single_scattering`). An eye-only change redoes only these.
+//! profile has one (`shading::exit_chord`) and the transmitted light's exit lobe where light
+//! crossed the body (`shading::transmitted_exit`), and single scattering along the view ray
+//! where the transport asks for it (`shading::single_scattering`). An eye-only change redoes
+//! only these.
 
 use super::Frame;
+use super::body::Body;
 use super::irradiance::Irradiance;
 use crate::Rgb;
 use crate::mesh::Mesh;
 use crate::shading::diffuse_radiance;
-use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use crate::shading::transmitted_exit;
 use glam::Vec3;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
@@ -19,6 +22,10 @@ pub(super) struct View {
     eye: Option<Vec3>,
     /// The last solve's diffuse radiance `B / (c π)` per vertex, before the chord factor.
     diffuse: Vec<Rgb>,
+    /// The last solve's `B` per face and the transmitted light it holds
+    /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
+    /// crossed the body.
+    transmitted: (Vec<Rgb>, Vec<Rgb>),
 }
 
 impl View {
@@ -36,22 +43,21 @@ impl View {
         self.diffuse.len() == mesh.positions.len()
     }
 
-    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`.
-    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb]) {
+    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`, and the
+    /// transmitted light `sent` per face that `face_b` holds (empty: none).
+    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb], sent: Vec<Rgb>) {
         self.diffuse = diffuse_radiance(&f.mesh.face_to_vertex(face_b), &f.profile);
+        self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.to_vec(), sent) };
     }
 
     /// `(radiance, single)` per vertex as seen from the eye (the shadow BVH of `irradiance` is
     /// current: the solve refits it first): the kept diffuse radiance times the chord factor
-    /// of `exit_chord` (the lobe's weights and mean factors, if the lobe is not flat), and
-    /// view-ray single scattering where the transport asks for it (else empty). Without an
-    /// eye: `B / (c π)` as solved, and no single scattering.
-    pub(super) fn seen(
-        &self,
-        f: &Frame,
-        irradiance: &Irradiance,
-        exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
-    ) -> (Vec<Rgb>, Vec<Rgb>) {
+    /// of `body`'s exit chord (the lobe's weights and mean factors, if the lobe is not flat)
+    /// with the transmitted share's own lobe (`shading::transmitted_exit`, where light crossed
+    /// the body), and view-ray single scattering where the transport asks for it (else empty).
+    /// Without an eye: `B / (c π)` as solved, and no single scattering.
+    pub(super) fn seen(&self, f: &Frame, irradiance: &Irradiance, body: &Body) -> (Vec<Rgb>, Vec<Rgb>) {
+        let exit_chord = body.exit_chord();
         let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
             return (self.diffuse.clone(), Vec::new());
         };
@@ -71,7 +77,14 @@ impl View {
         };
         let diffuse = match exit_chord {
             Some((chord, means)) => {
-                let factors = chord.vertex_factors(&view_rays(&scene, eye), means);
+                let rays = view_rays(&scene, eye);
+                let mut factors = chord.vertex_factors(&rays, means);
+                let (face_b, sent) = &self.transmitted;
+                if let Some(cross) = body.cross_body().filter(|c| c.len() == sent.len()) {
+                    let lobe = &f.profile.exit_lobe;
+                    factors =
+                        transmitted_exit::exit_factors(cross, &f.mesh, face_b, sent, &rays, lobe, &factors);
+                }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }
             None => self.diffuse.clone(),

@@ -24,4 +24,5 @@ pub fn diffuse_radiance(b: &[Rgb], profile: &Profile) -> Vec<Rgb> {
 
 pub mod exit_chord;
 pub mod single_scattering;
+pub mod transmitted_exit;
 pub use single_scattering::{SingleScattering, UnknownSingleScattering};
