@@ -1,8 +1,8 @@
 //! The hierarchical solve (Mertens et al. 2003, §5.5) on the portable path against the widest
 //! instruction set this CPU has ([`lucent_core::simd::Isa`]): `B` per face, on the fly and in
-//! render mode, for Mertens' dipole and photon beam diffusion. The path is chosen once per
-//! process, so the test runs itself again with `LUCENT_SIMD=scalar` and compares (relative to
-//! the face's `B`, or a thousandth of the largest where that is smaller).
+//! render mode, for every profile (with its single scattering where it has one). The path is
+//! chosen once per process, so the test runs itself again with `LUCENT_SIMD=scalar` and
+//! compares (relative to the face's `B`, or a thousandth of the largest where that is smaller).
 
 use glam::Vec3;
 use lucent_core::bssrdf::{Material, Profile, ProfileKind};
@@ -13,14 +13,16 @@ use lucent_core::solver::{HierarchicalSolver, Oracle};
 
 const DUMP: &str = "LUCENT_SIMD_TEST_DUMP";
 
-/// `B` per face and channel: on the fly, then render mode, for each profile.
+/// `B` per face and channel: on the fly, then render mode, for each profile (the normal-placed
+/// and the distance-form kernels both).
 fn solve() -> Vec<f32> {
     let sub = butterfly(&octahedron(Vec3::new(1.0, 1.25, 0.9)), 4).expect("closed base mesh");
     let marble = Material::by_name("marble").unwrap();
     let mut out = vec![];
-    for kind in [ProfileKind::Mertens, ProfileKind::Pbd] {
+    for kind in ProfileKind::ALL {
         let mesh = sub.mesh.clone();
-        let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.025, kind, kind == ProfileKind::Pbd);
+        let single = kind.has_single_scattering();
+        let d = Profile::at_model_scale(&marble, mesh.extent() as f64, 0.025, kind, single);
         let light = [Light::Point { position: Vec3::new(2.0, 3.0, 1.6), intensity: Vec3::splat(10.0) }];
         let e = face_irradiance(&mesh, &light, &d.entry);
         let mut s = HierarchicalSolver::new(mesh, sub.hierarchy.clone(), d, Oracle::default());

@@ -26,16 +26,19 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
         intensity: Vec3::splat(ext * ext * 4.0),
     }];
     let m = Material::custom("dense", [100.0; 3], [100.0; 3], 1.3).unwrap();
-    for (kind, single) in
-        [(ProfileKind::Pbd, true), (ProfileKind::Dipole, false), (ProfileKind::Mertens, false)]
-    {
+    // Every profile, with and without single scattering where it has it.
+    let every = ProfileKind::ALL.into_iter().flat_map(|kind| [(kind, false), (kind, true)]);
+    for (kind, single) in every.filter(|&(kind, single)| !single || kind.has_single_scattering()) {
         let d = Profile::at_model_scale(&m, ext as f64, 0.1, kind, single);
         let loc = Locality::of(&d);
         let reach_mm = loc.reach as f64 * d.mm_per_unit;
         // The numerical `∫ R dA` of the local limit is the closed form's.
         let closed = d.total_diffuse_reflectance();
         for c in 0..3 {
-            assert!((loc.r_total[c] as f64 / closed[c] - 1.0).abs() < 2e-3, "{kind}: {loc:?} vs {closed:?}");
+            assert!(
+                (loc.r_total[c] as f64 / closed[c] - 1.0).abs() < 2e-3,
+                "{kind} ss={single}: {loc:?} vs {closed:?}"
+            );
         }
         let e = face_irradiance(&mesh, &light, &d.entry);
         let want = exact::solve(&mesh, &d, &e, &FormFactorOptions::default());
@@ -45,16 +48,20 @@ fn dense_bunny_takes_the_local_limit_and_matches_exact() {
         let render = s.solve_render(&e);
         let (err, err_render) = (rel_rmse(&want, &otf.face_b), rel_rmse(&want, &render.face_b));
         println!(
-            "{kind}: reach {reach_mm:.4} mm, {} local faces of {n}, {} links, rel RMSE {:.4}% (render {:.4}%)",
+            "{kind} ss={single}: reach {reach_mm:.4} mm, {} local faces of {n}, {} links, rel RMSE {:.4}% (render {:.4}%)",
             otf.stats.local_faces,
             link.links,
             100.0 * err,
             100.0 * err_render
         );
-        assert!(reach_mm < 0.1, "{kind}: reach {reach_mm} mm");
-        assert!(otf.stats.local_faces >= n * 9 / 10, "{kind}: {} local faces", otf.stats.local_faces);
-        assert!(link.links <= 2 * n, "{kind}: {} links", link.links);
-        assert!(err <= 0.01 && err_render <= 0.01, "{kind}: {err} / {err_render}");
+        assert!(reach_mm < 0.1, "{kind} ss={single}: reach {reach_mm} mm");
+        assert!(
+            otf.stats.local_faces >= n * 9 / 10,
+            "{kind} ss={single}: {} local faces",
+            otf.stats.local_faces
+        );
+        assert!(link.links <= 2 * n, "{kind} ss={single}: {} links", link.links);
+        assert!(err <= 0.01 && err_render <= 0.01, "{kind} ss={single}: {err} / {err_render}");
     }
 }
 

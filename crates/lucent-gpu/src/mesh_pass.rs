@@ -26,7 +26,7 @@ use glam::{Vec2, Vec3};
 use lucent_core::Rgb;
 use lucent_core::bssrdf::ExitLobe;
 use lucent_core::camera::CameraView;
-use lucent_core::irradiance::Light;
+use lucent_core::irradiance::{Cone, Light};
 use wgpu::util::DeviceExt;
 
 /// Most lights the highlight loop reads (more are ignored, with a log line).
@@ -272,6 +272,30 @@ struct LightUniform {
 /// No cone: the half-angle the shader reads for point and directional lights.
 const NO_CONE: f32 = 4.0;
 
+/// One light as `mesh.wgsl` reads it, from the light's shape (its position or direction, power
+/// and cone; see [`lucent_core::irradiance::Cone`]), whatever its kind.
+fn light_uniform(light: &Light) -> LightUniform {
+    // A positional light's position (w = 1), a distant one's direction of travel (w = 0).
+    let position = match light.position() {
+        Some(p) => p.extend(1.0),
+        None => light.direction().unwrap_or(Vec3::ZERO).extend(0.0),
+    };
+    match light.cone() {
+        // The same cone and smoothstep edge as the subsurface irradiance
+        // (`lucent_core::irradiance::spot_falloff`).
+        Some(Cone { axis, half_angle, soft_edge }) => LightUniform {
+            position: position.to_array(),
+            intensity: light.power().extend(soft_edge.clamp(0.0, 1.0)).to_array(),
+            spot: axis.normalize_or_zero().extend(half_angle).to_array(),
+        },
+        None => LightUniform {
+            position: position.to_array(),
+            intensity: light.power().extend(0.0).to_array(),
+            spot: [0.0, 0.0, 0.0, NO_CONE],
+        },
+    }
+}
+
 /// The mesh pipeline and its uniforms. Draws into a render pass whose colour target has the
 /// format and sample count given to [`MeshPass::new`] and whose depth target is
 /// [`DEPTH_FORMAT`].
@@ -429,26 +453,7 @@ impl MeshPass {
         let mut lights =
             [LightUniform { position: [0.0; 4], intensity: [0.0; 4], spot: [0.0; 4] }; MAX_LIGHTS];
         for (dst, l) in lights.iter_mut().zip(&shading.lights) {
-            let no_cone = [0.0, 0.0, 0.0, NO_CONE];
-            *dst = match *l {
-                Light::Point { position, intensity } => LightUniform {
-                    position: position.extend(1.0).to_array(),
-                    intensity: intensity.extend(0.0).to_array(),
-                    spot: no_cone,
-                },
-                // The same cone and smoothstep edge as the subsurface irradiance
-                // (`lucent_core::irradiance::spot_falloff`).
-                Light::Spot { position, direction, intensity, cone_angle, soft_edge } => LightUniform {
-                    position: position.extend(1.0).to_array(),
-                    intensity: intensity.extend(soft_edge.clamp(0.0, 1.0)).to_array(),
-                    spot: direction.normalize_or_zero().extend(cone_angle).to_array(),
-                },
-                Light::Directional { direction, irradiance } => LightUniform {
-                    position: direction.extend(0.0).to_array(),
-                    intensity: irradiance.extend(0.0).to_array(),
-                    spot: no_cone,
-                },
-            };
+            *dst = light_uniform(l);
         }
         let u = MeshUniforms {
             view_proj: camera.view_proj.to_cols_array_2d(),

@@ -110,11 +110,19 @@ mod tests {
 
     #[test]
     fn default_bounces_follow_a_profile_switch_and_chosen_ones_stay() {
-        use lucent_core::bssrdf::ProfileKind::{Dipole, Mertens, Pbd};
-        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Mertens), 0);
-        assert_eq!(bounces_after_profile_change(0, Mertens, Pbd), DEFAULT_BOUNCES);
-        assert_eq!(bounces_after_profile_change(DEFAULT_BOUNCES, Pbd, Dipole), DEFAULT_BOUNCES);
-        assert_eq!(bounces_after_profile_change(1, Pbd, Mertens), 1, "chosen by hand");
-        assert_eq!(bounces_after_profile_change(2, Mertens, Pbd), 2, "chosen by hand");
+        use lucent_core::bssrdf::ProfileKind;
+        for before in ProfileKind::ALL {
+            for after in ProfileKind::ALL {
+                let left = bounces_after_profile_change(default_bounces(before), before, after);
+                assert_eq!(left, default_bounces(after), "{before} -> {after}: follows");
+                for chosen in [1, 2] {
+                    let kept = bounces_after_profile_change(chosen, before, after);
+                    assert_eq!(kept, chosen, "{before} -> {after}: chosen by hand");
+                }
+            }
+        }
+        // The defaults differ, so switching moves them: none for the paper's profile.
+        assert_eq!(default_bounces("mertens".parse().unwrap()), 0);
+        assert_eq!(default_bounces(ProfileKind::default()), DEFAULT_BOUNCES);
     }
 }

@@ -11,13 +11,13 @@
 //! scale = 0.05                # largest bounding-box side, metres
 //! exposure = 1.0
 //! surface = true             # false: subsurface term only (no reflection, no highlight)
-//! profile = "pbd"             # diffusion profile: pbd, dipole or mertens
+//! profile = "pbd"             # diffusion profile, as --profile
 //! single_scattering = "view"  # along the view ray (default), "profile" or "off"
 //! transmission = "slab"       # light crossing the body: "slab" (default) or "halfspace"
 //! deform = ["twist:30"]       # twist:DEGREES, bump:x,y,z,radius,height, noise:amplitude,frequency
 //!
-//! [[light]]
-//! type = "spot"               # "point", "directional" (or "dir"), "spot"
+//! [[light]]                   # any number; every type and key: `LightSpec` (scene/light.rs)
+//! type = "spot"
 //! position = [0.0, 2.0, 1.0]  # mesh units
 //! direction = [0.0, -1.0, -0.5]
 //! color = [1.0, 0.9, 0.8]
@@ -44,16 +44,16 @@
 
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
-use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
 use lucent_core::camera::OrbitCamera;
-use lucent_core::irradiance::{EnvMap, Environment, Light, SceneLight};
+use lucent_core::irradiance::{EnvMap, Environment, SceneLight};
 use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 pub mod gltf_material;
+mod light;
 mod material;
 mod meshes;
 mod resolve;
@@ -65,7 +65,8 @@ pub use meshes::{
 };
 use meshes::{builtin_mesh, builtin_mesh_label};
 
-pub use resolve::{Overrides, Scene, default_lights, orbit_lights, parse_light, parse_three};
+pub use light::{LightSpec, default_lights, orbit_lights, parse_light, parse_three};
+pub use resolve::{Overrides, Scene};
 
 /// A scene as read from a TOML file (what [`Scene::resolve`] reads beside the flags). Every field has a default, so an empty file is the default
 /// scene (the bunny in skim milk with one light).
@@ -100,9 +101,8 @@ pub struct SceneFile {
     /// ([`crate::ranges::default_bounces`]).
     #[serde(default)]
     pub bounces: Option<u32>,
-    /// Diffusion profile: `"pbd"` (photon beam diffusion, the default), `"dipole"` (Jensen's
-    /// distance form) or `"mertens"` (the paper's dipole on the receiver's normal), as
-    /// `lucent render --profile`.
+    /// Diffusion profile by name (`lucent_core::bssrdf::ProfileKind::name`; the default
+    /// `"pbd"`, photon beam diffusion), as `lucent render --profile`, whose help lists them.
     #[serde(default)]
     pub profile: Option<String>,
     /// Single scattering, as `lucent render --single-scattering`: `"view"` (default), `"profile"`,
@@ -174,73 +174,6 @@ fn yes() -> bool {
 fn white() -> [f32; 3] {
     [1.0; 3]
 }
-fn default_cone() -> f32 {
-    30.0
-}
-fn default_soft_edge() -> f32 {
-    0.2
-}
-
-/// One `[[light]]` table, selected by `type`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
-pub enum LightSpec {
-    /// An isotropic point light.
-    Point {
-        /// Position, mesh units.
-        position: [f32; 3],
-        /// Colour (linear RGB, >= 0). Default white.
-        #[serde(default = "white")]
-        color: [f32; 3],
-        /// Irradiance (times `color`) that the light gives a surface facing it at the centre of
-        /// the mesh's bounding box (>= 0), so brightness does not depend on the mesh's units.
-        /// Default 1.
-        #[serde(default = "one")]
-        intensity: f32,
-        /// Whether the mesh shadows itself from this light. Default true.
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    /// A distant light.
-    #[serde(alias = "dir")]
-    Directional {
-        /// The direction the light travels (non-zero).
-        direction: [f32; 3],
-        /// Colour (linear RGB, >= 0). Default white.
-        #[serde(default = "white")]
-        color: [f32; 3],
-        /// Irradiance (times `color`) on a surface facing the light (>= 0). Default 1.
-        #[serde(default = "one")]
-        intensity: f32,
-        /// Whether the mesh shadows itself from this light. Default true.
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    /// A spot light: a point light limited to a cone.
-    Spot {
-        /// Position, mesh units.
-        position: [f32; 3],
-        /// The direction the spot points (non-zero).
-        direction: [f32; 3],
-        /// Colour (linear RGB, >= 0). Default white.
-        #[serde(default = "white")]
-        color: [f32; 3],
-        /// Irradiance (times `color`) on the spot's axis at the distance of the mesh's
-        /// bounding-box centre (>= 0). Default 1.
-        #[serde(default = "one")]
-        intensity: f32,
-        /// Cone half-angle, degrees (0..180). Default 30.
-        #[serde(default = "default_cone")]
-        cone_angle: f32,
-        /// Fraction of the cone angle over which the light fades out (0..1). Default 0.2.
-        #[serde(default = "default_soft_edge")]
-        soft_edge: f32,
-        /// Whether the mesh shadows itself from this light. Default true.
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-}
-
 /// The `[environment]` table.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -341,7 +274,7 @@ impl SceneFile {
         }
         self.material()?;
         for (i, l) in self.lights.iter().enumerate() {
-            validate_light(l).with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;
+            l.validate().with_context(|| format!("light {} ([[light]] #{})", i + 1, i + 1))?;
         }
         if let Some(env) = &self.environment {
             check("environment intensity", env.intensity, &r::INTENSITY).map_err(ok)?;
@@ -423,45 +356,10 @@ impl SceneFile {
         }
     }
 
-    /// The lights for the irradiance computation. Point and spot intensities are set so the
-    /// light gives `intensity * color` at the distance of `center` (mesh units; the centre of
-    /// the mesh's bounding box).
+    /// The lights for the irradiance computation (see [`LightSpec::light`]), brightness set at
+    /// the distance of `center` (mesh units; the centre of the mesh's bounding box).
     pub fn lights(&self, center: Vec3) -> Vec<SceneLight> {
-        self.lights
-            .iter()
-            .map(|l| match *l {
-                LightSpec::Point { position, color, intensity, shadows } => {
-                    let p = Vec3::from_array(position);
-                    SceneLight {
-                        light: Light::Point {
-                            position: p,
-                            intensity: Rgb::from_array(color) * intensity * d2(p, center),
-                        },
-                        shadows,
-                    }
-                }
-                LightSpec::Directional { direction, color, intensity, shadows } => SceneLight {
-                    light: Light::Directional {
-                        direction: Vec3::from_array(direction).normalize(),
-                        irradiance: Rgb::from_array(color) * intensity,
-                    },
-                    shadows,
-                },
-                LightSpec::Spot { position, direction, color, intensity, cone_angle, soft_edge, shadows } => {
-                    let p = Vec3::from_array(position);
-                    SceneLight {
-                        light: Light::Spot {
-                            position: p,
-                            direction: Vec3::from_array(direction).normalize(),
-                            intensity: Rgb::from_array(color) * intensity * d2(p, center),
-                            cone_angle: cone_angle.to_radians(),
-                            soft_edge,
-                        },
-                        shadows,
-                    }
-                }
-            })
-            .collect()
+        self.lights.iter().map(|l| l.light(center)).collect()
     }
 
     /// Loads the environment map (if any), projects it onto SH and makes the 256 x 128
@@ -495,53 +393,6 @@ fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
         }
         None => message,
     }
-}
-
-fn d2(p: Vec3, center: Vec3) -> f32 {
-    (p - center).length_squared().max(1e-12)
-}
-
-fn validate_light(l: &LightSpec) -> Result<()> {
-    let finite = |v: &[f32; 3]| v.iter().all(|x| crate::ranges::COORDINATE.contains(x));
-    let (color, intensity) = match l {
-        LightSpec::Point { position, color, intensity, .. } => {
-            if !finite(position) {
-                bail!("position must be within {:?} mesh units", crate::ranges::COORDINATE);
-            }
-            (color, *intensity)
-        }
-        LightSpec::Directional { direction, color, intensity, .. } => {
-            check_direction(direction)?;
-            (color, *intensity)
-        }
-        LightSpec::Spot { position, direction, color, intensity, cone_angle, soft_edge, .. } => {
-            if !finite(position) {
-                bail!("position must be within {:?} mesh units", crate::ranges::COORDINATE);
-            }
-            check_direction(direction)?;
-            if !(*cone_angle > 0.0 && *cone_angle < 180.0) {
-                bail!("cone_angle must be within 0..180 degrees, got {cone_angle}");
-            }
-            if !(0.0..=1.0).contains(soft_edge) {
-                bail!("soft_edge must be within 0..1, got {soft_edge}");
-            }
-            (color, *intensity)
-        }
-    };
-    use crate::ranges::{INTENSITY, check};
-    for c in color {
-        check("color component", *c, &INTENSITY).map_err(anyhow::Error::msg)?;
-    }
-    check("intensity", intensity, &INTENSITY).map_err(anyhow::Error::msg)?;
-    Ok(())
-}
-
-fn check_direction(d: &[f32; 3]) -> Result<()> {
-    let v = Vec3::from_array(*d);
-    if !d.iter().all(|x| crate::ranges::COORDINATE.contains(x)) || v.length_squared() == 0.0 {
-        bail!("direction must be non-zero with components within {:?}, got {d:?}", crate::ranges::COORDINATE);
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -8,6 +8,12 @@ use glam::Vec3;
 /// A light source. Radiometric units are arbitrary but consistent (think W and W/m^2); positions
 /// are in mesh units and irradiance from a positional light falls off as `1 / d^2` with `d` in
 /// mesh units.
+///
+/// Code outside this file reads a light through its accessors, so that a new kind is one
+/// variant here: a light is either positional ([`Light::position`] is `Some`; a camera at that
+/// position sees what it lights) or distant ([`Light::position`] is `None` and
+/// [`Light::direction`] is `Some`), has a [`Light::power`], and may be limited to a
+/// [`Light::cone`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
     /// An isotropic point light at `position` (mesh units) with radiant `intensity` per channel
@@ -70,6 +76,22 @@ pub fn spot_falloff(cos_angle: f32, cone_angle: f32, soft_edge: f32) -> f32 {
     }
 }
 
+/// The cone a light is limited to (a spot light's), in the terms every renderer of it needs:
+/// the subsurface irradiance ([`Light::incident`]), the mesh pass's highlight and HTSM's passes
+/// (`lucent-gpu`) read a light's shape from [`Light::position`], [`Light::direction`],
+/// [`Light::power`] and [`Light::cone`], never from its variant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// The cone's axis, the way the light shines, as the light holds it (need not be unit; a
+    /// zero axis is a light that reaches nothing).
+    pub axis: Vec3,
+    /// Half-angle, radians (0..π).
+    pub half_angle: f32,
+    /// Fraction (0..1) of the half-angle over which the intensity fades out (see
+    /// [`spot_falloff`]; 0 is a hard edge).
+    pub soft_edge: f32,
+}
+
 /// The kind of a [`Light`], for editors and file formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LightKind {
@@ -123,6 +145,17 @@ impl Light {
         match *self {
             Light::Spot { direction, .. } | Light::Directional { direction, .. } => Some(direction),
             Light::Point { .. } => None,
+        }
+    }
+
+    /// The cone the light is limited to (`None` for lights that shine into every direction they
+    /// face: point and directional).
+    pub fn cone(&self) -> Option<Cone> {
+        match *self {
+            Light::Spot { direction, cone_angle, soft_edge, .. } => {
+                Some(Cone { axis: direction, half_angle: cone_angle, soft_edge })
+            }
+            Light::Point { .. } | Light::Directional { .. } => None,
         }
     }
 

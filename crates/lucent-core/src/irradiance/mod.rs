@@ -16,7 +16,7 @@ pub mod sh;
 pub mod shadow;
 
 pub use envmap::{EnvMap, EnvMapError, equirect_direction, equirect_uv};
-pub use lights::{Incident, Light, LightKind, SceneLight, light_irradiance, spot_falloff};
+pub use lights::{Cone, Incident, Light, LightKind, SceneLight, light_irradiance, spot_falloff};
 pub use sh::{BandWeights, Sh9};
 pub use shadow::{ShadowCaster, Update};
 

@@ -29,16 +29,17 @@ pub struct LightFrustum {
 impl LightFrustum {
     /// Fits the light's frustum to the object's bounding sphere (§4.3: a distant light is
     /// rendered from the minimum distance that captures the object, a point light from its
-    /// position; a spot light like a point light, its cone applied per texel).
+    /// position; a spot light like a point light, its cone applied per texel). Reads only the
+    /// light's [`Light::position`] and [`Light::direction`], so any kind of light fits.
     /// `sphere` is the object's bounding sphere (centre, radius; mesh units).
     pub fn fit(sphere: (Vec3, f32), light: &Light) -> Result<LightFrustum, HtsmError> {
         let (centre, radius) = sphere;
         let up_for = |d: Vec3| {
             if d.dot(Vec3::Y).abs() > 0.99 { Vec3::X } else { Vec3::Y }
         };
-        match *light {
-            Light::Directional { direction, .. } => {
-                let d = direction.normalize_or_zero();
+        match light.position() {
+            None => {
+                let d = light.direction().unwrap_or(Vec3::ZERO).normalize_or_zero();
                 if d == Vec3::ZERO {
                     return Err(HtsmError::Light("distant light has a zero direction".into()));
                 }
@@ -48,7 +49,7 @@ impl LightFrustum {
                     Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.5 * radius, 3.5 * radius);
                 Ok(LightFrustum { view_proj: proj * view, width_at_centre: 2.0 * radius })
             }
-            Light::Point { position, .. } | Light::Spot { position, .. } => {
+            Some(position) => {
                 let to_centre = centre - position;
                 let dist = to_centre.length();
                 if dist <= radius * 1.001 {

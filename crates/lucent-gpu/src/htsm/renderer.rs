@@ -16,7 +16,7 @@ use crate::context::{DEPTH_FORMAT, GpuContext, HDR_FORMAT, LDR_FORMAT};
 use crate::readback::read_texture;
 use crate::tonemap::{ToneMap, ToneMapPass};
 use glam::Vec3;
-use lucent_core::irradiance::Light;
+use lucent_core::irradiance::{Cone, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::DensityVolume;
 use std::time::{Duration, Instant};
@@ -198,22 +198,28 @@ impl HtsmRenderer {
         params: &HtsmParams,
     ) -> Result<LightUniforms, HtsmError> {
         let frustum = LightFrustum::fit(self.geometry.sphere, &pass.light)?;
-        let (position, colour, spot) = match pass.light {
-            Light::Point { position, intensity } => (position.extend(1.0), intensity.extend(0.0), [0.0; 4]),
-            Light::Spot { position, direction, intensity, cone_angle, soft_edge } => {
-                let axis = direction.normalize_or_zero();
-                if axis == Vec3::ZERO || !(cone_angle > 0.0 && cone_angle <= std::f32::consts::PI) {
+        let light = &pass.light;
+        // Homogeneous: a positional light's position (w = 1), a distant one's unit direction of
+        // travel (w = 0).
+        let position = match light.position() {
+            Some(p) => p.extend(1.0),
+            None => light.direction().unwrap_or(Vec3::ZERO).normalize_or_zero().extend(0.0),
+        };
+        // Cone: unit axis (xyz) and half-angle (w), zero for none; its soft edge in `colour.w`.
+        let (spot, soft_edge) = match light.cone() {
+            None => ([0.0; 4], 0.0),
+            Some(Cone { axis, half_angle, soft_edge }) => {
+                let unit = axis.normalize_or_zero();
+                if unit == Vec3::ZERO || !(half_angle > 0.0 && half_angle <= std::f32::consts::PI) {
                     return Err(HtsmError::Light(format!(
-                        "spot light with axis {direction} and cone half-angle {cone_angle} rad \
+                        "spot light with axis {axis} and cone half-angle {half_angle} rad \
                          (needs a non-zero axis and an angle in (0, pi])"
                     )));
                 }
-                (position.extend(1.0), intensity.extend(soft_edge), axis.extend(cone_angle).to_array())
-            }
-            Light::Directional { direction, irradiance } => {
-                (direction.normalize_or_zero().extend(0.0), irradiance.extend(0.0), [0.0; 4])
+                (unit.extend(half_angle).to_array(), soft_edge)
             }
         };
+        let colour = light.power().extend(soft_edge);
         // Ring-1 radius: object units -> level-0 texels at the object's centre.
         let kernel_texels = params.kernel_radius * self.geometry.extent() / frustum.width_at_centre
             * self.reference.size as f32;

@@ -3,9 +3,9 @@
 //! wins over the file, the file over the defaults, and every default is written here once.
 //! Everything that can fail (files, numbers, names) fails here, before any output exists.
 
+use super::light::{default_lights, parse_light};
 use super::{LoadedEnvironment, MeshSource, SceneFile, TexturedMesh};
 use anyhow::{Context, Result, bail};
-use glam::Vec3;
 use lucent_core::bssrdf::{Material, ProfileKind};
 use lucent_core::camera::OrbitCamera;
 use lucent_core::hierarchy::Hierarchy;
@@ -419,23 +419,6 @@ pub fn environment_of(name: &str, map: &EnvMap, rotation: f32, intensity: f32) -
     Ok(LoadedEnvironment { name: name.to_string(), environment, reflection })
 }
 
-/// A key light in front of the object (towards the default camera), above and to the right, and
-/// a back light behind and above that shows the translucency of thin parts (Mertens fig. 6.3);
-/// each gives irradiance 1 at the object's centre. The CLI and the viewer both start with these.
-pub fn default_lights(mesh: &Mesh) -> [Light; 2] {
-    let (center, radius) = lucent_core::camera::bounding_sphere(&mesh.positions);
-    let key = center + Vec3::new(1.0, 1.1, 1.8) * radius;
-    let back = center + Vec3::new(-0.3, 0.6, -2.2) * radius;
-    [point_light(key, center), point_light(back, center)]
-}
-
-/// A white point light whose irradiance at the object's centre distance is 1 (arbitrary but
-/// consistent units), so images look alike whatever the mesh units.
-fn point_light(position: Vec3, center: Vec3) -> Light {
-    let d2 = position.distance_squared(center).max(1e-12);
-    Light::Point { position, intensity: Vec3::splat(d2) }
-}
-
 /// What a colour-and-distance material became, on one line: `material: albedo 0.800,0.600,0.400
 /// mfp 1,0.5,0.25 mm -> sigma_s' 0.9794,1.979,3.979 sigma_a 0.02065,0.02111,0.02089 mm^-1 (eta 1.3)`.
 pub fn colour_material_line(albedo: [f64; 3], mfp_mm: [f64; 3], m: &Material) -> String {
@@ -456,67 +439,6 @@ pub fn colour_material_line(albedo: [f64; 3], mfp_mm: [f64; 3], m: &Material) ->
         join(m.sigma_a, &sig4),
         m.eta
     )
-}
-
-/// Parses three comma-separated numbers; errors start with `label` and end with `usage`.
-pub fn parse_three(label: &str, text: &str, usage: &str) -> Result<Vec3> {
-    let v: Vec<f32> = text
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!("{label}: {e}; {usage}"))?;
-    let [x, y, z] = v[..] else {
-        bail!("{label}: {} numbers given; {usage}", v.len());
-    };
-    Ok(Vec3::new(x, y, z))
-}
-
-/// Parses `point:x,y,z` (position, mesh units) or `dir:x,y,z` (direction the light travels).
-/// Point lights give irradiance 1 at the distance of `center`; directional lights give 1.
-pub fn parse_light(spec: &str, center: Vec3) -> Result<Light> {
-    let usage = "expected point:x,y,z (position, mesh units) or dir:x,y,z (direction of travel)";
-    let (kind, rest) = spec.split_once(':').with_context(|| format!("--light {spec:?}: {usage}"))?;
-    let p = parse_three(&format!("--light {spec:?}"), rest, usage)?;
-    let range = crate::ranges::COORDINATE;
-    if !p.to_array().iter().all(|c| range.contains(c)) {
-        bail!("--light {spec:?}: coordinates must be within {}..={}", range.start(), range.end());
-    }
-    match kind.trim().to_ascii_lowercase().as_str() {
-        "point" => Ok(point_light(p, center)),
-        "dir" | "directional" => {
-            if p.length_squared() == 0.0 {
-                bail!("--light {spec:?}: a direction cannot be zero");
-            }
-            Ok(Light::Directional { direction: p.normalize(), irradiance: Vec3::ONE })
-        }
-        other => bail!("--light {spec:?}: unknown kind {other:?}; {usage}"),
-    }
-}
-
-/// The lights turned by `angle` radians about the vertical axis through `center` (positions
-/// and directions), for `--orbit-light`.
-pub fn orbit_lights(lights: &[SceneLight], center: Vec3, angle: f32) -> Vec<SceneLight> {
-    let q = glam::Quat::from_rotation_y(angle);
-    let turn = |p: Vec3| center + q * (p - center);
-    lights
-        .iter()
-        .map(|l| SceneLight {
-            light: match l.light {
-                Light::Point { position, intensity } => Light::Point { position: turn(position), intensity },
-                Light::Directional { direction, irradiance } => {
-                    Light::Directional { direction: q * direction, irradiance }
-                }
-                Light::Spot { position, direction, intensity, cone_angle, soft_edge } => Light::Spot {
-                    position: turn(position),
-                    direction: q * direction,
-                    intensity,
-                    cone_angle,
-                    soft_edge,
-                },
-            },
-            shadows: l.shadows,
-        })
-        .collect()
 }
 
 #[cfg(test)]

@@ -4,23 +4,6 @@ fn candle() -> Option<PathBuf> {
     Some(format!("{}/../../examples/scenes/candle.toml", env!("CARGO_MANIFEST_DIR")).into())
 }
 
-#[test]
-fn lights_parse_and_bad_ones_are_rejected() {
-    let c = Vec3::ZERO;
-    assert_eq!(
-        parse_light("point:0,3,4", c).unwrap(),
-        Light::Point { position: Vec3::new(0.0, 3.0, 4.0), intensity: Vec3::splat(25.0) }
-    );
-    assert_eq!(
-        parse_light("dir: 0, -2, 0", c).unwrap(),
-        Light::Directional { direction: Vec3::NEG_Y, irradiance: Vec3::ONE }
-    );
-    for bad in ["point:1,2", "spot:1,2,3", "point", "dir:0,0,0", "point:a,b,c", "point:1,2,inf"] {
-        let e = parse_light(bad, c).unwrap_err().to_string();
-        assert!(e.contains(bad), "{bad}: {e}");
-    }
-}
-
 /// Flags given explicitly win over the scene file; the rest comes from the file.
 #[test]
 fn flags_override_the_scene_file() {
@@ -80,25 +63,20 @@ fn defaults_without_a_scene() {
     assert_eq!(s.environment.unwrap().environment.rotation_deg, 45.0);
 }
 
-/// Orbiting keeps the distance to the centre and turns about +Y.
-#[test]
-fn orbit_turns_about_the_vertical_axis() {
-    let c = Vec3::new(1.0, 2.0, 3.0);
-    let l = [SceneLight::from(Light::Point { position: c + Vec3::X, intensity: Vec3::ONE })];
-    let turned = orbit_lights(&l, c, std::f32::consts::FRAC_PI_2);
-    let Light::Point { position, .. } = turned[0].light else { panic!() };
-    assert!((position - (c - Vec3::Z)).length() < 1e-6, "{position}");
-}
-
-/// Three bounces between parts by default, none with the paper's `mertens` profile (which does
-/// not bound energy on thin parts); a flag or scene key sets them for any profile.
+/// Three bounces between parts by default, none with a profile that does not bound energy on
+/// thin parts (the paper's `mertens`); a flag or scene key sets them for any profile.
 #[test]
 fn bounces_default_by_profile() {
     let bounces = |o: Overrides| Scene::resolve(&o).unwrap().settings.bounces;
     assert_eq!(bounces(Overrides::default()), crate::ranges::DEFAULT_BOUNCES);
-    let mertens = || Overrides { profile: Some(ProfileKind::Mertens), ..Default::default() };
-    assert_eq!(bounces(mertens()), 0);
-    assert_eq!(bounces(Overrides { bounces: Some(2), ..mertens() }), 2);
+    for kind in ProfileKind::ALL {
+        let with = || Overrides { profile: Some(kind), ..Default::default() };
+        let default = if kind.bounces_by_default() { crate::ranges::DEFAULT_BOUNCES } else { 0 };
+        assert_eq!(bounces(with()), default, "{kind}");
+        assert_eq!(bounces(Overrides { bounces: Some(2), ..with() }), 2, "{kind}");
+    }
+    let mertens = Overrides { profile: Some("mertens".parse().unwrap()), ..Default::default() };
+    assert_eq!(bounces(mertens), 0, "the paper's profile, as a user names it");
     assert_eq!(bounces(Overrides { scene: candle(), ..Default::default() }), crate::ranges::DEFAULT_BOUNCES);
 }
 

@@ -1,6 +1,7 @@
 //! Scene files: examples, defaults, lights, materials, paths and errors.
 
 use super::*;
+use lucent_core::irradiance::Light;
 
 fn examples() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes")
