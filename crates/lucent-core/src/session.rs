@@ -21,12 +21,12 @@
 //!
 //! * `irradiance.rs`: lights, environment, the texture's entry factors and the shadow BVH that
 //!   every stage traces → Fresnel-transmitted irradiance per face (§5.3);
-//! * `body.rs`: thickness rays under the faces → the finite-body gain and the exit chord's
-//!   per-vertex means;
+//! * `body.rs`: thickness rays under the faces → the finite-body gain, the slab transmission
+//!   across the body and the exit chord's per-vertex means;
 //! * `subsurface.rs`: the hierarchical solver and its links, or the exact sum → `B` per face;
 //! * `bounces.rs`: the rays between facing parts → `B` of the light they send each other;
-//! * `view.rs`: the eye → `B / (c π)` per vertex seen along the view rays (the chord factor) and
-//!   view-ray single scattering.
+//! * `view.rs`: the eye → `B / (c π)` per vertex seen along the view rays (the chord factor,
+//!   the transmitted light's lobe) and view-ray single scattering.
 
 use crate::Rgb;
 use crate::bssrdf::Profile;
@@ -458,18 +458,22 @@ impl FrameSession {
         self.subsurface.keep(solver);
         timings.body_ms = body_ms;
         timings.irradiance_ms = ms_since(t) - body_ms;
-        let (irradiance, e, gain) = (&self.irradiance, self.irradiance.faces(), self.body.face_gain());
+        let (irradiance, e, body) = (&self.irradiance, self.irradiance.faces(), &self.body);
+        let carried = irradiance.carried(e);
         let (mut face_b, links) =
-            self.subsurface.solve(f, gain, &irradiance.carried(e), &changes, f.oracle(), &mut timings);
+            self.subsurface.solve(f, body, &carried, &changes, f.oracle(), &mut timings);
         let t = Instant::now();
+        // Light that crossed the body, and what of `B` it is (the transmitted exit lobe's share).
+        let mut sent = Vec::new();
+        body.add_transmission(&mut face_b, &mut sent, &carried);
         irradiance.add_local(f, &mut face_b, e);
         let t_bounces = Instant::now();
-        self.bounces.add(f, &changes, irradiance, &mut self.subsurface, gain, &mut face_b);
+        self.bounces.add(f, &changes, irradiance, &mut self.subsurface, body, (&mut face_b, &mut sent));
         timings.bounces_ms = ms_since(t_bounces);
-        self.view.keep_solve(f, &face_b);
+        self.view.keep_solve(f, &face_b, sent);
         timings.push_ms += ms_since(t) - timings.bounces_ms;
         let t = Instant::now();
-        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, self.body.exit_chord(), false);
+        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, &self.body, false);
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = if f.settings.ablate.exit_lobe {
             crate::bssrdf::ExitLobe::flat()
@@ -511,7 +515,7 @@ impl FrameSession {
     /// leaves none, but leaving HTSM is a method change, which solves).
     fn see_again(&mut self, mut timings: Timings) {
         let t = Instant::now();
-        let seen = self.view.seen(&self.frame, &self.irradiance, self.body.exit_chord(), true);
+        let seen = self.view.seen(&self.frame, &self.irradiance, &self.body, true);
         (self.last.vertex_radiance, self.last.vertex_single) = seen;
         timings.single_scattering_ms = ms_since(t);
         self.last.timings = timings;

@@ -48,6 +48,7 @@ pub struct SceneArgs<'py> {
     pub camera: Option<std::collections::HashMap<String, f32>>,
     pub profile: Option<String>,
     pub single_scattering: Option<String>,
+    pub transmission: Option<String>,
     pub method: Option<String>,
     pub mode: Option<String>,
     pub bounces: Option<u32>,
@@ -103,6 +104,7 @@ impl SceneArgs<'_> {
         o.profile = self.profile.as_deref().map(|p| parse("profile", p)).transpose()?;
         o.single_scattering =
             self.single_scattering.as_deref().map(|s| parse("single_scattering", s)).transpose()?;
+        o.transmission = self.transmission.as_deref().map(|t| parse("transmission", t)).transpose()?;
         o.method = Some(self.method()?);
         o.mode = self.mode.as_deref().map(|m| parse::<SolveMode>("mode", m)).transpose()?;
         o.refine = match &self.refine {

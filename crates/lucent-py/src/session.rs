@@ -116,8 +116,8 @@ impl Session {
     #[pyo3(signature = (
         mesh = None, *, vertices = None, faces = None, scene = None, material = None, scale = None,
         lights = None, shadows = true, env = None, env_rotation = None, camera = None, width = 800,
-        height = 600, profile = None, single_scattering = None, method = None, mode = None,
-        bounces = None, refine = None, deform = None, surface = true, exposure = None
+        height = 600, profile = None, single_scattering = None, transmission = None, method = None,
+        mode = None, bounces = None, refine = None, deform = None, surface = true, exposure = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new<'py>(
@@ -137,6 +137,7 @@ impl Session {
         height: u32,
         profile: Option<String>,
         single_scattering: Option<String>,
+        transmission: Option<String>,
         method: Option<String>,
         mode: Option<String>,
         bounces: Option<u32>,
@@ -159,6 +160,7 @@ impl Session {
             camera,
             profile,
             single_scattering,
+            transmission,
             method,
             mode,
             bounces,

@@ -6,12 +6,13 @@ use lucent_core::mesh::refine::Refine;
 pub use lucent_core::session::{Method, SolveMode};
 use lucent_core::shading::SingleScattering;
 use lucent_core::solver::Oracle;
+use lucent_core::solver::transmission::Transmission;
 use std::path::{Path, PathBuf};
 
 mod parse;
-use parse::parse_single_scattering;
 pub use parse::{HierarchyChoice, parse_rgb};
 use parse::{names, parse_albedo, parse_hierarchy, parse_mfp, parse_oracle, parse_profile, parse_refine};
+use parse::{parse_single_scattering, parse_transmission};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -170,6 +171,12 @@ pub struct RenderArgs {
     /// light, closed forms per eye; docs/speed.md gives the difference).
     #[arg(long, default_value = "per-eye", value_parser = |s: &str| s.parse::<lucent_core::session::ViewTerms>())]
     pub view_terms: lucent_core::session::ViewTerms,
+    /// Light that crosses the body to a face on its far side (homogeneous profiles with a
+    /// finite-body gain): `slab` (default: the exact transmittance of a slab of the face's
+    /// thickness in place of the profile's far-side share) or `halfspace` (the profile at the
+    /// chord, as before issue 50).
+    #[arg(long, value_parser = parse_transmission)]
+    pub transmission: Option<Transmission>,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
     /// (every face against every face, O(N^2): the reference) or `htsm` (Heterogeneous
     /// Translucent Shadow Maps on the GPU, Shopf 2007).
@@ -257,6 +264,7 @@ impl RenderArgs {
             exposure: self.exposure,
             profile: self.profile,
             single_scattering: self.single_scattering,
+            transmission: self.transmission,
             lights: self.light.clone(),
             no_shadows: self.no_shadows,
             bounces: self.bounces,

@@ -14,6 +14,7 @@ pub mod halfspace;
 mod material;
 pub mod profile;
 mod quadrature;
+pub mod slab;
 pub mod tables;
 pub mod walk;
 

@@ -1,13 +1,15 @@
 //! The body measure of a [`super::FrameSession`]: rays under every face measure how far the
 //! body reaches behind it, which gives the finite-body gain of each face
-//! (`solver::finite_body`) and the mean chord factor `N` of each vertex
-//! (`shading::exit_chord`), both for the profiles that bound energy.
+//! (`solver::finite_body`), the slab transmission across the body (`solver::transmission`)
+//! and the mean chord factor `N` of each vertex (`shading::exit_chord`), all for the profiles
+//! that bound energy.
 
 use super::{Changes, Frame};
 use crate::Rgb;
 use crate::irradiance::ShadowCaster;
 use crate::shading::exit_chord::ExitChord;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
+use crate::solver::transmission::{CrossBody, Transmission};
 use std::sync::Arc;
 
 /// The thickness rays and what they measure, remade when the mesh moves or the transport
@@ -24,12 +26,41 @@ pub(super) struct Body {
     /// The exit lobe's weights and the mean chord factor `N` per vertex, made with the gain
     /// from the same rays; `None` for a flat exit lobe.
     exit_chord: Option<(ExitChord, Vec<Rgb>)>,
+    /// The slab transmission of every face across the body (`solver::transmission`), made
+    /// with the gain from the same rays; `None` for [`Transmission::HalfSpace`], without a
+    /// gain, or where no face has a term.
+    cross_body: Option<Arc<CrossBody>>,
+    /// `cross_body`'s terms under uniform irradiance 1, which the energy bound leaves room for.
+    face_term: Option<Arc<Vec<Rgb>>>,
 }
 
 impl Body {
     /// The finite-body gain per face (`None`: the profile does not bound energy).
     pub(super) fn face_gain(&self) -> Option<&Arc<Vec<Rgb>>> {
         self.face_gain.as_ref()
+    }
+
+    /// Per face, what the slab transmission adds to `B` under uniform irradiance 1 (`None`:
+    /// no transmission term), for the energy bound.
+    pub(super) fn face_term(&self) -> Option<&Arc<Vec<Rgb>>> {
+        self.face_term.as_ref()
+    }
+
+    /// The slab transmission across the body (`None`: not modelled for this transport).
+    pub(super) fn cross_body(&self) -> Option<&CrossBody> {
+        self.cross_body.as_deref()
+    }
+
+    /// Adds to `b` the slab transmission across the body of the carried irradiance `carried`
+    /// (`solver::transmission`), where the transport has it, and to `sent` (per face, made on
+    /// first use) the transmitted light `b` then holds.
+    pub(super) fn add_transmission(&self, b: &mut [Rgb], sent: &mut Vec<Rgb>, carried: &[Rgb]) {
+        if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == b.len()) {
+            if sent.len() != b.len() {
+                *sent = vec![Rgb::ZERO; b.len()];
+            }
+            cross.add(b, sent, carried);
+        }
     }
 
     /// The exit lobe's weights and the mean chord factor per vertex (`None`: a flat lobe).
@@ -50,12 +81,14 @@ impl Body {
     }
 
     /// Measures the body under the faces for the current pose and profile, with one set of
-    /// rays: the finite-body gain of every face, and the mean chord factor `N` of every vertex.
-    /// Both `None` where the profile does not bound energy (Mertens'); no `N` where its exit
-    /// lobe is flat.
+    /// rays: the finite-body gain and the slab transmission of every face, and the mean chord
+    /// factor `N` of every vertex. All `None` where the profile does not bound energy
+    /// (Mertens'); no `N` where its exit lobe is flat.
     fn measure(&mut self, f: &Frame, caster: Option<&ShadowCaster>) {
         self.face_gain = None;
         self.exit_chord = None;
+        self.cross_body = None;
+        self.face_term = None;
         let Some(caster) = caster.filter(|_| f.profile.bounds_energy()) else { return };
         let (mesh, profile) = (&f.mesh, &f.profile);
         let ablate = &f.settings.ablate;
@@ -73,6 +106,13 @@ impl Body {
             true => vec![Rgb::ONE; mesh.triangles.len()],
             false => fb.gains_along(mesh, &rays, caster.offset()),
         };
+        if f.transport.transmission == Transmission::Slab {
+            let cross = CrossBody::new(profile, fb, mesh, &rays, caster.offset(), &gains);
+            if !cross.is_empty() {
+                self.face_term = Some(Arc::new(cross.uniform_terms()));
+                self.cross_body = Some(Arc::new(cross));
+            }
+        }
         self.face_gain = Some(Arc::new(gains));
         self.exit_chord = ExitChord::new(profile).map(|chord| {
             let means = mesh.face_to_vertex(&chord.face_means(mesh, &rays, caster.offset()));

@@ -3,6 +3,7 @@
 //! again, a set number of times. The solve is linear in the irradiance, so each bounce reuses
 //! the stored links.
 
+use super::body::Body;
 use super::irradiance::Irradiance;
 use super::subsurface::Subsurface;
 use super::{Changes, Frame, SolveMode, Timings};
@@ -10,7 +11,6 @@ use crate::Rgb;
 use crate::irradiance::ShadowCaster;
 use crate::irradiance::interreflection::{BounceRays, bounced_irradiance};
 use crate::solver::Oracle;
-use std::sync::Arc;
 
 /// How much looser the oracle's thresholds are for a bounce solved on the fly than for the
 /// direct light's solve. The bounce is a few percent of `B` (up to a third in a crevice), so its
@@ -31,7 +31,9 @@ pub(super) struct Bounces {
 impl Bounces {
     /// Adds to `face_b`, the subsurface solve's `B` of the direct light, the settings' number
     /// of bounces: each one the light the last sent out, caught by facing parts (rays against
-    /// the shadow BVH of `irradiance`) and solved by `subsurface` (with the finite-body `gain`).
+    /// the shadow BVH of `irradiance`) and solved by `subsurface` (with the finite-body gain
+    /// and the slab transmission of `body`); and to `sent` the transmitted light the bounces
+    /// hold (`Body::add_transmission`).
     /// The direct light's single scattering leaves too, but is not bounced: with it the dragon
     /// read +6.5% against the path tracer (validation/README.md, "Single scattering of bounced
     /// light").
@@ -41,8 +43,8 @@ impl Bounces {
         changes: &Changes,
         irradiance: &Irradiance,
         subsurface: &mut Subsurface,
-        gain: Option<&Arc<Vec<Rgb>>>,
-        face_b: &mut [Rgb],
+        body: &Body,
+        (face_b, sent): (&mut [Rgb], &mut Vec<Rgb>),
     ) {
         self.moved |= changes.geometry;
         let mut last = face_b.to_vec();
@@ -57,7 +59,8 @@ impl Bounces {
             let e = bounced_irradiance(rays, &last, &f.profile);
             let carried = irradiance.carried(&e);
             last =
-                subsurface.solve(f, gain, &carried, &Changes::default(), oracle, &mut Timings::default()).0;
+                subsurface.solve(f, body, &carried, &Changes::default(), oracle, &mut Timings::default()).0;
+            body.add_transmission(&mut last, sent, &carried);
             irradiance.add_local(f, &mut last, &e);
             // No view ray follows the bounced light: its single scattering joins `B`.
             irradiance.add_single(f, &mut last, &e);

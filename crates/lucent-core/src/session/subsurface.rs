@@ -2,6 +2,7 @@
 //! to radiosity `B` per face, by the hierarchical solver (its hierarchy and links kept across
 //! frames as the solve mode says, §5.5) or by the exact O(N²) sum.
 
+use super::body::Body;
 use super::{Changes, Frame, Method, SolveMode, Timings};
 use crate::Rgb;
 use crate::clock::ms_since;
@@ -74,13 +75,15 @@ impl Subsurface {
         }
     }
 
-    /// `B` per face for irradiance `e` (times the finite-body `gain` per face, if any) by the
-    /// settings' method, updating the hierarchical solver for `changes` first and linking with
-    /// the thresholds `oracle`: `(B, links)`. Adds its stages' times to `timings`.
+    /// `B` per face for irradiance `e` (times the finite-body gain per face of `body`, if any,
+    /// under an energy bound that leaves room for its slab transmission term) by the settings'
+    /// method, updating the hierarchical solver for `changes` first and linking with the
+    /// thresholds `oracle`: `(B, links)`. Adds its stages' times to `timings`. The
+    /// transmission term itself is added by the caller (`Body::add_transmission`).
     pub(super) fn solve(
         &mut self,
         f: &Frame,
-        gain: Option<&Arc<Vec<Rgb>>>,
+        body: &Body,
         e: &[Rgb],
         changes: &Changes,
         oracle: Oracle,
@@ -91,8 +94,10 @@ impl Subsurface {
             let all: Vec<usize> = (0..f.mesh.triangles.len()).collect();
             let opts = FormFactorOptions::default();
             let p = f.progress.as_deref();
-            let gain = gain.map(|g| g.as_slice());
-            let b = solver::exact::solve_receivers_with_gain(&f.mesh, &f.profile, e, &opts, &all, p, gain);
+            let gain = body.face_gain().map(|g| g.as_slice());
+            let term = body.face_term().map(|t| t.as_slice());
+            let b =
+                solver::exact::solve_receivers_with_gain(&f.mesh, &f.profile, e, &opts, &all, p, gain, term);
             timings.gather_ms += ms_since(t);
             return (b, None);
         }
@@ -100,7 +105,8 @@ impl Subsurface {
             self.solver = Some(self.maker(f)());
         }
         let s = self.solver.as_mut().expect("made above");
-        s.set_face_gain(gain.cloned());
+        s.set_face_gain(body.face_gain().cloned());
+        s.set_face_term(body.face_term().cloned());
         hierarchical(s, f, e, changes, oracle, timings)
     }
 }

@@ -6,7 +6,8 @@ use crate::irradiance::ShadowCaster;
 use crate::mesh::deform::{self, Deformer as _};
 use crate::mesh::generate;
 use crate::shading;
-use crate::solver::finite_body::FiniteBody;
+use crate::solver::finite_body::{FiniteBody, ThicknessRays};
+use crate::solver::transmission::CrossBody;
 
 fn marble() -> Transport {
     Transport::new(Material::by_name("marble").unwrap(), 0.05)
@@ -46,10 +47,20 @@ fn on_the_fly_matches_the_solver_called_directly() {
     );
     // The session applies the finite-body gain of its pose with the energy bound.
     let caster = ShadowCaster::new(&mesh);
-    let gain = FiniteBody::new(&profile).face_gains(&mesh, caster.bvh(), caster.offset());
+    let fb = FiniteBody::new(&profile);
+    let rays = ThicknessRays::trace(&mesh, caster.bvh(), caster.offset());
+    let gain = fb.gains_along(&mesh, &rays, caster.offset());
     assert!(gain.iter().all(|g| g.min_element() > 1.0), "a small marble sphere gains");
+    // And the slab transmission across the body, with room for it under the bound.
+    let cross = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gain);
     solver.set_face_gain(Some(Arc::new(gain)));
+    if !cross.is_empty() {
+        solver.set_face_term(Some(Arc::new(cross.uniform_terms())));
+    }
     let mut direct = solver.solve_on_the_fly(&e).face_b;
+    if !cross.is_empty() {
+        cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e);
+    }
     let r = Rgb::from_array(profile.total_diffuse_reflectance().map(|v| v as f32));
     assert!(entering.iter().any(|e| e.local.max_element() > 0.0), "oblique faces return some light locally");
     direct.iter_mut().zip(&entering).for_each(|(b, e)| *b += e.local * Rgb::ONE * r);

@@ -2,6 +2,7 @@
 
 use crate::bssrdf::{Material, Profile, ProfileKind};
 use crate::shading::SingleScattering;
+use crate::solver::transmission::Transmission;
 
 /// The material at its size, which together decide the diffusion profile.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,6 +16,9 @@ pub struct Transport {
     /// Where single scattering is computed (default [`SingleScattering::ViewRay`]; the `mertens`
     /// profile has none whatever this says).
     pub single_scattering: SingleScattering,
+    /// How light crossing the body to a face on its far side is carried (default
+    /// [`Transmission::Slab`]; only the profiles with a finite-body gain have it).
+    pub transmission: Transmission,
 }
 
 impl Transport {
@@ -25,6 +29,7 @@ impl Transport {
             scale_m,
             profile: ProfileKind::default(),
             single_scattering: SingleScattering::default(),
+            transmission: Transmission::default(),
         }
     }
 

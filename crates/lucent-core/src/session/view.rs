@@ -1,15 +1,19 @@
 //! The view terms of a [`super::FrameSession`]: what depends on the eye. The diffuse radiance
 //! `B / (c π)` per vertex as it leaves towards the eye, times the body's chord factor where the
-//! profile has one (`shading::exit_chord`), and single scattering along the view ray where the
-//! transport asks for it (`shading::single_scattering`). An eye-only change redoes only these.
+//! profile has one (`shading::exit_chord`) and the transmitted light's exit lobe where light
+//! crossed the body (`shading::transmitted_exit`), and single scattering along the view ray
+//! where the transport asks for it (`shading::single_scattering`). An eye-only change redoes
+//! only these.
 
 use super::Frame;
+use super::body::Body;
 use super::irradiance::Irradiance;
 use crate::Rgb;
 use crate::mesh::Mesh;
 use crate::shading::diffuse_radiance;
 use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use crate::shading::transmitted_exit;
 use crate::shading::view_basis::{ViewBasis, ViewTerms};
 use glam::Vec3;
 
@@ -26,6 +30,10 @@ pub(super) struct View {
     /// and the one before, whose chords serve while the mesh has not moved.
     basis: Option<ViewBasis>,
     stale: Option<ViewBasis>,
+    /// The last solve's `B` per face and the transmitted light it holds
+    /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
+    /// crossed the body.
+    transmitted: (Vec<Rgb>, Vec<Rgb>),
 }
 
 impl View {
@@ -50,32 +58,36 @@ impl View {
         changed
     }
 
-    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`; the split's
+    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`, and the
+    /// transmitted light `sent` per face that `face_b` holds (empty: none); the split's
     /// eye-independent part is made again on the next eye.
-    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb]) {
+    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb], sent: Vec<Rgb>) {
         self.diffuse = diffuse_radiance(&f.mesh.face_to_vertex(face_b), &f.profile);
         self.stale = self.basis.take().or(self.stale.take());
+        self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.to_vec(), sent) };
     }
 
     /// `(radiance, single)` per vertex as seen from the eye (the shadow BVH of `irradiance` is
     /// current: the solve refits it first): the kept diffuse radiance times the chord factor
-    /// of `exit_chord` (the lobe's weights and mean factors, if the lobe is not flat), and
-    /// view-ray single scattering where the transport asks for it (else empty). Without an
-    /// eye: `B / (c π)` as solved, and no single scattering. With the split view terms a
-    /// solve is still seen per eye (its image is the reference's); the split's eye-independent
-    /// part is made on the first `eye_only` change after it and serves until the next solve.
+    /// of `body`'s exit chord (the lobe's weights and mean factors, if the lobe is not flat)
+    /// with the transmitted share's own lobe (`shading::transmitted_exit`, where light crossed
+    /// the body), and view-ray single scattering where the transport asks for it (else empty).
+    /// Without an eye: `B / (c π)` as solved, and no single scattering. With the split view
+    /// terms a solve is still seen per eye (its image is the reference's); the split's
+    /// eye-independent part is made on the first `eye_only` change after it and serves until
+    /// the next solve (it has no view rays, so the transmitted share takes the chord's lobe).
     pub(super) fn seen(
         &mut self,
         f: &Frame,
         irradiance: &Irradiance,
-        exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
+        body: &Body,
         eye_only: bool,
     ) -> (Vec<Rgb>, Vec<Rgb>) {
         let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
             return (self.diffuse.clone(), Vec::new());
         };
         let single = f.transport.single_scattering_along_view();
-        let exit_chord = exit_chord.filter(|_| !f.settings.ablate.chord);
+        let exit_chord = body.exit_chord().filter(|_| !f.settings.ablate.chord);
         if exit_chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
         }
@@ -94,7 +106,14 @@ impl View {
         };
         let diffuse = match exit_chord {
             Some((chord, means)) => {
-                let factors = chord.vertex_factors(&view_rays(&scene, eye), means);
+                let rays = view_rays(&scene, eye);
+                let mut factors = chord.vertex_factors(&rays, means);
+                let (face_b, sent) = &self.transmitted;
+                if let Some(cross) = body.cross_body().filter(|c| c.len() == sent.len()) {
+                    let lobe = &f.profile.exit_lobe;
+                    factors =
+                        transmitted_exit::exit_factors(cross, &f.mesh, face_b, sent, &rays, lobe, &factors);
+                }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }
             None => self.diffuse.clone(),

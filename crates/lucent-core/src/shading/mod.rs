@@ -24,5 +24,6 @@ pub fn diffuse_radiance(b: &[Rgb], profile: &Profile) -> Vec<Rgb> {
 
 pub mod exit_chord;
 pub mod single_scattering;
+pub mod transmitted_exit;
 pub use single_scattering::{SingleScattering, UnknownSingleScattering};
 pub mod view_basis;

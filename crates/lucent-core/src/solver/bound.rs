@@ -43,6 +43,24 @@ pub fn bound_with_gain(uniform: Rgb, gain: Rgb) -> Rgb {
     gain * bound(uniform * gain)
 }
 
+/// [`bound_with_gain`] for a face that also takes `term` (per channel, the `B` it adds under
+/// uniform irradiance 1 after the solve: the slab transmission across the body,
+/// [`super::transmission`]): the gathered `B` is scaled by one factor `k` so that
+/// `U G k + term` stays at most 1 in every channel, and `gain k` returned (`k = 1` where it
+/// does; equal to [`bound_with_gain`] for a zero term).
+#[inline]
+pub fn bound_with_gain_and_term(uniform: Rgb, gain: Rgb, term: Rgb) -> Rgb {
+    let base = uniform * gain;
+    let mut k = 1.0f32;
+    for c in 0..3 {
+        let (b, t) = (base[c], term[c].max(0.0));
+        if b.is_finite() && b > 0.0 && b + t > 1.0 {
+            k = k.min((1.0 - t).max(0.0) / b);
+        }
+    }
+    gain * k
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

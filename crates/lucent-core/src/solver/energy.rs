@@ -2,14 +2,15 @@
 //! the largest `B` under uniform irradiance ([`uniform_report`], `lucent bench energy`) and the
 //! albedo rendered on a flat slab ([`slab_albedo`], `lucent bench albedo`).
 
-pub use super::bound::{bound, bound_with_gain};
+pub use super::bound::{bound, bound_with_gain, bound_with_gain_and_term};
 use crate::Rgb;
 
 /// What [`uniform_report`] measures on one mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniformReport {
-    /// Largest `B` over faces and channels under uniform irradiance 1 after the finite-body gain
-    /// and the bound, as a render applies them (unitless; at most 1 for the bounded profiles).
+    /// Largest `B` over faces and channels under uniform irradiance 1 after the finite-body gain,
+    /// the bound and the slab transmission across the body, as a render applies them
+    /// (unitless; at most 1 for the bounded profiles).
     pub max_b_uniform: f32,
     /// The same before the bound: how far the profile alone breaks energy conservation.
     pub max_b_unbounded: f32,
@@ -36,20 +37,30 @@ pub fn uniform_report(
     let solver = super::HierarchicalSolver::new(mesh.clone(), h, unbounded, oracle);
     let raw = solver.solve_on_the_fly(&ones);
     let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
-    // As a render does: the finite-body gain of each face, applied with the bound.
+    // As a render does: the finite-body gain of each face, applied with the bound, and the
+    // slab transmission across the body (`super::transmission`, the default).
+    let mut cross: Option<super::transmission::CrossBody> = None;
     let gain = profile.bounds_energy().then(|| {
         let caster = crate::irradiance::ShadowCaster::new(mesh);
-        super::finite_body::FiniteBody::new(profile).face_gains(mesh, caster.bvh(), caster.offset())
+        let fb = super::finite_body::FiniteBody::new(profile);
+        let rays = super::finite_body::ThicknessRays::trace(mesh, caster.bvh(), caster.offset());
+        let gains = fb.gains_along(mesh, &rays, caster.offset());
+        cross = Some(super::transmission::CrossBody::new(profile, &fb, mesh, &rays, caster.offset(), &gains));
+        gains
     });
-    let bounded: Vec<Rgb> = raw
+    let mut bounded: Vec<Rgb> = raw
         .face_b
         .iter()
         .enumerate()
-        .map(|(f, &u)| match &gain {
-            Some(g) => u * bound_with_gain(u, g[f]),
-            None => u,
+        .map(|(f, &u)| match (&gain, &cross) {
+            (Some(g), Some(c)) => u * bound_with_gain_and_term(u, g[f], c.uniform_term(f)),
+            (Some(g), None) => u * bound_with_gain(u, g[f]),
+            _ => u,
         })
         .collect();
+    if let Some(cross) = cross {
+        cross.add(&mut bounded, &mut vec![Rgb::ZERO; ones.len()], &ones);
+    }
     UniformReport {
         max_b_uniform: max(&bounded),
         max_b_unbounded: max(&raw.face_b),

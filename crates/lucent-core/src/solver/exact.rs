@@ -48,11 +48,14 @@ pub fn solve_receivers(
     receivers: &[usize],
     progress: Option<&Progress>,
 ) -> Vec<Rgb> {
-    solve_receivers_with_gain(mesh, profile, face_irradiance, opts, receivers, progress, None)
+    solve_receivers_with_gain(mesh, profile, face_irradiance, opts, receivers, progress, None, None)
 }
 
 /// [`solve_receivers`] with the finite-body gain per face (`gain`, one per face of `mesh`;
-/// [`super::finite_body`]) applied with the energy bound, as the hierarchical solver does.
+/// [`super::finite_body`]) applied with the energy bound, as the hierarchical solver does,
+/// leaving room for what each face adds after the solve under uniform irradiance 1 (`term`:
+/// the slab transmission, [`super::transmission`]).
+#[allow(clippy::too_many_arguments)] // the solve's inputs, each one per face or per call
 pub fn solve_receivers_with_gain(
     mesh: &Mesh,
     profile: &Profile,
@@ -61,6 +64,7 @@ pub fn solve_receivers_with_gain(
     receivers: &[usize],
     progress: Option<&Progress>,
     gain: Option<&[Rgb]>,
+    term: Option<&[Rgb]>,
 ) -> Vec<Rgb> {
     assert_eq!(face_irradiance.len(), mesh.triangles.len());
     if let Some(p) = progress {
@@ -106,7 +110,10 @@ pub fn solve_receivers_with_gain(
             let u = Rgb::new(u[0] as f32, u[1] as f32, u[2] as f32);
             match (bound, gain) {
                 (false, _) => b,
-                (true, Some(g)) => b * bound::bound_with_gain(u, g[o]),
+                (true, Some(g)) => match term {
+                    Some(t) => b * bound::bound_with_gain_and_term(u, g[o], t[o]),
+                    None => b * bound::bound_with_gain(u, g[o]),
+                },
                 (true, None) => b * bound::bound(u),
             }
         })

@@ -45,6 +45,7 @@ pub mod local;
 mod near_face;
 pub mod oracle;
 pub mod point_sample;
+pub mod transmission;
 
 pub use crate::progress::Progress;
 pub use hierarchical::census;

@@ -72,6 +72,7 @@ def render(
     height: int = 600,
     profile: Optional[str] = None,
     single_scattering: Optional[str] = None,
+    transmission: Optional[str] = None,
     method: Optional[str] = None,
     mode: Optional[str] = None,
     bounces: Optional[int] = None,
@@ -105,6 +106,9 @@ def render(
     width, height: image size, pixels (1..=16384). Default 800 x 600.
     profile: ``"pbd"`` (default), ``"dipole"`` or ``"mertens"``.
     single_scattering: ``"view"`` (default), ``"profile"`` or ``"off"``.
+    transmission: light that crosses the body to a face on its far side: ``"slab"`` (default:
+        the exact transmittance of a slab of the face's thickness) or ``"halfspace"`` (the
+        profile at the chord, as before issue 50).
     method: ``"hierarchical"`` (default) or ``"exact"`` (O(N^2), the reference). HTSM is not
         offered here.
     mode: ``"render"``, ``"incremental"`` or ``"on-the-fly"``. Default as ``lucent render``:
@@ -163,6 +167,7 @@ class Session:
         height: int = 600,
         profile: Optional[str] = None,
         single_scattering: Optional[str] = None,
+        transmission: Optional[str] = None,
         method: Optional[str] = None,
         mode: Optional[str] = None,
         bounces: Optional[int] = None,

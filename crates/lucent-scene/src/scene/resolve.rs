@@ -55,6 +55,8 @@ pub struct Overrides {
     pub profile: Option<ProfileKind>,
     /// Where single scattering is computed.
     pub single_scattering: Option<lucent_core::shading::SingleScattering>,
+    /// How light crossing the body is carried (`slab`, default, or `halfspace`).
+    pub transmission: Option<lucent_core::solver::transmission::Transmission>,
     /// Lights as `point:x,y,z` or `dir:x,y,z`; any replaces all of the file's lights.
     pub lights: Vec<String>,
     /// Turns off every shadow (lights and environment).
@@ -332,7 +334,12 @@ fn transport(
         None => None,
     };
     let single_scattering = o.single_scattering.or(from_file).unwrap_or_default();
-    Ok(Transport { material, scale_m, profile, single_scattering })
+    let transmission = match (o.transmission, file.and_then(|f| f.transmission.as_deref())) {
+        (Some(t), _) => t,
+        (None, Some(name)) => name.parse().map_err(|e| anyhow::anyhow!("scene file: {e}"))?,
+        (None, None) => Default::default(),
+    };
+    Ok(Transport { material, scale_m, profile, single_scattering, transmission })
 }
 
 /// The material a glTF file's first material maps to (printing what was approximated and the

@@ -47,6 +47,11 @@ where
         .map(|s| s.parse::<T>().expect("one of the possible values"))
 }
 
+/// `--transmission NAME`: `slab` or `halfspace`, case-insensitive.
+pub fn parse_transmission(s: &str) -> Result<lucent_core::solver::transmission::Transmission, String> {
+    s.parse::<lucent_core::solver::transmission::Transmission>().map_err(|e| e.to_string())
+}
+
 /// `--profile NAME`: one of the diffusion profiles, case-insensitive.
 pub fn parse_profile(s: &str) -> Result<ProfileKind, String> {
     s.parse::<ProfileKind>().map_err(|e| e.to_string())

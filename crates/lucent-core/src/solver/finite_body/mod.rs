@@ -147,6 +147,13 @@ impl FiniteBody {
         std::array::from_fn(|c| ln_interpolate(&self.slab_t_mm, &self.slab_reach[c], t_mm, 0.0))
     }
 
+    /// `X_c(t)` per channel for a slab `thickness` mesh units thick: what the profile carries
+    /// through it, per unit irradiance on its far side (unitless, 0..R_d,c).
+    pub fn slab_carried(&self, thickness: f32) -> [f64; 3] {
+        let reach = self.slab_reach(thickness);
+        std::array::from_fn(|c| reach[c] * self.rd[c])
+    }
+
     /// `Σ_c X_c(t) / Σ_c R_d,c` for a slab `thickness` mesh units thick: the share of the
     /// half-space's return (channel sums) that the profile carries through it.
     pub fn slab_share(&self, thickness: f32) -> f64 {

@@ -105,6 +105,12 @@ impl ThicknessRays {
         Some((t, slabness(tilted, t, offset)))
     }
 
+    /// The face that face `f`'s inward ray hit (the far side of the body under it), `None` where
+    /// it left the mesh.
+    pub(crate) fn inward_face(&self, f: usize) -> Option<usize> {
+        self.hits[f][0].map(|h| h.k as usize)
+    }
+
     /// Face `f`'s five chords on `mesh` as it is now (mesh units): from the rays' origin,
     /// `offset` inside the face's centroid, along the rays as [`Self::trace`] casts them from
     /// the face's normal now, to the plane of the face each hit (to the place it hit on that

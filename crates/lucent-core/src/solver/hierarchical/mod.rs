@@ -116,6 +116,10 @@ pub struct HierarchicalSolver {
     /// where the profile bounds energy; `None` (default): none. Set through
     /// [`HierarchicalSolver::set_face_gain`].
     pub(super) face_gain: Option<Arc<Vec<Rgb>>>,
+    /// Per face, what it adds to `B` after the solve under uniform irradiance 1, which the
+    /// energy bound leaves room for ([`HierarchicalSolver::set_face_term`]); `None` (default):
+    /// nothing.
+    pub(super) face_term: Option<Arc<Vec<Rgb>>>,
     pub(super) links: Option<LinkSet>,
     /// The link set an incremental update replaced, kept for its buffers.
     pub(super) spare: Option<LinkSet>,
@@ -162,6 +166,7 @@ impl HierarchicalSolver {
             frame_geom: Default::default(),
             bound: None,
             face_gain: None,
+            face_term: None,
             locality,
             local,
         }
@@ -287,9 +292,20 @@ impl HierarchicalSolver {
     /// uniform irradiance 1 is `uniform`.
     #[inline]
     pub(super) fn bound_factor(&self, f: usize, uniform: Rgb) -> Rgb {
-        match &self.face_gain {
-            Some(g) => bound::bound_with_gain(uniform, g[f]),
-            None => bound::bound(uniform),
+        match (&self.face_gain, &self.face_term) {
+            (Some(g), Some(t)) => bound::bound_with_gain_and_term(uniform, g[f], t[f]),
+            (Some(g), None) => bound::bound_with_gain(uniform, g[f]),
+            (None, _) => bound::bound(uniform),
+        }
+    }
+
+    /// Sets what each face adds to its `B` after the solve under uniform irradiance 1 (the
+    /// slab transmission, [`super::transmission`]; `None`: nothing), which the energy bound
+    /// leaves room for; the stored bound is remade.
+    pub fn set_face_term(&mut self, term: Option<Arc<Vec<Rgb>>>) {
+        if self.face_term != term {
+            self.face_term = term;
+            self.bound = None;
         }
     }
 
