@@ -26,11 +26,11 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::halfspace::HalfSpace;
+use super::tables::{TableCache, cached_table};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, OnceLock};
 
 /// Photons below this weight play Russian roulette (survivors double).
 const ROULETTE: f64 = 0.05;
@@ -347,16 +347,8 @@ impl SlabTable {
     /// The table for albedo `rho` (0..=1) and index `eta` (>= 1), made once per process for
     /// each pair (tens of milliseconds).
     pub fn cached(rho: f64, eta: f64) -> Arc<Self> {
-        type Cache = Mutex<HashMap<(u64, u64), Arc<SlabTable>>>;
-        static CACHE: OnceLock<Cache> = OnceLock::new();
-        let key = (rho.to_bits(), eta.to_bits());
-        let cache = CACHE.get_or_init(Default::default);
-        if let Some(hit) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-            return hit.clone();
-        }
-        let made = Arc::new(Self::new(rho, eta));
-        cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, made.clone());
-        made
+        static CACHE: TableCache<SlabTable> = OnceLock::new();
+        cached_table(&CACHE, rho, eta, || Self::new(rho, eta))
     }
 
     fn new(rho: f64, eta: f64) -> Self {

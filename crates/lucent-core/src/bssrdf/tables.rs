@@ -3,7 +3,8 @@
 //! `Q(r)` for the form factor (Mertens §4), per channel, calibrated to the exact half-space
 //! albedo ([`super::halfspace`]).
 
-use std::sync::Arc;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Samples per channel of a [`RadialTable`] (the grid is `r_k = r_max (k/N)²`, `k = 0..=N`,
 /// dense near 0 where profiles peak).
@@ -218,4 +219,25 @@ pub fn channel_tables(
 pub fn multiple_scattering_scale(rho: f64, eta: f64, ms_total: f64, ss_total: f64) -> f64 {
     let exact = super::halfspace::HalfSpace::new(rho, eta).albedo(1.0);
     if ms_total > 1e-12 { ((exact - ss_total) / ms_total).max(0.0) } else { 1.0 }
+}
+
+/// Tables made once per process for each (albedo, index) pair: the slab's transport and the
+/// finite body's gain, which every face of a material shares.
+pub type TableCache<T> = OnceLock<Mutex<HashMap<(u64, u64), Arc<T>>>>;
+
+/// The table in `cache` for albedo `rho` and index `eta`, made by `make` on the first ask.
+pub fn cached_table<T>(
+    cache: &'static TableCache<T>,
+    rho: f64,
+    eta: f64,
+    make: impl FnOnce() -> T,
+) -> Arc<T> {
+    let key = (rho.to_bits(), eta.to_bits());
+    let cache = cache.get_or_init(Default::default);
+    if let Some(hit) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return hit.clone();
+    }
+    let made = Arc::new(make());
+    cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, made.clone());
+    made
 }

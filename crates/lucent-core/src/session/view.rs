@@ -9,6 +9,7 @@ use super::Frame;
 use super::body::Body;
 use super::irradiance::Irradiance;
 use crate::Rgb;
+use crate::irradiance::ShadowCaster;
 use crate::mesh::Mesh;
 use crate::shading::diffuse_radiance;
 use crate::shading::exit_chord::ExitChord;
@@ -95,15 +96,7 @@ impl View {
             return self.seen_split(f, irradiance, exit_chord, eye, single);
         }
         let normals = f.mesh.vertex_normals();
-        let scene = ViewRayScene {
-            mesh: &f.mesh,
-            normals: &normals,
-            bvh: caster.bvh(),
-            offset: caster.offset(),
-            profile: &f.profile,
-            lights: irradiance.lights(),
-            environment: irradiance.environment(),
-        };
+        let scene = view_ray_scene(f, irradiance, caster, &normals);
         let diffuse = match exit_chord {
             Some((chord, means)) => {
                 let rays = view_rays(&scene, eye);
@@ -139,15 +132,7 @@ impl View {
             Some(b) => b,
             None => {
                 let normals = f.mesh.vertex_normals();
-                let scene = ViewRayScene {
-                    mesh: &f.mesh,
-                    normals: &normals,
-                    bvh: caster.bvh(),
-                    offset: caster.offset(),
-                    profile: &f.profile,
-                    lights: irradiance.lights(),
-                    environment: irradiance.environment(),
-                };
+                let scene = view_ray_scene(f, irradiance, caster, &normals);
                 ViewBasis::new(&scene, single, self.stale.take())
             }
         };
@@ -158,5 +143,24 @@ impl View {
             None => self.diffuse.clone(),
         };
         (diffuse, radiance)
+    }
+}
+
+/// What the view rays see of frame `f`: its posed mesh with `normals`, the shadow BVH of
+/// `caster`, its material and the lights and environment of `irradiance`.
+fn view_ray_scene<'a>(
+    f: &'a Frame,
+    irradiance: &'a Irradiance,
+    caster: &'a ShadowCaster,
+    normals: &'a [Vec3],
+) -> ViewRayScene<'a> {
+    ViewRayScene {
+        mesh: &f.mesh,
+        normals,
+        bvh: caster.bvh(),
+        offset: caster.offset(),
+        profile: &f.profile,
+        lights: irradiance.lights(),
+        environment: irradiance.environment(),
     }
 }

@@ -46,13 +46,13 @@
 //! then returns the sphere's `g R_d` rather than `g (R_d + X)`.
 
 use crate::Rgb;
+use crate::bssrdf::tables::{TableCache, cached_table};
 use crate::bssrdf::walk;
 use crate::bssrdf::{Profile, boundary_a};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use rayon::prelude::*;
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, OnceLock};
 
 mod rays;
 pub use rays::{MAX_TURN, ThicknessRays};
@@ -251,16 +251,8 @@ struct OpticalGain {
 impl OpticalGain {
     /// The table for `rho` and `eta`, made once per process for each pair.
     fn cached(rho: f64, eta: f64) -> Arc<Self> {
-        type Cache = Mutex<HashMap<(u64, u64), Arc<OpticalGain>>>;
-        static CACHE: OnceLock<Cache> = OnceLock::new();
-        let key = (rho.to_bits(), eta.to_bits());
-        let cache = CACHE.get_or_init(Default::default);
-        if let Some(hit) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-            return hit.clone();
-        }
-        let made = Arc::new(Self::new(rho, eta));
-        cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, made.clone());
-        made
+        static CACHE: TableCache<OpticalGain> = OnceLock::new();
+        cached_table(&CACHE, rho, eta, || Self::new(rho, eta))
     }
 
     fn new(rho: f64, eta: f64) -> Self {
