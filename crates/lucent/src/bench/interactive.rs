@@ -25,14 +25,14 @@
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
 //! for `bench solver --real`.
 
-use super::solver_real::{bump, lights, meshes};
+use super::solver_real::{bump, each_case, lights};
 use anyhow::Context;
 use glam::{Quat, Vec3};
 use lucent_core::Rgb;
 use lucent_core::bssrdf::Material;
 use lucent_core::irradiance::{Light, SceneLight};
+use lucent_core::mesh::Mesh;
 use lucent_core::mesh::deform::Deformation;
-use lucent_core::mesh::{Mesh, embedded, load_mesh};
 use lucent_core::session::{
     FrameSession, FrameSettings, Method, SolveMode, Solved, Timings, Transport, ViewTerms,
 };
@@ -73,9 +73,6 @@ struct State {
 }
 
 pub fn run(json: bool) -> anyhow::Result<()> {
-    let env = |k: &str, d: usize| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
-    let (max_t, min_t) = (env("LUCENT_BENCH_MAX_TRIANGLES", 60_000), env("LUCENT_BENCH_MIN_TRIANGLES", 0));
-    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
     if !json {
         println!(
             "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8}",
@@ -96,25 +93,12 @@ pub fn run(json: bool) -> anyhow::Result<()> {
             "view p95"
         );
     }
-    for (name, path) in meshes(json) {
-        let mesh = if path.as_os_str().is_empty() {
-            embedded::bunny()
-        } else {
-            load_mesh(&path).with_context(|| format!("loading {}", path.display()))?
-        };
-        if mesh.triangles.len() > max_t || mesh.triangles.len() < min_t {
-            continue;
+    each_case(json, 60_000, |name, mesh, material, scale_m| {
+        for row in measure(name, mesh, material, scale_m)? {
+            print_row(&row, json)?;
         }
-        for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
-            if only.as_deref().is_some_and(|m| m != material) {
-                continue;
-            }
-            for row in measure(&name, &mesh, material, scale_m)? {
-                print_row(&row, json)?;
-            }
-        }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {

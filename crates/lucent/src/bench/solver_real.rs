@@ -99,13 +99,7 @@ pub(super) fn meshes(json: bool) -> Vec<(String, PathBuf)> {
 }
 
 pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
-    let max_t: usize =
-        std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
-    let samples: usize =
-        std::env::var("LUCENT_BENCH_EXACT_SAMPLES").ok().and_then(|v| v.parse().ok()).unwrap_or(1000);
-    let min_t: usize =
-        std::env::var("LUCENT_BENCH_MIN_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
-    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
+    let samples = env_usize("LUCENT_BENCH_EXACT_SAMPLES", 1000);
     if !json {
         println!(
             "{:<12} {:>7} {:<9} {:>10} {:>6} {:>11} {:>10} {:>9} {:>12} {:>9} {:>9} {:>9}",
@@ -124,6 +118,49 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
         );
     }
     let watch = Watch::new();
+    each_case(json, usize::MAX, |name, mesh, material, scale_m| {
+        let row = measure(name, mesh, material, scale_m, samples, &watch, oracle)?;
+        if json {
+            println!("{}", serde_json::to_string(&row)?);
+        } else {
+            println!(
+                "{:<12} {:>7} {:<9} {:>10} {:>6.1} {:>9.1}ms {:>8.1}ms {:>7.1}ms {:>10.1}ms {:>6.0}MiB{} {:>8.3}% {:>8.3}%",
+                row.mesh,
+                row.triangles,
+                row.material,
+                row.links,
+                row.links_per_triangle,
+                row.on_the_fly_ms,
+                row.link_ms,
+                row.render_ms,
+                row.incremental_ms,
+                row.peak_rss_mib,
+                if row.rss_reset { " " } else { "*" },
+                100.0 * row.median_rel_err,
+                100.0 * row.max_rel_err
+            );
+        }
+        Ok(())
+    })
+}
+
+/// A `usize` from the environment variable `key`, else `default`.
+pub(super) fn env_usize(key: &str, default: usize) -> usize {
+    std::env::var(key).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// Runs `each` on every case of the real-mesh benches as (mesh name, mesh, material, scale in
+/// metres): the meshes of [`meshes`] with `LUCENT_BENCH_MIN_TRIANGLES` (default 0) to
+/// `LUCENT_BENCH_MAX_TRIANGLES` (default `max_default`) triangles, each in marble at 10 cm and
+/// skim milk at 5 cm, or only the material `LUCENT_BENCH_MATERIAL` names.
+pub(super) fn each_case(
+    json: bool,
+    max_default: usize,
+    mut each: impl FnMut(&str, &Mesh, &'static str, f64) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let max_t = env_usize("LUCENT_BENCH_MAX_TRIANGLES", max_default);
+    let min_t = env_usize("LUCENT_BENCH_MIN_TRIANGLES", 0);
+    let only = std::env::var("LUCENT_BENCH_MATERIAL").ok();
     for (name, path) in meshes(json) {
         let mesh = if path.as_os_str().is_empty() {
             embedded::bunny()
@@ -134,29 +171,8 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
             continue;
         }
         for (material, scale_m) in [("marble", 0.1), ("skimmilk", 0.05)] {
-            if only.as_deref().is_some_and(|m| m != material) {
-                continue;
-            }
-            let row = measure(&name, &mesh, material, scale_m, samples, &watch, oracle)?;
-            if json {
-                println!("{}", serde_json::to_string(&row)?);
-            } else {
-                println!(
-                    "{:<12} {:>7} {:<9} {:>10} {:>6.1} {:>9.1}ms {:>8.1}ms {:>7.1}ms {:>10.1}ms {:>6.0}MiB{} {:>8.3}% {:>8.3}%",
-                    row.mesh,
-                    row.triangles,
-                    row.material,
-                    row.links,
-                    row.links_per_triangle,
-                    row.on_the_fly_ms,
-                    row.link_ms,
-                    row.render_ms,
-                    row.incremental_ms,
-                    row.peak_rss_mib,
-                    if row.rss_reset { " " } else { "*" },
-                    100.0 * row.median_rel_err,
-                    100.0 * row.max_rel_err
-                );
+            if only.as_deref().is_none_or(|m| m == material) {
+                each(&name, &mesh, material, scale_m)?;
             }
         }
     }
@@ -166,8 +182,7 @@ pub fn run(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
 /// With `LUCENT_BENCH_CENSUS` set: where the links come from (the oracle's decisions by cause,
 /// links by kind, level, separation and emitter size), per mesh, marble at 10 cm.
 pub fn census(json: bool, oracle: Option<Oracle>) -> anyhow::Result<()> {
-    let max_t: usize =
-        std::env::var("LUCENT_BENCH_MAX_TRIANGLES").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX);
+    let max_t = env_usize("LUCENT_BENCH_MAX_TRIANGLES", usize::MAX);
     for (name, path) in meshes(json) {
         let mesh = if path.as_os_str().is_empty() { embedded::bunny() } else { load_mesh(&path)? };
         if mesh.triangles.len() > max_t {
