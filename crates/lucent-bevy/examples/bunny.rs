@@ -7,7 +7,7 @@
 //! and distance), `D` toggles a slow bulge of the mesh (the session's deformation path), `Space`
 //! pauses the light. Every finished solve is logged with its time.
 //!
-//! `LUCENT_BEVY_SCREENSHOT=out.png` saves a screenshot after the third solve and exits (the
+//! `LUCENT_BEVY_SCREENSHOT=out.png` saves a screenshot after the third solve and 15 s and exits (the
 //! README's image: `xvfb-run -a -s "-screen 0 1280x800x24"` with Mesa's lavapipe).
 
 use bevy::prelude::*;
@@ -86,14 +86,14 @@ fn setup(
     commands.spawn((
         Mesh3d(meshes.add(Plane3d::default().mesh().size(0.6, 0.6))),
         MeshMaterial3d(standard.add(StandardMaterial {
-            base_color: Color::srgb(0.35, 0.33, 0.3),
+            base_color: Color::srgb(0.5, 0.48, 0.45),
             perceptual_roughness: 0.8,
             ..default()
         })),
     ));
     commands.spawn((
         PointLight {
-            intensity: 2000.0,
+            intensity: 1500.0,
             color: Color::WHITE,
             shadow_maps_enabled: true,
             range: 5.0,
@@ -104,6 +104,8 @@ fn setup(
     ));
     commands.spawn((
         Camera3d::default(),
+        // Bevy's default curve needs the `tonemapping_luts` feature, which this build leaves out.
+        bevy::core_pipeline::tonemapping::Tonemapping::AcesFitted,
         Transform::from_xyz(-0.02, 0.11, 0.26).looking_at(Vec3::new(0.0, 0.045, 0.0), Vec3::Y),
     ));
 }
@@ -167,6 +169,7 @@ fn report(
     mut demo: ResMut<Demo>,
     bodies: Query<&SolveStatus>,
     mut exit: MessageWriter<AppExit>,
+    time: Res<Time>,
 ) {
     for s in &bodies {
         if s.solves > demo.logged {
@@ -176,13 +179,15 @@ fn report(
     }
     let Ok(path) = std::env::var("LUCENT_BEVY_SCREENSHOT") else { return };
     match demo.since_screenshot {
-        None if demo.logged >= 3 => {
+        // Bevy compiles its pipelines in the background: on a software driver the first frames
+        // show nothing for some seconds.
+        None if demo.logged >= 3 && time.elapsed_secs() > 15.0 => {
             demo.paused = true;
             demo.since_screenshot = Some(0);
             commands.spawn(Screenshot::primary_window()).observe(save_to_disk(path));
         }
-        // Exit some frames later, once the screenshot is written.
-        Some(n) if n > 30 => {
+        // Exit once the screenshot is written (its file appears some frames later).
+        Some(n) if std::path::Path::new(&path).exists() || n > 5000 => {
             exit.write(AppExit::Success);
         }
         Some(n) => demo.since_screenshot = Some(n + 1),

@@ -24,8 +24,7 @@
 //! its own body from every light by ray casts (that flag governs only Bevy's shadow maps on
 //! other objects).
 
-use crate::material::LightUniform;
-use bevy::math::{Affine3A, Vec3 as BVec3, Vec4};
+use bevy::math::{Affine3A, Vec3 as BVec3};
 use bevy::prelude::*;
 use lucent_core::irradiance::{Light, SceneLight};
 
@@ -111,29 +110,6 @@ impl MappedLight {
         };
         SceneLight { light, shadows: true }
     }
-
-    /// The light as the highlight of [`crate::LucentMaterial`]'s shader reads it (world units).
-    pub fn world_uniform(&self) -> LightUniform {
-        // A cone wider than π is no cone (lucent-gpu's encoding of point lights).
-        const NO_CONE: f32 = 4.0;
-        match *self {
-            MappedLight::Point { position, cd } => LightUniform {
-                position: BVec3::from(position).extend(1.0),
-                intensity: BVec3::from(cd).extend(0.0),
-                spot: Vec4::new(0.0, 0.0, -1.0, NO_CONE),
-            },
-            MappedLight::Spot { position, axis, cd, cone, soft_edge } => LightUniform {
-                position: BVec3::from(position).extend(1.0),
-                intensity: BVec3::from(cd).extend(soft_edge),
-                spot: BVec3::from(axis).extend(cone),
-            },
-            MappedLight::Directional { direction, lux } => LightUniform {
-                position: BVec3::from(direction).extend(0.0),
-                intensity: BVec3::from(lux).extend(0.0),
-                spot: Vec4::new(0.0, 0.0, -1.0, NO_CONE),
-            },
-        }
-    }
 }
 
 /// Bevy's vector as lucent's (the two crates use different glam versions).
@@ -204,8 +180,5 @@ mod tests {
         assert_eq!(cone, 0.6);
         assert!((soft_edge - 0.5).abs() < 1e-6);
         assert_eq!(axis, [0.0, 0.0, -1.0]);
-        let u = m.world_uniform();
-        assert_eq!(u.spot.w, 0.6);
-        assert_eq!(u.position.w, 1.0);
     }
 }

@@ -3,7 +3,8 @@
 //   L = F_t(eta, w_o) (T(mu_o) B / (c pi) + L_single) + Fresnel-weighted Blinn-Phong highlight,
 // with B / (c pi) and L_single per vertex from lucent's frame session (a storage buffer indexed
 // by the vertex), Gouraud-interpolated (single scattering geometrically, as lucent's mesh pass),
-// then multiplied by Bevy's camera exposure like every Bevy light. Lights are in world units,
+// then multiplied by Bevy's camera exposure like every Bevy light (and tone mapped here where
+// the camera tone maps in the material shaders, as Bevy's own materials do). Lights are in world units,
 // already mapped from Bevy's lumens and lux (see `lights.rs`). spot_falloff (lucent-gpu's
 // spot.wgsl) is appended to this file when the plugin builds the shader.
 
@@ -13,6 +14,9 @@
     mesh_view_bindings::view,
     view_transformations::position_world_to_clip,
 }
+#ifdef TONEMAP_IN_SHADER
+#import bevy_core_pipeline::tonemapping::tone_mapping
+#endif
 
 const PI: f32 = 3.14159265358979;
 const MAX_LIGHTS: u32 = 8u;
@@ -153,5 +157,10 @@ fn fragment(in: VertexOutput, @builtin(front_facing) front: bool) -> @location(0
     if (shading.params.y > 0.0 && cos_o > 0.0) {
         l += highlight(in.world, n, v, eta);
     }
-    return vec4<f32>(l * view.exposure, 1.0);
+    var out = vec4<f32>(l * view.exposure, 1.0);
+#ifdef TONEMAP_IN_SHADER
+    // A camera without HDR tone maps in each material's shader, as Bevy's own do.
+    out = tone_mapping(out, view.color_grading);
+#endif
+    return out;
 }

@@ -5,7 +5,7 @@
 
 use crate::lights::MappedLight;
 use bevy::asset::{Handle, uuid_handle};
-use bevy::math::{UVec4, Vec4};
+use bevy::math::{UVec4, Vec3, Vec4};
 use bevy::pbr::Material;
 use bevy::prelude::*;
 use bevy::render::render_resource::{AsBindGroup, ShaderType};
@@ -36,6 +36,29 @@ pub struct LightUniform {
     pub intensity: Vec4,
     /// xyz: a spot's unit axis; w: its cone half-angle in radians (> π: no cone).
     pub spot: Vec4,
+}
+
+/// `light` as the highlight of [`LucentMaterial`]'s shader reads it (world units).
+pub fn light_uniform(light: &MappedLight) -> LightUniform {
+    // A cone wider than π is no cone (lucent-gpu's encoding of point lights).
+    const NO_CONE: f32 = 4.0;
+    match *light {
+        MappedLight::Point { position, cd } => LightUniform {
+            position: Vec3::from(position).extend(1.0),
+            intensity: Vec3::from(cd).extend(0.0),
+            spot: Vec4::new(0.0, 0.0, -1.0, NO_CONE),
+        },
+        MappedLight::Spot { position, axis, cd, cone, soft_edge } => LightUniform {
+            position: Vec3::from(position).extend(1.0),
+            intensity: Vec3::from(cd).extend(soft_edge),
+            spot: Vec3::from(axis).extend(cone),
+        },
+        MappedLight::Directional { direction, lux } => LightUniform {
+            position: Vec3::from(direction).extend(0.0),
+            intensity: Vec3::from(lux).extend(0.0),
+            spot: Vec4::new(0.0, 0.0, -1.0, NO_CONE),
+        },
+    }
 }
 
 /// What the fragment shader needs besides the per-vertex radiance.
@@ -73,7 +96,7 @@ impl ShadingUniform {
             ..Default::default()
         };
         for (slot, l) in u.lights.iter_mut().zip(lights) {
-            *slot = l.world_uniform();
+            *slot = light_uniform(l);
         }
         for (slot, t) in u.exit_lobe.iter_mut().zip(solved.exit_lobe.samples()) {
             *slot = Vec4::new(t[0], t[1], t[2], 0.0);

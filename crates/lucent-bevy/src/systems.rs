@@ -112,6 +112,13 @@ pub(crate) fn collect(
             let highlight = (translucent.specular, translucent.shininess);
             material.shading = ShadingUniform::new(eta, highlight, &inputs.world_lights, &solved);
         }
+        let mean = solved.vertex_radiance.iter().map(|r| r.max_element()).sum::<f32>()
+            / solved.vertex_radiance.len().max(1) as f32;
+        debug!(
+            "lucent: solve of {} faces in {ms:.0} ms, mean B/(c pi) {mean:.4e}, lights {:?}",
+            solved.face_b.len(),
+            inputs.lights
+        );
         status.solves += 1;
         status.last_ms = ms;
         status.solving = false;
