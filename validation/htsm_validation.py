@@ -35,7 +35,7 @@ from validation_stats import print_rows, print_summary, summary
 HERE = lv.HERE
 REFS = os.path.join(HERE, "references")
 SCENES = os.path.join(HERE, "scenes")
-MODELS = ["beer-lambert", "thesis"]
+MODELS = ["diffusion", "beer-lambert", "thesis"]
 
 
 def load_cfg():

@@ -165,6 +165,7 @@ fn model_name(m: TransportModel) -> &'static str {
     match m {
         TransportModel::Thesis => "thesis",
         TransportModel::BeerLambert => "beer-lambert",
+        TransportModel::Diffusion => "diffusion",
     }
 }
 
@@ -213,13 +214,23 @@ pub fn htsm_params(
         samples: h.samples,
         steps: h.steps,
         model: match h.htsm_model {
-            HtsmModel::Thesis => TransportModel::Thesis,
-            HtsmModel::BeerLambert => TransportModel::BeerLambert,
+            Some(HtsmModel::Thesis) => TransportModel::Thesis,
+            Some(HtsmModel::BeerLambert) => TransportModel::BeerLambert,
+            Some(HtsmModel::Diffusion) => TransportModel::Diffusion,
+            None if former_inputs(h) => TransportModel::BeerLambert,
+            None => TransportModel::Diffusion,
         },
         tone: tone_map(args, args.exposure.unwrap_or(1.0)),
         ..HtsmParams::default()
     };
     let params = if former_inputs(h) {
+        if h.htsm_model == Some(HtsmModel::Diffusion) {
+            bail!(
+                "--htsm-model diffusion needs the scene's material as HTSM's medium; it cannot be \
+                 combined with --transport-colour, --transport-distance or --density-scale (the \
+                 former inputs): use --htsm-model beer-lambert or thesis with them"
+            );
+        }
         if h.density_absorption.is_some() {
             bail!(
                 "--density-absorption sets the medium's absorption; it cannot be combined with \
