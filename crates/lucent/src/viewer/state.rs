@@ -216,6 +216,7 @@ impl ViewState {
     /// The initial state for a material and model scale under `lights` (normalised mesh
     /// units), solved in render mode (lights change more often than shapes here).
     pub fn new(material: Material, scale_m: f64, lights: Vec<Light>) -> Self {
+        let htsm = super::htsm::HtsmSettings::for_material(&material, scale_m);
         let transport = Transport::new(material, scale_m);
         let settings = FrameSettings {
             method: Method::Hierarchical,
@@ -244,7 +245,7 @@ impl ViewState {
             picked_face: None,
             tool: Tool::Orbit,
             method: ViewMethod::Mertens,
-            htsm: Default::default(),
+            htsm,
             by_colour: ByColour::default(),
             save: SaveTarget::default(),
         }
