@@ -261,7 +261,12 @@ impl HtsmRenderer {
     }
 
     /// The uniforms shared by every pass of the frame.
-    fn frame_uniforms(&self, view: &HtsmView, params: &HtsmParams, diffusion: DiffusionUniforms) -> FrameUniforms {
+    fn frame_uniforms(
+        &self,
+        view: &HtsmView,
+        params: &HtsmParams,
+        diffusion: DiffusionUniforms,
+    ) -> FrameUniforms {
         let extent = self.geometry.extent();
         let (sigma_a, sigma_s, sigma_d) = extinction_terms(params);
         let mut u = FrameUniforms {

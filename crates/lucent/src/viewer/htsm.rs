@@ -10,12 +10,12 @@
 //! settings, viewport size), so an idle window costs nothing.
 
 use glam::Vec3;
+use lucent_core::bssrdf::Material;
 use lucent_core::camera::CameraView;
 use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::VolumeSpec;
 use lucent_gpu::GpuContext;
-use lucent_core::bssrdf::Material;
 use lucent_gpu::htsm::medium::DEFAULT_DENSITY_SIGMA_A;
 use lucent_gpu::htsm::{HtsmMedium, HtsmParams, HtsmRenderer, HtsmView, TransportModel, volume_dims_for};
 use lucent_gpu::tonemap::ToneMap;
