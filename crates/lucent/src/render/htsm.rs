@@ -330,6 +330,18 @@ mod tests {
         let a = args(&["--transport-distance", "0.3", "--density-absorption", "1"]);
         let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap_err());
         assert!(e.contains("--density-absorption") && e.contains("--transport-distance"), "{e}");
+        // The default model: diffusion with the medium, beer-lambert with the former inputs,
+        // which have no medium for diffusion (asking for it is an error naming both).
+        let a = args(&[]);
+        assert_eq!(htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap().model, TransportModel::Diffusion);
+        let a = args(&["--transport-distance", "0.3"]);
+        assert_eq!(
+            htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap().model,
+            TransportModel::BeerLambert
+        );
+        let a = args(&["--transport-distance", "0.3", "--htsm-model", "diffusion"]);
+        let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap_err());
+        assert!(e.contains("--htsm-model diffusion") && e.contains("--transport-distance"), "{e}");
         for bad in ["-1", "1,2", "x", "1e30", "nan"] {
             let a = args(&["--density-absorption", bad]);
             let e = format!(
