@@ -6,6 +6,9 @@
 //! light and camera. Target (issue 53): the median relative difference over the object within
 //! 5%.
 //!
+//! Then the mesh asset's positions are edited, and the plugin must solve the new pose in the
+//! same session (its deformation path), without a new one.
+//!
 //! `LUCENT_BEVY_DEBUG=1` prints what each frame read back; `LUCENT_BEVY_LIMIT_S` changes the
 //! 300 s limit on reaching a stable frame.
 //!
@@ -193,6 +196,34 @@ fn interior(image: &Pixels, i: usize) -> bool {
     [i, i - 1, i + 1, i - w, i + w].iter().all(|&j| image[j][3] > 0.999)
 }
 
+/// Stretches the body's mesh asset by 10% along y (a system editing the mesh would do the same)
+/// and runs `app` until the plugin has solved it; returns the body's solve count then.
+fn stretch(app: &mut App, limit: Duration) -> u64 {
+    {
+        let world = app.world_mut();
+        let handle = world.query::<&Mesh3d>().single(world).expect("one body").0.clone();
+        let mut meshes = world.resource_mut::<Assets<Mesh>>();
+        let mut mesh = meshes.get_mut(&handle).expect("the body's mesh");
+        let Some(bevy::mesh::VertexAttributeValues::Float32x3(p)) =
+            mesh.attribute_mut(Mesh::ATTRIBUTE_POSITION)
+        else {
+            panic!("positions")
+        };
+        p.iter_mut().for_each(|v| v[1] *= 1.1);
+    }
+    let started = Instant::now();
+    loop {
+        assert!(started.elapsed() < limit, "no solve of the stretched mesh within {limit:?}");
+        app.update();
+        let world = app.world_mut();
+        let status = world.query::<&SolveStatus>().single(world).expect("one body").clone();
+        if status.solves != 1 && !status.solving {
+            return status.solves;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 fn luminance(p: &[f32; 4]) -> f32 {
     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
 }
@@ -240,6 +271,8 @@ fn the_bevy_image_matches_lucent_render_within_5_percent_median_over_the_object(
         p95 * 100.0
     );
     std::fs::remove_dir_all(&dir).ok();
+    // Moved vertices are a deformation of the same session (a new session would count from 0).
+    assert_eq!(stretch(&mut app, Duration::from_secs(120)), 2, "the stretch was not solved as a deformation");
     assert!(both > 2000, "the object covers only {both} pixels in both images");
     assert!(only_one * 20 < both, "the silhouettes differ: {only_one} pixels covered in one image only");
     assert!(relative < 0.05, "median relative difference {:.2}% over the object", relative * 100.0);
