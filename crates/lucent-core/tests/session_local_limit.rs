@@ -39,8 +39,9 @@ fn inside_top(mesh: &Mesh) -> Vec<usize> {
 
 /// sigma_s' = sigma_a = 100 mm^-1 (the dense material) on a 5 cm cube of 12.5 mm
 /// faces: every face is local, `refine = auto` would not split it, and at the vertices inside
-/// the lit side the session's radiance is within 1% of the split mesh's (`refine = 2`, whose
-/// faces are local too), against 5% or more for the faces' `B` averaged into the vertices.
+/// the lit side the session's radiance is within 3% of the split mesh's faces' `B` averaged
+/// into its vertices (`refine = 2`, as `auto` made it before), against 5% or more for the
+/// coarse faces' `B` averaged into the vertices.
 #[test]
 fn dense_vertices_follow_the_split_solve() {
     let m = Material::custom("dense", [100.0; 3], [100.0; 3], 1.3).unwrap();
@@ -49,9 +50,15 @@ fn dense_vertices_follow_the_split_solve() {
     let reach = Locality::of(&transport.profile_at(cube.extent())).reach;
     assert!(mean_face_is_local(&cube, reach as f64));
     let (coarse, coarse_b) = vertex_radiance(cube.clone(), &transport);
-    let (split, _) = vertex_radiance(split_midpoints(&cube, 2), &transport);
+    // The reference: the split mesh's faces' B averaged into its vertices (the split faces
+    // are local too, so the session's own per-vertex radiance there would be the limit again),
+    // at the original vertices, which the split keeps first.
+    let profile = transport.profile_at(cube.extent());
+    let fine = split_midpoints(&cube, 2);
+    let (_, fine_b) = vertex_radiance(fine.clone(), &transport);
+    let split = diffuse_radiance(&fine.face_to_vertex(&fine_b), &profile);
     // Without the local limit at the vertices: the faces' B averaged into them.
-    let plain = diffuse_radiance(&cube.face_to_vertex(&coarse_b), &transport.profile_at(cube.extent()));
+    let plain = diffuse_radiance(&cube.face_to_vertex(&coarse_b), &profile);
     let rel = |a: &[Rgb]| -> Vec<f32> {
         let mut r: Vec<f32> =
             inside_top(&cube).iter().map(|&v| ((a[v] - split[v]).abs() / split[v]).max_element()).collect();
@@ -66,7 +73,7 @@ fn dense_vertices_follow_the_split_solve() {
         worst(&with),
         worst(&without)
     );
-    assert!(worst(&with) < 0.01, "with the local limit at the vertices: {with:?}");
+    assert!(worst(&with) < 0.03, "with the local limit at the vertices: {with:?}");
     assert!(worst(&without) > 0.05, "the faces' B alone: {without:?}");
 }
 

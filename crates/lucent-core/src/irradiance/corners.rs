@@ -74,7 +74,7 @@ mod tests {
         let e = |p: Vec3| {
             let d = Vec3::new(0.0, 0.0, 1.0) - p;
             let cos = d.normalize().z;
-            cos / d.length_squared() * entry.at(cos)
+            cos / d.length_squared() * entry.at(cos).x
         };
         let centre = e(Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0));
         for (k, p) in [Vec3::ZERO, Vec3::X, Vec3::Y].into_iter().enumerate() {
