@@ -111,8 +111,10 @@ pub struct RenderArgs {
     /// Splits of every face into four before the solve (the surface stays where it is): `auto`
     /// splits until the mean edge is at most 6 reduced mean free paths of the most opaque
     /// channel, at most twice and not past 1M faces, so B and single scattering resolve a
-    /// shadow edge; a count 0..=3 forces it. Not for `--method htsm`. Default: the scene's
-    /// `refine`, else auto.
+    /// shadow edge, except where transport is far below the mean face (dense materials: the
+    /// local limit B = R_d E is taken at the vertices instead) and for `--method exact` (it
+    /// says what the splits would cost); a count 0..=3 forces it. Not for `--method htsm`.
+    /// Default: the scene's `refine`, else auto.
     #[arg(long, value_parser = parse_refine)]
     pub refine: Option<Refine>,
     /// Corrections of the default path left out, for measuring each against the path tracer

@@ -8,6 +8,7 @@
 //! ([`occlusion`]; Mertens §5.3 leaves it unshadowed: "shadows cannot be taken into account,
 //! unless we assume rigid objects").
 
+pub mod corners;
 pub mod envmap;
 pub mod interreflection;
 pub mod lights;
@@ -186,20 +187,33 @@ pub fn face_entering(
                     None => open,
                 }
             });
-            for sl in lights {
-                let Some(inc) = sl.light.incident(p) else {
-                    continue;
-                };
-                let cos = n.dot(inc.to_light);
-                if cos <= 0.0 {
-                    continue;
-                }
-                if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
-                    continue;
-                }
-                e.add(inc.irradiance * cos, entry, cos);
-            }
+            add_lights(&mut e, p, n, lights, entry, caster);
             e
         })
         .collect()
+}
+
+/// Adds to `e` the light of `lights` at point `p` of a surface with unit normal `n`, through
+/// the `entry` term, each light shadowed where it says so and a `caster` is given.
+pub(crate) fn add_lights(
+    e: &mut Entering,
+    p: Vec3,
+    n: Vec3,
+    lights: &[SceneLight],
+    entry: &Entry,
+    caster: Option<&ShadowCaster>,
+) {
+    for sl in lights {
+        let Some(inc) = sl.light.incident(p) else {
+            continue;
+        };
+        let cos = n.dot(inc.to_light);
+        if cos <= 0.0 {
+            continue;
+        }
+        if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
+            continue;
+        }
+        e.add(inc.irradiance * cos, entry, cos);
+    }
 }

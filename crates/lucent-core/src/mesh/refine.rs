@@ -122,6 +122,16 @@ pub fn mean_edge(mesh: &Mesh) -> f64 {
     sum / (3 * mesh.triangles.len()).max(1) as f64
 }
 
+/// Whether transport at `mesh`'s mean face is local: the profile's `reach` (mesh units, the
+/// radius holding all but `solver::local::TAIL` of `∫ R dA`) is shorter than the distance from
+/// an equilateral triangle of the mean edge's centroid to its edges, `edge / (2 √3)`, the test
+/// `solver::local` puts to every face. There `B` is the local limit `R_d E` (no light crosses a
+/// face), so splitting only samples the irradiance more finely; the session evaluates that limit
+/// at the vertices instead (`session::local_limit`), and [`Refine::Auto`] does not split.
+pub fn mean_face_is_local(mesh: &Mesh, reach: f64) -> bool {
+    mean_edge(mesh) / (2.0 * 3f64.sqrt()) > reach
+}
+
 /// Splits that bring `mesh`'s mean edge to at most [`EDGE_PER_MEAN_FREE_PATH`] times
 /// `mean_free_path_m`, the shortest reduced mean free path `1 / (sigma_s' + sigma_a)` over the
 /// channels, metres, when one mesh unit is `metres_per_unit`: at most [`MAX_AUTO_LEVELS`], and

@@ -114,6 +114,11 @@ impl Irradiance {
         e
     }
 
+    /// The texture's entry factor of face `face` (1 without a texture).
+    pub(super) fn entry_factor(&self, face: usize) -> Rgb {
+        self.entry.as_ref().map_or(Rgb::ONE, |t| t[face])
+    }
+
     /// The carried part of `e` past the texture's entry factors (unchanged without a texture):
     /// what the subsurface solve spreads.
     pub(super) fn carried(&self, e: &[Entering]) -> Vec<Rgb> {

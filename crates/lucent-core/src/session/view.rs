@@ -59,11 +59,22 @@ impl View {
         changed
     }
 
-    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b`, and the
-    /// transmitted light `sent` per face that `face_b` holds (empty: none); the split's
+    /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b` (plus
+    /// `vertex_change`, the local limit's change at the vertices, `super::local_limit`), and
+    /// the transmitted light `sent` per face that `face_b` holds (empty: none); the split's
     /// eye-independent part is made again on the next eye.
-    pub(super) fn keep_solve(&mut self, f: &Frame, face_b: &[Rgb], sent: Vec<Rgb>) {
-        self.diffuse = diffuse_radiance(&f.mesh.face_to_vertex(face_b), &f.profile);
+    pub(super) fn keep_solve(
+        &mut self,
+        f: &Frame,
+        face_b: &[Rgb],
+        sent: Vec<Rgb>,
+        vertex_change: Option<&[Rgb]>,
+    ) {
+        let mut b = f.mesh.face_to_vertex(face_b);
+        if let Some(change) = vertex_change {
+            b.iter_mut().zip(change).for_each(|(b, c)| *b = (*b + *c).max(Rgb::ZERO));
+        }
+        self.diffuse = diffuse_radiance(&b, &f.profile);
         self.stale = self.basis.take().or(self.stale.take());
         self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.to_vec(), sent) };
     }

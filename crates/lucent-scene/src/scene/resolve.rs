@@ -126,6 +126,10 @@ pub struct Scene {
     /// Times every face of the loaded mesh was split into four (`refine`); `mesh` and
     /// `texture` are the split ones.
     pub refine_levels: u32,
+    /// Splits `refine = auto` would make for the hierarchical method but did not because the
+    /// method is exact, whose cost grows with the square of the faces (0 otherwise): a front
+    /// end says what asking for them would cost.
+    pub refine_declined: u32,
 }
 
 impl Scene {
@@ -145,15 +149,7 @@ impl Scene {
             (None, Some(key)) => key.refine().map_err(|e| in_file(anyhow::anyhow!(e)))?,
             (None, None) => Refine::default(),
         };
-        // HTSM shades per pixel from the light's view: nothing to resolve between vertices.
-        let refine_levels = match method {
-            Method::Htsm => 0,
-            _ => refine.levels(
-                &mesh,
-                transport.scale_m / mesh.extent() as f64,
-                transport.shortest_mean_free_path_m(),
-            ),
-        };
+        let (refine_levels, refine_declined) = refine_levels(&mesh, &transport, method, refine);
         // Split only when asked: a copy of an 871K-face scan is not free.
         let (mesh, texture) = match refine_levels {
             0 => (mesh, texture),
@@ -209,6 +205,7 @@ impl Scene {
             surface: !o.no_surface && file.as_ref().is_none_or(|f| f.surface),
             hierarchy: None,
             refine_levels,
+            refine_declined,
         })
     }
 
@@ -270,6 +267,32 @@ impl Scene {
 
 /// The mesh from `--mesh`, else the file's, else the embedded bunny, with its texture if any:
 /// `(source, (mesh, texture), path)`.
+/// `(splits made, splits declined)` of `mesh` for `refine` under `method`. HTSM shades per
+/// pixel from the light's view: never split. `auto` splits to a few mean free paths
+/// (`refine::auto_levels`) except where transport at the mean face is local
+/// (`refine::mean_face_is_local`: the session takes the local limit at the vertices instead),
+/// and never for the exact method, whose cost is the faces squared: what it would have split
+/// is returned as declined, for the front end to say.
+fn refine_levels(mesh: &Mesh, transport: &Transport, method: Method, refine: Refine) -> (u32, u32) {
+    let auto = || {
+        let metres_per_unit = transport.scale_m / mesh.extent() as f64;
+        let levels = refine.levels(mesh, metres_per_unit, transport.shortest_mean_free_path_m());
+        // Only a mesh the rule splits (edges over 6 mean free paths) can have local faces:
+        // the profile (tens of milliseconds) is made for those alone.
+        if levels == 0 {
+            return 0;
+        }
+        let reach = lucent_core::solver::local::Locality::of(&transport.profile_at(mesh.extent())).reach;
+        if refine::mean_face_is_local(mesh, reach as f64) { 0 } else { levels }
+    };
+    match (method, refine) {
+        (Method::Htsm, _) => (0, 0),
+        (Method::Exact, Refine::Auto) => (0, auto()),
+        (_, Refine::Auto) => (auto(), 0),
+        (_, Refine::Levels(n)) => (n, 0),
+    }
+}
+
 fn load_mesh(o: &Overrides, file: Option<&SceneFile>) -> Result<(String, TexturedMesh, Option<PathBuf>)> {
     if let Some((name, mesh)) = &o.mesh_data {
         let (mesh, _) = lucent_core::mesh::validate::validate(mesh.clone(), name)?;

@@ -81,8 +81,9 @@ fn bounces_default_by_profile() {
 }
 
 /// `refine`: auto splits the embedded bunny in marble at 10 cm (3.9 mm edges, 12 mean free
-/// paths) once and leaves it in skim milk at 5 cm (3.7); a count forces it; HTSM is never
-/// split; a bad scene value is one error naming the file, the value and the range.
+/// paths) once and leaves it in skim milk at 5 cm (3.7) and in a dense material whose transport
+/// is local; a count forces it; HTSM is never split, the exact method only when asked; a bad
+/// scene value is one error naming the file, the value and the range.
 #[test]
 fn refine_splits_coarse_meshes_of_opaque_materials() {
     let bunny = lucent_core::mesh::embedded::bunny().triangles.len();
@@ -97,6 +98,26 @@ fn refine_splits_coarse_meshes_of_opaque_materials() {
     assert_eq!(faces(Overrides { refine: Some(Refine::Levels(0)), ..marble() }), (0, bunny));
     assert_eq!(faces(Overrides { refine: Some(Refine::Levels(2)), ..marble() }), (2, 16 * bunny));
     assert_eq!(faces(Overrides { method: Some(Method::Htsm), ..marble() }), (0, bunny));
+    // The exact method splits only when asked, and says what auto would have split.
+    let exact = |refine| Overrides { method: Some(Method::Exact), refine, ..marble() };
+    let declined = |o: Overrides| Scene::resolve(&o).unwrap().refine_declined;
+    assert_eq!((faces(exact(None)), declined(exact(None))), ((0, bunny), 1));
+    assert_eq!(
+        (faces(exact(Some(Refine::Levels(1)))), declined(exact(Some(Refine::Levels(1))))),
+        ((1, 4 * bunny), 0)
+    );
+    // sigma_s' = sigma_a = 100 mm^-1 at 5 cm: 400 mean free paths an edge, but transport
+    // reaches 0.05 mm, far below every face: auto leaves it (the session takes the local limit
+    // at the vertices); asked, it splits.
+    let dir = std::env::temp_dir().join(format!("lucent-refine-dense-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("dense.toml");
+    let dense = "material = { sigma_s_prime = [100, 100, 100], sigma_a = [100, 100, 100] }\nscale = 0.05\n";
+    std::fs::write(&path, dense).unwrap();
+    let file = |refine| Overrides { scene: Some(path.clone()), refine, ..Default::default() };
+    assert_eq!(faces(file(None)), (0, bunny));
+    assert_eq!(faces(file(Some(Refine::Levels(1)))), (1, 4 * bunny));
+    std::fs::remove_dir_all(&dir).ok();
 
     let dir = std::env::temp_dir().join(format!("lucent-refine-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

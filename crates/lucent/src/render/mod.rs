@@ -30,6 +30,9 @@ use std::time::Instant;
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
     let scene = shrink_wrap_scene(Scene::resolve(&args.overrides())?, args)?;
+    if let Some(note) = declined_refine_note(&scene) {
+        println!("{note}");
+    }
     if let Some(frames) = args.frames {
         let out = args.out.clone().unwrap_or_else(animation::default_out);
         return animation::run(args, &scene, frames, &out);
@@ -106,6 +109,22 @@ pub struct Timings {
     pub adapter: String,
     /// Links of the hierarchical solve, if it made any.
     pub links: Option<usize>,
+}
+
+/// What the exact method left unsplit (`Scene::refine_declined`): the faces and the cost of
+/// asking for the splits, which grows with the square of the faces.
+fn declined_refine_note(scene: &Scene) -> Option<String> {
+    let n = scene.refine_declined;
+    let faces = scene.mesh.triangles.len();
+    (n > 0).then(|| {
+        format!(
+            "lucent: --method exact solves the {faces} faces as loaded; --refine auto would split them {n} time{} \
+             to {} faces, {}x the cost (O(N^2)): ask with --refine {n}",
+            if n == 1 { "" } else { "s" },
+            faces << (2 * n),
+            1u64 << (4 * n)
+        )
+    })
 }
 
 /// Says so when transport reaches less far than faces are wide: those faces took the local

@@ -186,6 +186,24 @@ impl HierarchicalSolver {
         self.linear_receivers() && self.oracle.curved_receivers
     }
 
+    /// Per face of the mesh, `Some(k)` where it takes the local limit (`super::local`): its
+    /// `B` is `k E` of its own irradiance `E`, `k` its own `∫ R dA` (`R_d_total`) times the
+    /// energy bound and finite-body gain the solve applies (the factor of its one link);
+    /// `None` where light crosses it from elsewhere.
+    pub fn local_factors(&self) -> Vec<Option<Rgb>> {
+        let mut out = vec![None; self.mesh.triangles.len()];
+        let r_total = Rgb::from_array(self.locality.r_total);
+        for (i, n) in self.hierarchy.nodes.iter().enumerate() {
+            if n.is_leaf() && self.local[i] {
+                let f = self.hierarchy.leaf_faces[n.leaf_start as usize] as usize;
+                let bound =
+                    if self.profile.bounds_energy() { self.bound_factor(f, r_total) } else { Rgb::ONE };
+                out[f] = Some(r_total * bound);
+            }
+        }
+        out
+    }
+
     /// The stored links, if [`HierarchicalSolver::link`] has run.
     pub fn links(&self) -> Option<&LinkSet> {
         self.links.as_ref()
