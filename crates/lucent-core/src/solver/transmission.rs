@@ -41,6 +41,8 @@ use crate::Rgb;
 use crate::bssrdf::Profile;
 use crate::bssrdf::slab::SlabTable;
 use crate::mesh::Mesh;
+use crate::mesh::bvh::Bvh;
+use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -109,6 +111,9 @@ pub struct CrossBody {
     sigma_t: [f64; 3],
     /// The slab tables per channel.
     tables: [Arc<SlabTable>; 3],
+    /// Where the far side's irradiance is averaged around the point across
+    /// ([`super::cross_spread`]); `None`: at that point alone.
+    spread: Option<Spread>,
 }
 
 impl CrossBody {
@@ -152,7 +157,18 @@ impl CrossBody {
             thickness: rows.iter().map(|r| r.3).collect(),
             sigma_t: profile.sigma_t,
             tables,
+            spread: None,
         }
+    }
+
+    /// The same terms with the far side's irradiance averaged over the slab's lateral spread
+    /// ([`super::cross_spread`]), its rays traced against `bvh` (over `mesh`, the pose these
+    /// terms were made for) from `offset` inside the faces.
+    pub fn with_spread(mut self, profile: &Profile, mesh: &Mesh, bvh: &Bvh, offset: f32) -> Self {
+        if self.far.len() == mesh.triangles.len() {
+            self.spread = Some(Spread::trace(profile, mesh, bvh, offset, &self.far, &self.thickness));
+        }
+        self
     }
 
     /// Adds each face's term for the irradiance `carried` (per face, what enters and the
@@ -165,7 +181,10 @@ impl CrossBody {
         b.par_iter_mut().zip(sent.par_iter_mut()).enumerate().for_each(|(f, (b, sent))| {
             let k = self.far[f];
             if k != u32::MAX {
-                let e = carried[k as usize];
+                let e = match &self.spread {
+                    Some(spread) => spread.average(f, k as usize, carried),
+                    None => carried[k as usize],
+                };
                 *b = (*b + self.coef[f] * e).max(Rgb::ZERO);
                 *sent += (self.transmitted[f] * e).min(*b);
             }
