@@ -6,7 +6,7 @@
 
 use super::{Changes, Frame};
 use crate::Rgb;
-use crate::irradiance::ShadowCaster;
+use crate::irradiance::{Entering, ShadowCaster};
 use crate::shading::exit_chord::ExitChord;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use crate::solver::transmission::{CrossBody, Transmission};
@@ -52,14 +52,22 @@ impl Body {
     }
 
     /// Adds to `b` the slab transmission across the body of the carried irradiance `carried`
-    /// (`solver::transmission`), where the transport has it, and to `sent` (per face, made on
-    /// first use) the transmitted light `b` then holds.
-    pub(super) fn add_transmission(&self, b: &mut [Rgb], sent: &mut Vec<Rgb>, carried: &[Rgb]) {
+    /// (`solver::transmission`; `e`, per face, what it was made of, for its mean incidence
+    /// cosine), where the transport has it, and to `sent` (per face, made on first use) the
+    /// transmitted light `b` then holds.
+    pub(super) fn add_transmission(
+        &self,
+        b: &mut [Rgb],
+        sent: &mut Vec<Rgb>,
+        carried: &[Rgb],
+        e: &[Entering],
+    ) {
         if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == b.len()) {
             if sent.len() != b.len() {
                 *sent = vec![Rgb::ZERO; b.len()];
             }
-            cross.add(b, sent, carried);
+            let cos: Vec<Rgb> = e.iter().map(Entering::mean_cos).collect();
+            cross.add(b, sent, carried, Some(&cos));
         }
     }
 

@@ -64,7 +64,8 @@ fn on_the_fly_matches_the_solver_called_directly() {
     }
     let mut direct = solver.solve_on_the_fly(&e).face_b;
     if !cross.is_empty() {
-        cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e);
+        let cos: Vec<Rgb> = entering.iter().map(|e| e.mean_cos()).collect();
+        cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e, Some(&cos));
     }
     let r = Rgb::from_array(profile.total_diffuse_reflectance().map(|v| v as f32));
     assert!(entering.iter().any(|e| e.local.max_element() > 0.0), "oblique faces return some light locally");

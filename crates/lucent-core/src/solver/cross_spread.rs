@@ -144,16 +144,16 @@ impl Spread {
         out
     }
 
-    /// Face `f`'s far-side irradiance averaged with its weights, the centre being `centre`
-    /// (the face across along its inward normal), from the per-face irradiance `e`.
+    /// Face `f`'s far-side value `e` (per face) averaged with its weights, the centre being
+    /// `centre` (the face across along its inward normal).
     #[inline]
-    pub fn average(&self, f: usize, centre: usize, e: &[Rgb]) -> Rgb {
+    pub fn average(&self, f: usize, centre: usize, e: impl Fn(usize) -> Rgb) -> Rgb {
         let (faces, w) = (&self.faces[f], &self.weights[f]);
-        let mut sum = e[centre] * w[0];
+        let mut sum = e(centre) * w[0];
         for ring in 1..RINGS {
             for &k in &faces[RING_START[ring - 1]..RING_START[ring]] {
                 if k != u32::MAX {
-                    sum += e[k as usize] * w[ring];
+                    sum += e(k as usize) * w[ring];
                 }
             }
         }
@@ -205,8 +205,8 @@ mod tests {
             let n = mesh.triangles.len();
             let e = vec![Rgb::new(0.7, 0.5, 0.3); n];
             let (mut a, mut b) = (vec![Rgb::splat(0.2); n], vec![Rgb::splat(0.2); n]);
-            point.add(&mut a, &mut vec![Rgb::ZERO; n], &e);
-            spread.add(&mut b, &mut vec![Rgb::ZERO; n], &e);
+            point.add(&mut a, &mut vec![Rgb::ZERO; n], &e, None);
+            spread.add(&mut b, &mut vec![Rgb::ZERO; n], &e, None);
             let worst = a.iter().zip(&b).map(|(x, y)| (*x - *y).abs().max_element()).fold(0.0f32, f32::max);
             assert!(worst < 1e-6, "{material}: {worst}");
             assert!(a.iter().zip(&b).any(|(x, y)| x != &Rgb::splat(0.2) && y != &Rgb::splat(0.2)));
@@ -229,8 +229,8 @@ mod tests {
         let mut e = vec![Rgb::ZERO; n];
         e[spike] = Rgb::ONE;
         let (mut a, mut b) = (vec![Rgb::ZERO; n], vec![Rgb::ZERO; n]);
-        point.add(&mut a, &mut vec![Rgb::ZERO; n], &e);
-        spread.add(&mut b, &mut vec![Rgb::ZERO; n], &e);
+        point.add(&mut a, &mut vec![Rgb::ZERO; n], &e, None);
+        spread.add(&mut b, &mut vec![Rgb::ZERO; n], &e, None);
         let near = |v: &[Rgb]| -> (f32, f32, usize) {
             let lit: Vec<f32> = (0..n).filter(|&f| mesh.face_normal(f).z > 0.9).map(|f| v[f].x).collect();
             (
