@@ -318,7 +318,7 @@ def render_lucent(cfg, case, scene_path, profile, out, extra=()):
     through the Python module (`pip install ./crates/lucent-py`, the CLI's image with no file
     between) when it is installed and no extra flags are asked for, else the binary."""
     w, h = cfg["resolution"]
-    module = lucent_module()
+    module = None if os.environ.get("LUCENT_BIN") else lucent_module()
     if module is not None and not extra:
         ours = module.render(scene=scene_path, profile=profile, width=w, height=h, surface=False).astype(np.float64)
         module.write_exr(out, ours)

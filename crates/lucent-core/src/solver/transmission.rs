@@ -32,10 +32,16 @@
 //! head-on); `shading::transmitted_exit` gives the transmitted share of each vertex's `B` the
 //! slab's exact lobe (at `η = 1`; elsewhere the half-space's).
 //!
-//! Left out: the slab's transmittance at oblique incidence (`E_k` carries the half-space's
-//! entry term, whose albedo ratio rises toward grazing where a slab transmits less), the energy
-//! bound's factor on the replaced share (1 on a slab), and the lateral spread of the
-//! transmitted light (about the thickness).
+//! `E_k` is the far side's irradiance averaged over the slab's lateral spread around the point
+//! across ([`super::cross_spread`]; the weights sum to 1, so a uniform far side gives the
+//! one-point term). Light arriving at the far side at a slant collides nearer its face and
+//! crosses less: at `η = 1` the slab's share `s T` is scaled by `T(τ, μ) / T(τ, 1)`
+//! ([`ObliqueTable`], the same transport with a slanted source) over the entry term's carried
+//! share at `μ` relative to head-on (which `E_k` already holds), `μ` the far side's mean
+//! incidence cosine ([`crate::irradiance::Entering::mean_cos`], averaged with the same weights).
+//!
+//! Left out: the slant at `η ≠ 1` (the term stays head-on), the energy bound's factor on the
+//! replaced share (1 on a slab), and the light that leaves through a part's sides.
 
 use crate::Rgb;
 use crate::bssrdf::Entry;
