@@ -95,11 +95,11 @@ pub enum SolveMode {
     /// Links stored and updated after a deformation or material change: only the links that
     /// the change touched are re-evaluated, promoted or demoted.
     Incremental,
-    /// Links stored and kept after a deformation: the moved links' coefficients are
-    /// re-evaluated at the new pose, and the oracle decides a sample of receivers again (all
-    /// of them where the sample's error exceeds its tolerance), refining only where it opens a
-    /// link ([`crate::solver::HierarchicalSolver::update_refit`]). Relinks after a material
-    /// change.
+    /// Links stored and kept after a deformation or material change: the changed links'
+    /// coefficients are re-evaluated at the new pose and material, and the oracle decides a
+    /// sample of receivers again (all of them where the sample's error exceeds its tolerance),
+    /// refining only where it opens a link
+    /// ([`crate::solver::HierarchicalSolver::update_refit_with`]).
     Refit,
     /// No stored links: refine from the root and gather while traversing, every solve. Default
     /// for single images (nothing to reuse).

@@ -171,3 +171,50 @@ fn refit_without_motion_keeps_the_links() {
     assert_eq!((st.refitted, st.links, st.relinked), (0, links, false));
     assert_eq!(s.solve_render(&e).face_b, before);
 }
+
+/// A material change refitted (`update_refit_with`): a slider's step of the scale, a scale
+/// doubled, another material, and another material with the twist, each within the refit's
+/// bound (1% median, 2.5% relative RMSE) of a fresh link of the new material.
+#[test]
+fn bunny_material_change_refit_within_its_bound() {
+    let mesh = lucent_core::mesh::embedded::bunny();
+    let h = face_cluster::build(&mesh);
+    let (_, twisted) = poses(&mesh).remove(0);
+    let at = |name: &str, scale: f64| {
+        Profile::for_model_scale(&Material::by_name(name).unwrap(), mesh.extent() as f64, scale)
+    };
+    let cases = [
+        ("marble 0.1 -> 0.105 m", at("marble", 0.1), at("marble", 0.105), &mesh),
+        ("skimmilk 0.05 -> 0.1 m", at("skimmilk", 0.05), at("skimmilk", 0.1), &mesh),
+        ("marble -> skimmilk 0.1 m", at("marble", 0.1), at("skimmilk", 0.1), &mesh),
+        ("ketchup 0.01 -> 0.0105 m, twisted", at("ketchup", 0.01), at("ketchup", 0.0105), &twisted),
+    ];
+    let mut failed = Vec::new();
+    for (what, from, to, pose) in cases {
+        let e = face_irradiance(pose, &light_for(pose), &to.entry);
+        let mut fresh = HierarchicalSolver::new(pose.clone(), h.clone(), to.clone(), Oracle::default());
+        fresh.link();
+        let want = fresh.solve_render(&e).face_b;
+        let mut s = HierarchicalSolver::new(mesh.clone(), h.clone(), from, Oracle::default());
+        s.keep_candidates = false;
+        s.link();
+        let st = s.update_refit_with(&pose.positions, Some(to), RefitOptions::default());
+        let got = s.solve_render(&e).face_b;
+        let (med, rmse) = (median_rel(&want, &got), rel_rmse(&want, &got));
+        println!(
+            "{what}: median {:.3}%, rel RMSE {:.3}% ({} refitted, {} decided, sample q90 {:.3}%, all {}, relinked {})",
+            100.0 * med,
+            100.0 * rmse,
+            st.refitted,
+            st.decided_receivers,
+            100.0 * st.sampled_q90,
+            st.decided_all,
+            st.relinked
+        );
+        assert!(st.refitted > 0 || st.relinked, "{what}: the links changed");
+        if med > 0.01 || rmse > 0.025 {
+            failed.push(format!("{what}: median {:.3}%, RMSE {:.3}%", 100.0 * med, 100.0 * rmse));
+        }
+    }
+    assert!(failed.is_empty(), "beyond the refit's bound: {}", failed.join(", "));
+}

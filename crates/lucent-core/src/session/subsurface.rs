@@ -163,13 +163,15 @@ fn hierarchical(
             s.solve_render(e)
         }
         SolveMode::Refit => {
-            if profile_changed {
-                s.set_profile(profile.clone());
-            }
-            if profile_changed || oracle_changed || s.links().is_none() {
+            if oracle_changed {
+                if profile_changed {
+                    s.set_profile(profile.clone());
+                }
                 s.link();
             }
-            s.update_refit(&mesh.positions, solver::RefitOptions::default());
+            // A material change is refitted too (no links yet: linked there).
+            let material = (s.profile != *profile).then(|| profile.clone());
+            s.update_refit_with(&mesh.positions, material, solver::RefitOptions::default());
             timings.link_ms += ms_since(t);
             s.solve_render(e)
         }

@@ -1,7 +1,7 @@
 //! `lucent bench interactive`: what a user's action costs from the action to the next image's
 //! per-vertex radiance, stage by stage (issue 51 item 5), on the meshes of `bench solver
 //! --real` (the embedded bunny and the dragons `scripts/fetch_dragon.sh` fetched), marble at
-//! 10 cm and skim milk at 5 cm, one shadowing point light, three bounces, incremental mode and
+//! 10 cm and skim milk at 5 cm, one shadowing point light, three bounces, refit mode and
 //! the viewer's split view terms (`shading::view_basis`), as the viewer solves.
 //!
 //! Actions, each repeated [`REPS`] times after one warm-up repetition, from the pose the
@@ -138,7 +138,7 @@ fn session(
 ) -> FrameSession {
     let settings = FrameSettings {
         method: Method::Hierarchical,
-        mode: SolveMode::Incremental,
+        mode: SolveMode::Refit,
         oracle: None,
         environment_shadows: false,
         bounces: 3,

@@ -214,12 +214,13 @@ pub enum Tool {
 
 impl ViewState {
     /// The initial state for a material and model scale under `lights` (normalised mesh
-    /// units), solved in render mode (lights change more often than shapes here).
+    /// units), solved in refit mode (a light move re-gathers as in render mode; a deformation
+    /// or a material change refits the links instead of linking again).
     pub fn new(material: Material, scale_m: f64, lights: Vec<Light>) -> Self {
         let transport = Transport::new(material, scale_m);
         let settings = FrameSettings {
             method: Method::Hierarchical,
-            mode: SolveMode::Render,
+            mode: SolveMode::Refit,
             // The profile's default thresholds (transport oracle), which meet 1% of the
             // exact solve on the bunny.
             oracle: Some(lucent_core::solver::Oracle::for_profile(transport.profile)),

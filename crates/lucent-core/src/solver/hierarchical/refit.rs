@@ -32,15 +32,24 @@
 //!   which they decide in turn. Links are never coarsened: a refit keeps links at least as fine
 //!   as a fresh link would make them.
 //!
+//! * **A material change** is refitted the same way ([`HierarchicalSolver::update_refit_with`]):
+//!   every link's one-point estimate is taken under the old profile and the new one at the
+//!   same pose, and the estimate of the error decides where the oracle links again. The
+//!   oracle's accuracy test depends on the profile, so a large change (another material, a
+//!   scale several times larger) fails the estimate and is decided in full, as a relink would
+//!   be; a slider's step keeps nearly every link.
+//!
 //! Nothing moved: nothing changes (the stored links, bit for bit). The refit stores no
 //! candidates, so an incremental update after it links from scratch first.
 
 use super::link::{Cands, Ctx, Deferred, Evaluate};
 use super::{HierarchicalSolver, ms};
+use crate::bssrdf::Profile;
 use crate::hierarchy::{ClusterGeom, PAR_LEAVES};
 use crate::solver::link_set::{ChunkPool, Link, LinkChunk, LinkSet};
+use crate::solver::local::Locality;
 use crate::solver::oracle::LinkKind;
-use crate::solver::point_sample::ReceiverSources;
+use crate::solver::point_sample::{ProfileF32, ReceiverSources};
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -127,6 +136,9 @@ struct Refit<'a> {
     s: &'a HierarchicalSolver,
     old: &'a LinkSet,
     old_geom: &'a [ClusterGeom],
+    /// The profile before a material change (`None`: the profile did not change).
+    old_profile: Option<&'a ProfileF32>,
+    /// Per cluster, whether its links' coefficients changed (it moved, or the material did).
     changed: &'a [bool],
     /// Decide every receiver with a moved link again (else those in `redo`).
     all: bool,
@@ -189,9 +201,10 @@ impl Refit<'_> {
             return false;
         }
         let d = &ctx.ev.d32;
+        let d_old = self.old_profile.unwrap_or(d);
         let (g_old, g) = (&self.old_geom[r], &h.geom[r]);
         let (src_old, src) = (
-            ReceiverSources::new(d, g_old.midpoint, g_old.normal),
+            ReceiverSources::new(d_old, g_old.midpoint, g_old.normal),
             ReceiverSources::new(d, g.midpoint, g.normal),
         );
         // One-point links four at a time: their estimate at both poses, the coefficient scaled;
@@ -207,7 +220,7 @@ impl Refit<'_> {
                 (p0[k], a0[k]) = (self.old_geom[e].midpoint, self.old_geom[e].area);
                 (p1[k], a1[k]) = (h.geom[e].midpoint, h.geom[e].area);
             }
-            let (f0, f1) = (src_old.point_samples(d, &p0, &a0), src.point_samples(d, &p1, &a1));
+            let (f0, f1) = (src_old.point_samples(d_old, &p0, &a0), src.point_samples(d, &p1, &a1));
             for (k, &i) in batch.iter().enumerate() {
                 let l = &mut links[i];
                 let (lo, hi) = MAX_POINT_CHANGE;
@@ -390,6 +403,31 @@ impl HierarchicalSolver {
     /// of receivers and decides every receiver again where it exceeds `opts.tolerance` (see
     /// the module documentation). Links from scratch first when there are none.
     pub fn update_refit(&mut self, positions: &[Vec3], opts: RefitOptions) -> RefitStats {
+        self.update_refit_with(positions, None, opts)
+    }
+
+    /// Changes the material to `p` as `set_profile` does, but leaves `local` the stored links'
+    /// (compared after the pose's refit): the old profile, or `None` if `p` is the same.
+    fn switch_profile(&mut self, p: Profile) -> Option<ProfileF32> {
+        if p == self.profile {
+            return None;
+        }
+        let old = ProfileF32::new(&self.profile);
+        self.locality = Locality::of(&p);
+        self.profile = p;
+        self.bound = None;
+        Some(old)
+    }
+
+    /// [`HierarchicalSolver::update_refit`] that also changes the material to `profile` (when
+    /// given and different): the stored links are refitted from the old profile's one-point
+    /// estimates to the new one's (module docs), instead of linking again.
+    pub fn update_refit_with(
+        &mut self,
+        positions: &[Vec3],
+        profile: Option<Profile>,
+        opts: RefitOptions,
+    ) -> RefitStats {
         let t0 = Instant::now();
         assert_eq!(positions.len(), self.mesh.positions.len(), "topology must not change");
         let done = |mut st: RefitStats, s: &Self| {
@@ -397,22 +435,28 @@ impl HierarchicalSolver {
             st.ms = ms(t0.elapsed());
             st
         };
-        let changed = moved_clusters(self, &self.mesh.positions, positions);
+        let moved = moved_clusters(self, &self.mesh.positions, positions);
+        let old_profile = profile.and_then(|p| self.switch_profile(p));
         if self.links.is_none() {
-            if changed.is_some() {
+            if moved.is_some() {
                 self.set_positions(positions);
             }
+            self.local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
             self.link();
             return done(RefitStats { relinked: true, ..Default::default() }, self);
         }
-        let Some(changed) = changed else {
-            return done(RefitStats::default(), self);
+        let changed = match (&moved, &old_profile) {
+            (_, Some(_)) => vec![true; self.hierarchy.len()],
+            (Some(m), None) => m.clone(),
+            (None, None) => return done(RefitStats::default(), self),
         };
         let old_geom = self.hierarchy.geom.clone();
-        self.mesh.positions.copy_from_slice(positions);
-        self.hierarchy.refit_changed(&self.mesh, &changed);
-        if let Some(g) = self.frame_geom.get_mut() {
-            g.refit(&self.hierarchy, &changed);
+        if let Some(moved) = &moved {
+            self.mesh.positions.copy_from_slice(positions);
+            self.hierarchy.refit_changed(&self.mesh, moved);
+            if let Some(g) = self.frame_geom.get_mut() {
+                g.refit(&self.hierarchy, moved);
+            }
         }
         let local = self.locality.local_clusters(&self.hierarchy, &self.mesh);
         if local != self.local {
@@ -428,6 +472,7 @@ impl HierarchicalSolver {
             s: self,
             old: &old,
             old_geom: &old_geom,
+            old_profile: old_profile.as_ref(),
             changed: &changed,
             all: opts.stride <= 1,
             stride: opts.stride.max(1),
