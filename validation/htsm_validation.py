@@ -4,7 +4,7 @@ with a heterogeneous medium (issue 55).
 
     python3 validation/htsm_validation.py scenes      # scene files and the density volumes
     python3 validation/htsm_validation.py reference   # Mitsuba references (minutes a case)
-    python3 validation/htsm_validation.py compare     # render lucent (both HTSM models), the table
+    python3 validation/htsm_validation.py compare     # render lucent (the three HTSM models), the table
 
 Every case of htsm_cases.json is a case of the homogeneous suite (cases.json: its resolution,
 camera, light and materials; lucent_validation.py's mesh placement, camera and Mitsuba scene)
@@ -35,7 +35,7 @@ from validation_stats import print_rows, print_summary, summary
 HERE = lv.HERE
 REFS = os.path.join(HERE, "references")
 SCENES = os.path.join(HERE, "scenes")
-MODELS = ["beer-lambert", "thesis"]
+MODELS = ["diffusion", "beer-lambert", "thesis"]
 
 
 def load_cfg():
@@ -195,10 +195,12 @@ def cmd_compare(cfg, out_dir, as_json, write, only, extra):
             homog = lv.read_exr(out)
             row = lv.compare_images(case, homog, a, b, None, os.path.join(out_dir, f"{case['name']}.homogeneous.png"))
             rows.append({**row, "profile": "homog"})
-            # HTSM against the homogeneous method: the homogeneous image as both "halves".
-            bl = lv.read_exr(os.path.join(out_dir, f"{case['name']}.beer-lambert.exr"))
-            row = lv.compare_images(case, bl, homog, homog, None)
-            rows.append({**row, "profile": "BL/homog"})
+            # HTSM (each model but the thesis's) against the homogeneous method: the homogeneous
+            # image as both "halves".
+            for model, short in (("diffusion", "D/homog"), ("beer-lambert", "BL/homog")):
+                ours = lv.read_exr(os.path.join(out_dir, f"{case['name']}.{model}.exr"))
+                row = lv.compare_images(case, ours, homog, homog, None)
+                rows.append({**row, "profile": short})
     for r in rows:
         r["green_or_blue_above_red"] = None
     summ = summary(rows, MODELS[0])

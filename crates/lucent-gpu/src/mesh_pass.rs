@@ -478,6 +478,41 @@ impl MeshPass {
         self.draw_background.set(shading.background > 0.0);
     }
 
+    /// The mesh pass's render pass: drawn into the multisampled `msaa`, resolved into
+    /// `resolved`, both cleared to transparent (alpha 0 marks the background for the tone-map
+    /// pass), with `depth` cleared to the far plane; nothing kept but the resolve.
+    pub fn begin<'e>(
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        msaa: &wgpu::TextureView,
+        resolved: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) -> wgpu::RenderPass<'e> {
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: msaa,
+                depth_slice: None,
+                resolve_target: Some(resolved),
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Discard,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+
     /// Records the draw of `mesh` into `pass` (after the environment background, when the
     /// last [`MeshPass::prepare`] asked for one).
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &GpuMesh) {

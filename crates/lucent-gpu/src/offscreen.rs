@@ -134,30 +134,8 @@ impl OffscreenRenderer {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lucent offscreen") });
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("lucent mesh"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.msaa,
-                    depth_slice: None,
-                    resolve_target: Some(&self.hdr_view),
-                    ops: wgpu::Operations {
-                        // Alpha 0 marks the background for the tone-map pass.
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Discard,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass =
+                MeshPass::begin(&mut encoder, "lucent mesh", &self.msaa, &self.hdr_view, &self.depth);
             self.mesh_pass.draw(&mut pass, mesh);
         }
         {

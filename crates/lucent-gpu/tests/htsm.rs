@@ -23,7 +23,7 @@ use lucent_core::irradiance::Light;
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::{DensityVolume, VolumeSpec};
 use lucent_gpu::GpuContext;
-use lucent_gpu::htsm::{HtsmParams, HtsmRenderer, HtsmView, TransportModel};
+use lucent_gpu::htsm::{HtsmMedium, HtsmParams, HtsmRenderer, HtsmView, TransportModel};
 use lucent_gpu::readback::read_texture;
 use lucent_gpu::test_support::adapter_or_skip;
 use std::path::PathBuf;
@@ -152,6 +152,7 @@ fn uniform_density_equals_a_homogeneous_material_with_the_density_folded_in() {
             TransportModel::Thesis => {
                 HtsmParams { transport_distance: base.transport_distance / (1.0 + s_d), ..base }
             }
+            TransportModel::Diffusion => unreachable!("not in this loop"),
         };
         let a = render(&ctx, &mesh, &dense, &base);
         let b = render(&ctx, &mesh, &clear, &folded);
@@ -168,9 +169,17 @@ fn uniform_density_equals_a_homogeneous_material_with_the_density_folded_in() {
 #[test]
 fn more_density_or_a_longer_path_transmits_less_light() {
     let Some(ctx) = adapter_or_skip() else { return };
-    for model in [TransportModel::BeerLambert, TransportModel::Thesis] {
+    // The diffusion model needs a medium: skim milk at 1 cm, whose density adds 0.2 mm^-1.
+    let milk = HtsmMedium {
+        sigma_s_prime: Vec3::new(0.70, 1.22, 1.90),
+        sigma_a: Vec3::new(0.0014, 0.0025, 0.0142),
+        density_sigma_a: Vec3::splat(0.2),
+        scale_m: 0.01,
+    };
+    for model in [TransportModel::BeerLambert, TransportModel::Thesis, TransportModel::Diffusion] {
         // No surface shading: the front is unlit anyway, this keeps rims out of the mean.
         let params = HtsmParams { model, diffuse: 0.0, specular: 0.0, ..Default::default() };
+        let params = if model == TransportModel::Diffusion { milk.apply(params) } else { params };
         let mesh = ellipsoid(0.5);
         let mut previous = f32::INFINITY;
         for d in [0.0, 0.1, 0.25, 0.5] {

@@ -332,9 +332,12 @@ pub struct HtsmArgs {
     /// path tracer's grid volume).
     #[arg(long, value_name = "PATH", help_heading = "HTSM (--method htsm)")]
     pub volume_out: Option<std::path::PathBuf>,
-    /// Transport model: `thesis` (Shopf table 4.1) or `beer-lambert` (exp(-sigma D - alpha)).
-    #[arg(long, value_enum, default_value_t = HtsmModel::BeerLambert, help_heading = "HTSM (--method htsm)")]
-    pub htsm_model: HtsmModel,
+    /// Transport model: `diffusion` (samples weighted by the medium's diffusion kernel, the
+    /// default with the scene's material), `beer-lambert` (exp(-sigma D - alpha), the default
+    /// with the former inputs, which have no medium for `diffusion`) or `thesis` (Shopf table
+    /// 4.1). docs/htsm.md measures each against a path tracer.
+    #[arg(long, value_enum, help_heading = "HTSM (--method htsm)")]
+    pub htsm_model: Option<HtsmModel>,
     /// Side of the light-view reference images, texels (16..=device limit).
     #[arg(long, value_parser = crate::ranges::parser(crate::ranges::HTSM_SIZE), allow_negative_numbers = true, default_value_t = 256, help_heading = "HTSM (--method htsm)")]
     pub htsm_size: u32,
@@ -382,6 +385,9 @@ pub enum HtsmModel {
     /// (1/n) sum E_i exp(-sigma D_i - alpha_i) f(theta_i), sigma = -ln(T_c) / T_d.
     #[default]
     BeerLambert,
+    /// Each sample weighs the diffusion kernel over the area it stands for, times the
+    /// half-space's albedo (lit side) or the slab's transmittance (through the body).
+    Diffusion,
 }
 
 /// Tone curve of `lucent render`.

@@ -5,26 +5,12 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn lucent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lucent")).args(args).output().expect("run lucent")
-}
+use common::{lucent, stderr_lines as lines};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_hostile").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// stderr lines, without Mesa's headless-machine notice and winit's log lines.
-fn lines(out: &Output) -> Vec<String> {
-    String::from_utf8_lossy(&out.stderr)
-        .lines()
-        .filter(|l| !l.contains("XDG_RUNTIME_DIR") && !l.trim().is_empty())
-        .map(str::to_string)
-        .collect()
+    common::scratch("cli_hostile", name)
 }
 
 /// Exit `code`, exactly one stderr line, containing every needle, no panic, and no `out` file.

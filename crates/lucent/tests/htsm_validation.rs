@@ -1,6 +1,6 @@
 //! HTSM (`--method htsm`) against the committed Mitsuba 3 references of a heterogeneous medium
 //! (`validation/htsm_validation.py`, issue 55; no Mitsuba needed): every case of
-//! `validation/htsm_cases.json` whose mesh is here is rendered with both transport models at
+//! `validation/htsm_cases.json` whose mesh is here is rendered with the three transport models at
 //! the suite's resolution, and its median per-pixel error, bias of means and worst 8x8 block
 //! against the mean of the two reference halves must stay within `validation/htsm_bounds.json`.
 //!
@@ -55,7 +55,7 @@ fn htsm_stays_within_its_recorded_bounds_against_the_path_tracer() {
         }
         let part = |p: &str| read_exr(&root.join(format!("validation/references/{name}.{p}.exr"))).2;
         let (a, b) = (part("half_a"), part("half_b"));
-        for model in ["beer-lambert", "thesis"] {
+        for model in ["diffusion", "beer-lambert", "thesis"] {
             let exr = out.join(format!("{name}.{model}.exr"));
             let run = Command::new(env!("CARGO_BIN_EXE_lucent"))
                 .arg("render")
@@ -106,6 +106,6 @@ fn htsm_stays_within_its_recorded_bounds_against_the_path_tracer() {
         }
     }
     std::fs::remove_dir_all(&out).ok();
-    assert!(checked >= 16, "only {checked} case-model pairs were checked");
+    assert!(checked >= 24, "only {checked} case-model pairs were checked");
     assert!(failures.is_empty(), "HTSM moved away from the path tracer:\n{}", failures.join("\n"));
 }

@@ -58,6 +58,7 @@
 //! Each light costs one reference pass, one mip chain and one camera pass.
 
 pub mod camera_pass;
+pub mod diffusion;
 pub mod environment;
 pub mod geometry;
 pub mod medium;
@@ -126,6 +127,12 @@ pub enum TransportModel {
     /// colour and distance) and `alpha_i` the density times `density_scale`.
     #[default]
     BeerLambert,
+    /// The diffusion quadrature ([`diffusion`], issue 55): each sample weighs the medium's
+    /// diffusion kernel integrated over the annulus it stands for, times the half-space's albedo
+    /// where the light reaches the visible point and the exact slab transmittance where it
+    /// crosses the body, times `exp(-alpha_i)` for the density. Needs [`HtsmParams::medium`];
+    /// the phase weight is not used (diffusion leaves the surface isotropically).
+    Diffusion,
 }
 
 /// Material and sampling parameters of an HTSM render.
@@ -233,6 +240,11 @@ impl HtsmParams {
                     return bad(format!("medium coefficient {v} per object unit must be finite and >= 0"));
                 }
             }
+        }
+        if self.model == TransportModel::Diffusion && self.medium.is_none() {
+            return bad("the diffusion model needs the medium's coefficients (HtsmParams::medium; \
+                        the former transport colour and distance inputs have none)"
+                .into());
         }
         if !(self.eta.is_finite() && self.eta >= 1.0) {
             return bad(format!("eta {} must be >= 1", self.eta));

@@ -3,6 +3,7 @@
 //! the uniforms, one block per frame plus one slot per light pass selected by a dynamic offset,
 //! so that every light of a frame can be recorded into one command encoder.
 
+use super::diffusion::DiffusionUniforms;
 use bytemuck::{Pod, Zeroable};
 
 /// Uniforms of a whole frame; mirrors `Frame` in `htsm_common.wgsl` field for field.
@@ -23,6 +24,7 @@ pub(super) struct FrameUniforms {
     pub env_frame: [f32; 4],
     pub env_irradiance: [[f32; 4]; 9],
     pub env_radiance: [[f32; 4]; 9],
+    pub diffusion: DiffusionUniforms,
 }
 
 /// Uniforms of one light's passes; mirrors `LightPass` in `htsm_common.wgsl`.

@@ -6,6 +6,7 @@
 //! caller's texture.
 
 use super::camera_pass::CameraPass;
+use super::diffusion::{DiffusionKey, DiffusionUniforms};
 use super::environment::{environment_lights, write_uniforms};
 use super::geometry::Geometry;
 use super::medium::extinction_terms;
@@ -47,6 +48,8 @@ pub struct HtsmRenderer {
     /// Tone-map pipelines by target format ([`LDR_FORMAT`] first, callers' formats on demand).
     tonemaps: Vec<(wgpu::TextureFormat, ToneMapPass)>,
     targets: Option<Targets>,
+    /// The diffusion model's tables for the last medium and pattern they were made for.
+    diffusion: Option<(DiffusionKey, DiffusionUniforms)>,
 }
 
 /// One light pass of a frame: the light, and whether it adds the lit side's diffuse and
@@ -110,6 +113,7 @@ impl HtsmRenderer {
             camera,
             tonemaps,
             targets: None,
+            diffusion: None,
         })
     }
 
@@ -234,8 +238,35 @@ impl HtsmRenderer {
         })
     }
 
+    /// The diffusion model's tables for `params` (made when the medium, index or pattern
+    /// changed; zeros for the other models).
+    fn diffusion_uniforms(&mut self, params: &HtsmParams) -> DiffusionUniforms {
+        let Some(coefficients) = params.medium.filter(|_| params.model == TransportModel::Diffusion) else {
+            return bytemuck::Zeroable::zeroed();
+        };
+        let key = DiffusionKey {
+            coefficients,
+            eta: params.eta,
+            kernel_radius: params.kernel_radius,
+            samples: params.samples,
+        };
+        match &self.diffusion {
+            Some((k, u)) if *k == key => *u,
+            _ => {
+                let u = DiffusionUniforms::new(&key);
+                self.diffusion = Some((key, u));
+                u
+            }
+        }
+    }
+
     /// The uniforms shared by every pass of the frame.
-    fn frame_uniforms(&self, view: &HtsmView, params: &HtsmParams) -> FrameUniforms {
+    fn frame_uniforms(
+        &self,
+        view: &HtsmView,
+        params: &HtsmParams,
+        diffusion: DiffusionUniforms,
+    ) -> FrameUniforms {
         let extent = self.geometry.extent();
         let (sigma_a, sigma_s, sigma_d) = extinction_terms(params);
         let mut u = FrameUniforms {
@@ -255,12 +286,14 @@ impl HtsmRenderer {
                 match params.model {
                     TransportModel::Thesis => 0.0,
                     TransportModel::BeerLambert => 1.0,
+                    TransportModel::Diffusion => 2.0,
                 },
                 *self.camera.density_dims.iter().max().expect("three sides") as f32,
             ],
             env_frame: [0.0; 4],
             env_irradiance: [[0.0; 4]; 9],
             env_radiance: [[0.0; 4]; 9],
+            diffusion,
         };
         write_uniforms(view.environment.as_ref(), params.f0(), &mut u);
         u
@@ -282,7 +315,8 @@ impl HtsmRenderer {
             .enumerate()
             .map(|(i, p)| self.light_uniforms(p, i == 0 && view.environment.is_some(), params))
             .collect::<Result<Vec<_>, _>>()?;
-        let frame = self.frame_uniforms(view, params);
+        let diffusion = self.diffusion_uniforms(params);
+        let frame = self.frame_uniforms(view, params, diffusion);
         self.uniforms.write(&self.device, &self.queue, &frame, &lights);
         self.camera.set_phase(&self.queue, params.phase_g);
         let t = self.targets.as_ref().expect("just ensured");

@@ -27,7 +27,7 @@ struct Frame {
     material: vec4<f32>,
     // x: diffuse weight; y: specular weight; z: Blinn-Phong exponent; w: unused.
     shading: vec4<f32>,
-    // x: samples n (1, 5, 9, 13); y: steps K; z: model (0 thesis, 1 Beer-Lambert);
+    // x: samples n (1, 5, 9, 13); y: steps K; z: model (0 thesis, 1 Beer-Lambert, 2 diffusion);
     // w: largest side of the density volume (voxels).
     counts: vec4<f32>,
     // Environment (see htsm/environment.rs): x, y: cos and sin of the rotation taking world
@@ -38,6 +38,16 @@ struct Frame {
     env_irradiance: array<vec4<f32>, 9>,
     // rgb: SH coefficients of the radiance times the intensity (glossy reflection).
     env_radiance: array<vec4<f32>, 9>,
+    // The diffusion model (htsm/diffusion.rs; zeros for the other models), object units.
+    // xyz: the annuli's boundaries r1/2, 1.5 r1, 3 r1; w: index of the outermost ring present.
+    rings: vec4<f32>,
+    // x: the boundary's A (z_b = 2 A / (3 sigma_t')); yzw: unused.
+    boundary: vec4<f32>,
+    // rgb at density d / 8 and incidence cosine k / 8 (entry 9 d + k): the half-space's albedo.
+    albedo: array<vec4<f32>, 81>,
+    // rgb at density d / 8 and diffusion optical depth 0.5 k (entry 33 d + k): the slab's
+    // transmittance times e^(0.5 k).
+    slab: array<vec4<f32>, 297>,
 }
 
 // Per light pass (a dynamic offset selects the light).

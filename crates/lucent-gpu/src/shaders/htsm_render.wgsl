@@ -77,12 +77,29 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
     let samples = i32(g.counts.x);
     let steps = i32(g.counts.y);
     let beer_lambert = g.counts.z > 0.5;
+    let diffusion = g.counts.z > 1.5;
     let t_d = g.transport.w;
+    // Whether the light reaches this point (it is the lit surface the reference image holds):
+    // the diffusion model's kernel is then the lit side's, else the light crossed the body.
+    let l = light_at(in.world);
+    let cos_i = dot(n, l.to_light);
+    let ref_tc = textureSampleLevel(ref_texcoord, ref_sampler, uv, 0.0);
+    let seen = ref_tc.a > 0.5 && length(tc_to_object(ref_tc.xyz / ref_tc.a - tc)) < g.material.y;
+    let lit = cos_i > 0.0 && seen;
 
+    // The diffusion model where the light crosses the body: the kernel spreads about as wide as
+    // the body is deep below this point (the centre sample's depth h_0), so the pattern widens
+    // to keep the kernel's middle inside its rings (ring 2 at h_0): the samples then see how
+    // far the lit surface really extends (htsm/diffusion.rs).
+    var spread = 1.0;
+    if (diffusion && !lit && ref_tc.a > 1e-3) {
+        let h_0 = dot(tc_to_object(ref_tc.xyz / ref_tc.a - tc), -n);
+        spread = max(1.0, 0.25 * h_0 / g.rings.x);
+    }
     var transport = vec3<f32>(0.0);
     for (var i = 0; i < samples; i = i + 1) {
         let s = pattern(i);
-        let radius_texels = light.flags.x;
+        let radius_texels = light.flags.x * spread;
         let offset = s.xy * radius_texels / map_size;
         // Ring r covers cells about as wide as its radius: level log2(radius in texels).
         var level = 0.0;
@@ -114,11 +131,13 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         let s0 = g.scatter.rgb;
         let sigma0 = sqrt(3.0 * a0 * (a0 + s0));
         var sum = vec3<f32>(0.0);
+        var rho_sum = 0.0;
         for (var j = 0; j < steps; j = j + 1) {
             let t = (f32(j) + 0.5) / f32(steps);
             let rho = textureSampleLevel(density, density_sampler, tc + dir * t, lod).r;
             let a = a0 + rho * g.density_absorption.rgb;
             sum = sum + sqrt(3.0 * a * (a + s0));
+            rho_sum = rho_sum + rho;
         }
         // Optical depth along the ray (the medium's sigma_tr integrated, htsm/medium.rs), and
         // alpha_i, the density's part of it (eq. 4.1's extra absorption).
@@ -132,7 +151,24 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         }
         let phase = textureSampleLevel(phase_table, ref_sampler, vec2<f32>(cos_theta * 0.5 + 0.5, 0.5), 0.0).r;
 
-        if (beer_lambert) {
+        if (diffusion) {
+            // htsm/diffusion.rs: the kernel of the medium along the ray (its mean density, its
+            // mean sigma_tr) integrated over the sample's annulus, times its total: the
+            // half-space's albedo on the lit side, else the slab's transmittance at the depth
+            // the sample lies below this point's tangent plane.
+            let ring = i32(s.z) + 1;
+            let rho_mean = rho_sum / f32(steps);
+            let m = medium_at(rho_mean);
+            let sigma_mean = sum / f32(steps);
+            if (lit) {
+                let share = annulus_share(ring, 1.0, m.z_r, m.z_b, sigma_mean);
+                transport = transport + irr.rgb * share * albedo_at(rho_mean, cos_i);
+            } else {
+                let h = max(d_i * cos_theta, 0.0);
+                let share = annulus_share(ring, spread, max(vec3<f32>(h), m.z_r), m.z_b, sigma_mean);
+                transport = transport + irr.rgb * share * slab_transmittance(rho_mean, sigma_mean * d_i);
+            }
+        } else if (beer_lambert) {
             // Transmittance exp(-sigma D_i - alpha_i): the optical depth of the medium's
             // transport coefficient along the ray.
             transport = transport + irr.rgb * exp(-tau) * phase;
@@ -145,7 +181,9 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
             transport = transport + irr.rgb * bracket * phase;
         }
     }
-    transport = transport / f32(samples);
+    if (!diffusion) {
+        transport = transport / f32(samples);
+    }
     if (!beer_lambert) {
         transport = transport * g.transport.rgb;
     }
@@ -156,11 +194,7 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
     // seen by the light at this point's light-space position must be this point itself.
     // Compared in rest texture space: a surface point's rest coordinate identifies it whatever the
     // deformation.
-    let l = light_at(in.world);
-    let cos_i = dot(n, l.to_light);
-    let ref_tc = textureSampleLevel(ref_texcoord, ref_sampler, uv, 0.0);
-    let seen = ref_tc.a > 0.5 && length(tc_to_object(ref_tc.xyz / ref_tc.a - tc)) < g.material.y;
-    if (cos_i > 0.0 && seen && light.flags.y > 0.5) {
+    if (lit && light.flags.y > 0.5) {
         let v = normalize(g.eye.xyz - in.world);
         let h = normalize(v + l.to_light);
         let e = l.irradiance * cos_i;
@@ -174,6 +208,95 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         radiance = radiance + environment_surface(in.world, n);
     }
     return vec4<f32>(radiance, 1.0);
+}
+
+// The medium at density rho (htsm/medium.rs), object units: the dipole's source depth z_r = 1 / sigma_t' and extrapolation distance z_b = 2 A / (3 sigma_t').
+struct LocalMedium {
+    z_r: vec3<f32>,
+    z_b: vec3<f32>,
+}
+
+fn medium_at(rho: f32) -> LocalMedium {
+    let t = max(g.sigma.rgb + rho * g.density_absorption.rgb + g.scatter.rgb, vec3<f32>(1e-12));
+    var m: LocalMedium;
+    m.z_r = 1.0 / t;
+    m.z_b = 2.0 * g.boundary.x / (3.0 * t);
+    return m;
+}
+
+// Bilinear lookup position in a table over density (9 levels) and a second coordinate x in
+// entry units (`count` entries): the two density rows' first entries and the weights.
+struct TableAt {
+    row0: u32,
+    row1: u32,
+    fd: f32,
+    i: u32,
+    fx: f32,
+}
+
+fn table_at(rho: f32, x: f32, count: u32) -> TableAt {
+    var t: TableAt;
+    let d = clamp(rho, 0.0, 1.0) * 8.0;
+    let d0 = min(u32(d), 7u);
+    t.row0 = d0 * count;
+    t.row1 = (d0 + 1u) * count;
+    t.fd = d - f32(d0);
+    let xc = clamp(x, 0.0, f32(count - 1u));
+    t.i = min(u32(xc), count - 2u);
+    t.fx = xc - f32(t.i);
+    return t;
+}
+
+// The half-space's albedo at density rho and incidence cosine c (htsm/diffusion.rs's table).
+fn albedo_at(rho: f32, c: f32) -> vec3<f32> {
+    let t = table_at(rho, clamp(c, 0.0, 1.0) * 8.0, 9u);
+    let a0 = mix(g.albedo[t.row0 + t.i].rgb, g.albedo[t.row0 + t.i + 1u].rgb, t.fx);
+    let a1 = mix(g.albedo[t.row1 + t.i].rgb, g.albedo[t.row1 + t.i + 1u].rgb, t.fx);
+    return mix(a0, a1, t.fd);
+}
+
+// The slab's multiple-scattering transmittance at density rho and diffusion optical depth x per
+// channel (htsm/diffusion.rs's table of T e^x at 0.5 k; its last entry beyond it).
+fn slab_transmittance(rho: f32, x: vec3<f32>) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    for (var c = 0; c < 3; c = c + 1) {
+        let t = table_at(rho, x[c] * 2.0, 33u);
+        let s0 = mix(g.slab[t.row0 + t.i][c], g.slab[t.row0 + t.i + 1u][c], t.fx);
+        let s1 = mix(g.slab[t.row1 + t.i][c], g.slab[t.row1 + t.i + 1u][c], t.fx);
+        out[c] = mix(s0, s1, t.fd);
+    }
+    return out * exp(-x);
+}
+
+// F(b) of htsm/diffusion.rs: the share of a dipole term with source depth z lying beyond the
+// lateral distance b, for transport coefficient s.
+fn kernel_share(b: f32, z: vec3<f32>, s: vec3<f32>) -> vec3<f32> {
+    let d = sqrt(b * b + z * z);
+    return z / max(d, vec3<f32>(1e-12)) * exp(-s * (d - z));
+}
+
+// The share of the dipole kernel (source at depth z, image at z + 2 z_b) in ring `ring`'s
+// annulus (0: the centre), per sample of the ring, the pattern widened `spread` times; the
+// outermost ring's reaches infinity. Zero for rings beyond the outermost.
+fn annulus_share(ring: i32, spread: f32, z: vec3<f32>, z_b: vec3<f32>, s: vec3<f32>) -> vec3<f32> {
+    if (f32(ring) > g.rings.w) {
+        return vec3<f32>(0.0);
+    }
+    let zv = z + 2.0 * z_b;
+    // The two terms' totals are e^(-s z) and e^(-s zv): their ratio needs no exponent of z.
+    let w_v = exp(-2.0 * s * z_b);
+    var inner = vec3<f32>(1.0 + w_v);
+    if (ring > 0) {
+        let b = g.rings[ring - 1] * spread;
+        inner = kernel_share(b, z, s) + w_v * kernel_share(b, zv, s);
+    }
+    var outer = vec3<f32>(0.0);
+    if (f32(ring) < g.rings.w) {
+        let b = g.rings[ring] * spread;
+        outer = kernel_share(b, z, s) + w_v * kernel_share(b, zv, s);
+    }
+    let per_sample = select(0.25, 1.0, ring == 0);
+    return (inner - outer) / (1.0 + w_v) * per_sample;
 }
 
 // The environment in the map's frame: world directions turned about +y.

@@ -165,6 +165,7 @@ fn model_name(m: TransportModel) -> &'static str {
     match m {
         TransportModel::Thesis => "thesis",
         TransportModel::BeerLambert => "beer-lambert",
+        TransportModel::Diffusion => "diffusion",
     }
 }
 
@@ -213,13 +214,23 @@ pub fn htsm_params(
         samples: h.samples,
         steps: h.steps,
         model: match h.htsm_model {
-            HtsmModel::Thesis => TransportModel::Thesis,
-            HtsmModel::BeerLambert => TransportModel::BeerLambert,
+            Some(HtsmModel::Thesis) => TransportModel::Thesis,
+            Some(HtsmModel::BeerLambert) => TransportModel::BeerLambert,
+            Some(HtsmModel::Diffusion) => TransportModel::Diffusion,
+            None if former_inputs(h) => TransportModel::BeerLambert,
+            None => TransportModel::Diffusion,
         },
         tone: tone_map(args, args.exposure.unwrap_or(1.0)),
         ..HtsmParams::default()
     };
     let params = if former_inputs(h) {
+        if h.htsm_model == Some(HtsmModel::Diffusion) {
+            bail!(
+                "--htsm-model diffusion needs the scene's material as HTSM's medium; it cannot be \
+                 combined with --transport-colour, --transport-distance or --density-scale (the \
+                 former inputs): use --htsm-model beer-lambert or thesis with them"
+            );
+        }
         if h.density_absorption.is_some() {
             bail!(
                 "--density-absorption sets the medium's absorption; it cannot be combined with \
@@ -319,6 +330,18 @@ mod tests {
         let a = args(&["--transport-distance", "0.3", "--density-absorption", "1"]);
         let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap_err());
         assert!(e.contains("--density-absorption") && e.contains("--transport-distance"), "{e}");
+        // The default model: diffusion with the medium, beer-lambert with the former inputs,
+        // which have no medium for diffusion (asking for it is an error naming both).
+        let a = args(&[]);
+        assert_eq!(htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap().model, TransportModel::Diffusion);
+        let a = args(&["--transport-distance", "0.3"]);
+        assert_eq!(
+            htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap().model,
+            TransportModel::BeerLambert
+        );
+        let a = args(&["--transport-distance", "0.3", "--htsm-model", "diffusion"]);
+        let e = format!("{:#}", htsm_params(&a.htsm, &cube(), None, med(), &a).unwrap_err());
+        assert!(e.contains("--htsm-model diffusion") && e.contains("--transport-distance"), "{e}");
         for bad in ["-1", "1,2", "x", "1e30", "nan"] {
             let a = args(&["--density-absorption", bad]);
             let e = format!(

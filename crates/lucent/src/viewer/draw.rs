@@ -213,27 +213,7 @@ impl ViewDrawer {
         let t = self.targets.as_ref().expect("just made");
         self.mesh_pass.prepare(ctx, &params.camera, &params.shading);
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("viewer mesh"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &t.msaa,
-                    depth_slice: None,
-                    resolve_target: Some(&t.resolved),
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Discard,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &t.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
+            let mut pass = MeshPass::begin(encoder, "viewer mesh", &t.msaa, &t.resolved, &t.depth);
             if let Some(mesh) = &self.mesh {
                 set_viewport(&mut pass, viewport);
                 self.mesh_pass.draw(&mut pass, mesh);

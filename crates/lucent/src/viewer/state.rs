@@ -217,6 +217,7 @@ impl ViewState {
     /// units), solved in refit mode (a light move re-gathers as in render mode; a deformation
     /// or a material change refits the links instead of linking again).
     pub fn new(material: Material, scale_m: f64, lights: Vec<Light>) -> Self {
+        let htsm = super::htsm::HtsmSettings::for_material(&material, scale_m);
         let transport = Transport::new(material, scale_m);
         let settings = FrameSettings {
             method: Method::Hierarchical,
@@ -245,7 +246,7 @@ impl ViewState {
             picked_face: None,
             tool: Tool::Orbit,
             method: ViewMethod::Mertens,
-            htsm: Default::default(),
+            htsm,
             by_colour: ByColour::default(),
             save: SaveTarget::default(),
         }

@@ -8,6 +8,36 @@
 pub mod figures;
 
 use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// Runs the `lucent` binary under test with `args` and the extra environment `envs`.
+pub fn lucent_env(args: &[&str], envs: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lucent"));
+    cmd.args(args).envs(envs.iter().copied());
+    cmd.output().expect("run lucent")
+}
+
+/// Runs the `lucent` binary under test with `args`.
+pub fn lucent(args: &[&str]) -> Output {
+    lucent_env(args, &[])
+}
+
+/// A fresh, empty directory `name` for one test of the test file `suite`.
+pub fn scratch(suite: &str, name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(suite).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// stderr's non-blank lines, without the notice Mesa's drivers print on headless machines.
+pub fn stderr_lines(out: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| !l.contains("XDG_RUNTIME_DIR") && !l.trim().is_empty())
+        .map(str::to_string)
+        .collect()
+}
 
 /// Whether a GPU adapter exists for the `lucent` binary the test runs (searched once per test
 /// binary); false after saying the test is skipped. Use as `if !common::gpu_or_skip() { return; }`.

@@ -1,0 +1,75 @@
+//! lucent in Bevy: translucent meshes solved by lucent's hierarchical subsurface scattering
+//! (Mertens et al. 2003, *Interactive Rendering of Translucent Deformable Objects*) and drawn in
+//! Bevy's pipeline with lucent's own exit term (§5.4).
+//!
+//! Add [`LucentPlugin`] and put a [`Translucent`] on an entity with a [`Mesh3d`]:
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use lucent_bevy::{LucentPlugin, Translucent};
+//!
+//! fn setup(mut commands: Commands, mut meshes: ResMut<Assets<Mesh>>) {
+//!     commands.spawn((Mesh3d(meshes.add(Sphere::new(0.05).mesh().ico(4).unwrap())), Translucent::preset("marble")));
+//!     commands.spawn((PointLight { intensity: 2000.0, ..default() }, Transform::from_xyz(0.3, 0.4, 0.3)));
+//!     commands.spawn((Camera3d::default(), Transform::from_xyz(0.0, 0.05, 0.3).looking_at(Vec3::ZERO, Vec3::Y)));
+//! }
+//!
+//! App::new().add_plugins((DefaultPlugins, LucentPlugin)).add_systems(Startup, setup).run();
+//! ```
+//!
+//! Per body the plugin keeps one lucent-core `FrameSession` (§5.5). When the mesh's vertices
+//! (a system editing the mesh asset: the session's deformation path, refit mode), Bevy's point,
+//! spot or directional lights ([`lights`] states the unit mapping), the [`Translucent`]
+//! component or the camera change, it hands the change to the session and solves it on Bevy's
+//! [`bevy::tasks::AsyncComputeTaskPool`]. A frame never waits: the last solve stays on screen
+//! until the next is ready ([`SolveStatus`] says how long solves take). The result, `B / (c π)`
+//! and view-ray single scattering per vertex, goes to a storage buffer of the body's
+//! [`LucentMaterial`], whose shader adds `F_t(η, ω_o) (T(μ_o) B / (c π) + L_single)` and the
+//! Fresnel-weighted highlight per pixel exactly as lucent's mesh pass does, times Bevy's
+//! camera exposure.
+//!
+//! Not covered: Bevy's ambient light and environment maps do not light the body's interior,
+//! skinned and morph-target meshes are solved in their rest pose, and the body's surface is
+//! shaded only by lucent (it takes no Bevy shadow maps from other objects; it casts them).
+
+mod body;
+mod component;
+mod convert;
+pub mod lights;
+mod material;
+mod systems;
+
+pub use body::SolveStatus;
+pub use component::{DEFAULT_BOUNCES, Translucent, TranslucentMaterial};
+pub use convert::{Weld, bevy_mesh};
+pub use lucent_core;
+pub use lucent_core::bssrdf::ProfileKind;
+pub use material::{LUCENT_SHADER, LucentMaterial, ShadingUniform, shader_source, vertex_records};
+
+use bevy::pbr::MaterialPlugin;
+use bevy::prelude::*;
+use bevy::shader::Shader;
+use bevy::transform::TransformSystems;
+
+/// Solves every [`Translucent`] body with lucent and draws it (see the crate documentation).
+pub struct LucentPlugin;
+
+/// The plugin's systems, in `PostUpdate` after transforms propagate: order your own systems
+/// that read [`SolveStatus`] after this set.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct LucentSystems;
+
+impl Plugin for LucentPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_plugins(MaterialPlugin::<LucentMaterial>::default());
+        let shader = Shader::from_wgsl(shader_source(), "lucent_bevy/lucent.wgsl");
+        app.world_mut().resource_mut::<Assets<Shader>>().insert(LUCENT_SHADER.id(), shader).ok();
+        app.add_systems(
+            PostUpdate,
+            (systems::collect, systems::attach, systems::start)
+                .chain()
+                .in_set(LucentSystems)
+                .after(TransformSystems::Propagate),
+        );
+    }
+}
