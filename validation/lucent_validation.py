@@ -134,6 +134,10 @@ def scene_toml(cfg, case):
         l = cfg["light"]
         lines += ["[[light]]", 'type = "directional"', f'direction = {case_light_direction(cfg, case)}',
                   f'intensity = {l["irradiance"]}', "shadows = true"]
+    elif case["light"] == "point":
+        # lucent's point-light intensity is the irradiance at the bounding box's centre.
+        lines += ["[[light]]", 'type = "point"', f'position = {case["light_position"]}',
+                  f'intensity = {cfg["light"]["irradiance"]}', "shadows = true"]
     else:
         lines += ["[environment]", 'path = "sky.exr"', f'intensity = {cfg["sky_radiance"]}']
     cam = case_camera(cfg, case)
@@ -198,6 +202,12 @@ def mitsuba_scene(cfg, case, max_depth, interior):
     if case["light"] == "directional":
         l = cfg["light"]
         emitter = {"type": "directional", "direction": case_light_direction(cfg, case), "irradiance": {"type": "rgb", "value": [l["irradiance"]] * 3}}
+    elif case["light"] == "point":
+        # The same irradiance at the bounding box's centre as lucent's (`light_position` in mesh
+        # units; Mitsuba's scene is in millimetres).
+        p = np.array(case["light_position"], dtype=np.float64)
+        i = cfg["light"]["irradiance"] * float(((p - centre) ** 2).sum()) * s * s
+        emitter = {"type": "point", "position": (p * s).tolist(), "intensity": {"type": "rgb", "value": [i] * 3}}
     else:
         emitter = {"type": "constant", "radiance": {"type": "rgb", "value": [cfg["sky_radiance"]] * 3}}
     return {
@@ -308,12 +318,13 @@ def render_lucent(cfg, case, scene_path, profile, out, extra=()):
     through the Python module (`pip install ./crates/lucent-py`, the CLI's image with no file
     between) when it is installed and no extra flags are asked for, else the binary."""
     w, h = cfg["resolution"]
-    module = lucent_module()
+    module = None if os.environ.get("LUCENT_BIN") else lucent_module()
     if module is not None and not extra:
         ours = module.render(scene=scene_path, profile=profile, width=w, height=h, surface=False).astype(np.float64)
         module.write_exr(out, ours)
         return ours
-    lucent = os.path.join(ROOT, "target", "release", "lucent")
+    # LUCENT_BIN: another build to compare (e.g. a copy of main's, for a before/after table).
+    lucent = os.environ.get("LUCENT_BIN") or os.path.join(ROOT, "target", "release", "lucent")
     subprocess.run([lucent, "render", "--scene", scene_path, "--profile", profile, "--width", str(w), "--height", str(h),
                     "--no-surface", "--out", out, *extra], check=True, capture_output=True)
     return read_exr(out)

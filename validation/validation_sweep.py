@@ -84,8 +84,17 @@ def cmd_sweep(cfg, seed, count, spp, out_dir, as_json):
         scene = os.path.join(lv.SCENES, case["name"] + ".toml")
         with open(scene, "w") as f:
             f.write(lv.scene_toml(cfg, case))
-        a = lv.render(cfg, case, -1, 1000 * seed + 2 * i + 1, spp)
-        b = lv.render(cfg, case, -1, 1000 * seed + 2 * i + 2, spp)
+        # The draw's Mitsuba halves are kept beside its images and reused by a later sweep of
+        # the same seed and samples (the draws are a function of the seed; lucent is re-rendered).
+        halves = []
+        for h in (1, 2):
+            cached = os.path.join(out_dir, f"{case['name']}.mitsuba_{spp}spp_{h}.exr")
+            if os.path.exists(cached):
+                halves.append(lv.read_exr(cached))
+            else:
+                halves.append(lv.render(cfg, case, -1, 1000 * seed + 2 * i + h, spp))
+                lv.write_exr(cached, halves[-1])
+        a, b = halves
         ours = lv.render_lucent(cfg, case, scene, "pbd", os.path.join(out_dir, case["name"] + ".exr"))
         os.remove(scene)
         row = lv.compare_images(case, ours, a, b, None, os.path.join(out_dir, case["name"] + ".png"))

@@ -466,7 +466,7 @@ impl FrameSession {
         let t = Instant::now();
         // Light that crossed the body, and what of `B` it is (the transmitted exit lobe's share).
         let mut sent = Vec::new();
-        body.add_transmission(&mut face_b, &mut sent, &carried);
+        body.add_transmission(&mut face_b, &mut sent, &carried, e);
         irradiance.add_local(f, &mut face_b, e);
         let t_bounces = Instant::now();
         self.bounces.add(f, &changes, irradiance, &mut self.subsurface, body, (&mut face_b, &mut sent));

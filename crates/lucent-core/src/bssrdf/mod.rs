@@ -15,6 +15,8 @@ mod material;
 pub mod profile;
 mod quadrature;
 pub mod slab;
+pub mod slab_oblique;
+pub mod slab_spread;
 pub mod tables;
 pub mod walk;
 

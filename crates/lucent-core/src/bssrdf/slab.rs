@@ -174,16 +174,29 @@ pub fn transmitted_lobe_exact(tau: f64, rho: f64, mus: &[f64]) -> (Vec<f64>, Sla
 /// The cell edges of the solve and, per cell, the density of collisions after which light
 /// is scattered a second time or more, `ρ (ψ - q₀)` (module docs); `None` for an empty slab.
 fn multiple_collisions(tau: f64, rho: f64, mu: f64) -> Option<(Vec<f64>, Vec<f64>)> {
-    if tau <= 0.0 || rho <= 0.0 {
+    multiple_collisions_many(tau, rho, &[mu]).map(|(edges, mut m)| (edges, m.swap_remove(0)))
+}
+
+/// Multiple-scattering return of a slab (as [`multiple_return_exact`]) for beams at each
+/// cosine of `mus`: one system, a right-hand side per cosine.
+pub fn multiple_return_exact_many(tau: f64, rho: f64, mus: &[f64]) -> Vec<SlabReturn> {
+    match multiple_collisions_many(tau, rho, mus) {
+        Some((edges, m)) => m.iter().map(|m| escaping(tau, &edges, m)).collect(),
+        None => vec![SlabReturn::default(); mus.len()],
+    }
+}
+
+/// [`multiple_collisions`] for beams at each cosine of `mus` (one solve of the system).
+fn multiple_collisions_many(tau: f64, rho: f64, mus: &[f64]) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    if tau <= 0.0 || rho <= 0.0 || mus.is_empty() {
         return None;
     }
-    let mu = mu.clamp(1e-3, 1.0);
     let edges = cell_edges(tau);
     let n = edges.len() - 1;
     let edge = |j: usize| edges[j];
     // The system (I - ρK) ψ = q₀, K_ij = ½ ∫_cell j E₁(|c_i - z'|) dz' at cell i's centre.
     let mut a = vec![0.0; n * n];
-    let mut q0 = vec![0.0; n];
+    let mut q0 = vec![vec![0.0; n]; mus.len()];
     for i in 0..n {
         let c = 0.5 * (edge(i) + edge(i + 1));
         for j in 0..n {
@@ -197,10 +210,13 @@ fn multiple_collisions(tau: f64, rho: f64, mu: f64) -> Option<(Vec<f64>, Vec<f64
             a[i * n + j] = if i == j { 1.0 } else { 0.0 } - rho * k;
         }
         // The cell's mean first-collision density.
-        q0[i] = ((-edge(i) / mu).exp() - (-edge(i + 1) / mu).exp()) / (edge(i + 1) - edge(i));
+        for (q, &mu) in q0.iter_mut().zip(mus) {
+            let mu = mu.clamp(1e-3, 1.0);
+            q[i] = ((-edge(i) / mu).exp() - (-edge(i + 1) / mu).exp()) / (edge(i + 1) - edge(i));
+        }
     }
     let psi = solve_dense(&mut a, q0.clone(), n);
-    let multiple = (0..n).map(|j| rho * (psi[j] - q0[j])).collect();
+    let multiple = psi.iter().zip(&q0).map(|(p, q)| (0..n).map(|j| rho * (p[j] - q[j])).collect()).collect();
     Some((edges, multiple))
 }
 
@@ -225,8 +241,8 @@ fn cell_edges(tau: f64) -> Vec<f64> {
 }
 
 /// Solves the dense `n`×`n` system `a x = b` (row-major, diagonally dominant: `I - ρK` with
-/// `ρ ‖K‖ < 1`) by Gaussian elimination without pivoting.
-fn solve_dense(a: &mut [f64], mut b: Vec<f64>, n: usize) -> Vec<f64> {
+/// `ρ ‖K‖ < 1`) for each right-hand side of `bs` by Gaussian elimination without pivoting.
+fn solve_dense(a: &mut [f64], mut bs: Vec<Vec<f64>>, n: usize) -> Vec<Vec<f64>> {
     for k in 0..n {
         let pivot = a[k * n + k];
         for i in k + 1..n {
@@ -237,14 +253,16 @@ fn solve_dense(a: &mut [f64], mut b: Vec<f64>, n: usize) -> Vec<f64> {
             for j in k..n {
                 a[i * n + j] -= f * a[k * n + j];
             }
-            b[i] -= f * b[k];
+            bs.iter_mut().for_each(|b| b[i] -= f * b[k]);
         }
     }
-    for k in (0..n).rev() {
-        let s: f64 = (k + 1..n).map(|j| a[k * n + j] * b[j]).sum();
-        b[k] = (b[k] - s) / a[k * n + k];
+    for b in &mut bs {
+        for k in (0..n).rev() {
+            let s: f64 = (k + 1..n).map(|j| a[k * n + j] * b[j]).sum();
+            b[k] = (b[k] - s) / a[k * n + k];
+        }
     }
-    b
+    bs
 }
 
 /// A unit direction's cosine with the slab's normal, uniformly over the sphere.

@@ -77,10 +77,12 @@ impl Environment {
             );
             (e * self.intensity).max(Rgb::ZERO)
         };
+        let carried = part(&|c| entry.band_weights(c));
         Entering {
-            carried: part(&|c| entry.band_weights(c)),
+            carried,
             local: part(&|c| entry.local_band_weights(c)),
             single: part(&|c| entry.single_band_weights(c)),
+            carried_cos: carried * (2.0 / 3.0),
         }
     }
 }
@@ -100,6 +102,10 @@ pub struct Entering {
     /// light's along the view ray (`shading::single_scattering`); a bounce between parts sends
     /// it on.
     pub single: Rgb,
+    /// `carried` times the cosine each part of it arrived at (the environment's at 2/3, the
+    /// flux-weighted mean cosine of diffuse light): over `carried`, the mean incidence cosine
+    /// the slab transmission reads (`solver::transmission`; unitless, 0..=1).
+    pub carried_cos: Rgb,
 }
 
 impl Entering {
@@ -109,6 +115,18 @@ impl Entering {
         self.carried += e * entry.at(cos);
         self.local += e * entry.local_at(cos);
         self.single += e * entry.single_at(cos);
+        self.carried_cos += e * entry.at(cos) * cos;
+    }
+
+    /// The mean incidence cosine of `carried`, per channel (1 where nothing is carried).
+    #[inline]
+    pub fn mean_cos(&self) -> Rgb {
+        let c = self.carried;
+        Rgb::new(
+            if c.x > 0.0 { (self.carried_cos.x / c.x).clamp(0.0, 1.0) } else { 1.0 },
+            if c.y > 0.0 { (self.carried_cos.y / c.y).clamp(0.0, 1.0) } else { 1.0 },
+            if c.z > 0.0 { (self.carried_cos.z / c.z).clamp(0.0, 1.0) } else { 1.0 },
+        )
     }
 }
 
@@ -120,6 +138,7 @@ impl std::ops::Sub for Entering {
             carried: (self.carried - o.carried).max(Rgb::ZERO),
             local: (self.local - o.local).max(Rgb::ZERO),
             single: (self.single - o.single).max(Rgb::ZERO),
+            carried_cos: (self.carried_cos - o.carried_cos).max(Rgb::ZERO),
         }
     }
 }
@@ -127,7 +146,12 @@ impl std::ops::Sub for Entering {
 impl std::ops::Mul<f32> for Entering {
     type Output = Entering;
     fn mul(self, k: f32) -> Entering {
-        Entering { carried: self.carried * k, local: self.local * k, single: self.single * k }
+        Entering {
+            carried: self.carried * k,
+            local: self.local * k,
+            single: self.single * k,
+            carried_cos: self.carried_cos * k,
+        }
     }
 }
 
@@ -136,6 +160,7 @@ impl std::ops::AddAssign for Entering {
         self.carried += o.carried;
         self.local += o.local;
         self.single += o.single;
+        self.carried_cos += o.carried_cos;
     }
 }
 

@@ -6,7 +6,7 @@
 
 use super::{Changes, Frame};
 use crate::Rgb;
-use crate::irradiance::ShadowCaster;
+use crate::irradiance::{Entering, ShadowCaster};
 use crate::shading::exit_chord::ExitChord;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use crate::solver::transmission::{CrossBody, Transmission};
@@ -52,14 +52,22 @@ impl Body {
     }
 
     /// Adds to `b` the slab transmission across the body of the carried irradiance `carried`
-    /// (`solver::transmission`), where the transport has it, and to `sent` (per face, made on
-    /// first use) the transmitted light `b` then holds.
-    pub(super) fn add_transmission(&self, b: &mut [Rgb], sent: &mut Vec<Rgb>, carried: &[Rgb]) {
+    /// (`solver::transmission`; `e`, per face, what it was made of, for its mean incidence
+    /// cosine), where the transport has it, and to `sent` (per face, made on first use) the
+    /// transmitted light `b` then holds.
+    pub(super) fn add_transmission(
+        &self,
+        b: &mut [Rgb],
+        sent: &mut Vec<Rgb>,
+        carried: &[Rgb],
+        e: &[Entering],
+    ) {
         if let Some(cross) = self.cross_body.as_ref().filter(|c| c.len() == b.len()) {
             if sent.len() != b.len() {
                 *sent = vec![Rgb::ZERO; b.len()];
             }
-            cross.add(b, sent, carried);
+            let cos: Vec<Rgb> = e.iter().map(Entering::mean_cos).collect();
+            cross.add(b, sent, carried, Some(&cos));
         }
     }
 
@@ -107,7 +115,12 @@ impl Body {
             false => fb.gains_along(mesh, &rays, caster.offset()),
         };
         if f.transport.transmission == Transmission::Slab {
-            let cross = CrossBody::new(profile, fb, mesh, &rays, caster.offset(), &gains);
+            let cross = CrossBody::new(profile, fb, mesh, &rays, caster.offset(), &gains).with_spread(
+                profile,
+                mesh,
+                caster.bvh(),
+                caster.offset(),
+            );
             if !cross.is_empty() {
                 self.face_term = Some(Arc::new(cross.uniform_terms()));
                 self.cross_body = Some(Arc::new(cross));

@@ -60,7 +60,7 @@ impl Bounces {
             let carried = irradiance.carried(&e);
             last =
                 subsurface.solve(f, body, &carried, &Changes::default(), oracle, &mut Timings::default()).0;
-            body.add_transmission(&mut last, sent, &carried);
+            body.add_transmission(&mut last, sent, &carried, &e);
             irradiance.add_local(f, &mut last, &e);
             // No view ray follows the bounced light: its single scattering joins `B`.
             irradiance.add_single(f, &mut last, &e);

@@ -52,14 +52,20 @@ fn on_the_fly_matches_the_solver_called_directly() {
     let gain = fb.gains_along(&mesh, &rays, caster.offset());
     assert!(gain.iter().all(|g| g.min_element() > 1.0), "a small marble sphere gains");
     // And the slab transmission across the body, with room for it under the bound.
-    let cross = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gain);
+    let cross = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gain).with_spread(
+        &profile,
+        &mesh,
+        caster.bvh(),
+        caster.offset(),
+    );
     solver.set_face_gain(Some(Arc::new(gain)));
     if !cross.is_empty() {
         solver.set_face_term(Some(Arc::new(cross.uniform_terms())));
     }
     let mut direct = solver.solve_on_the_fly(&e).face_b;
     if !cross.is_empty() {
-        cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e);
+        let cos: Vec<Rgb> = entering.iter().map(|e| e.mean_cos()).collect();
+        cross.add(&mut direct, &mut vec![Rgb::ZERO; e.len()], &e, Some(&cos));
     }
     let r = Rgb::from_array(profile.total_diffuse_reflectance().map(|v| v as f32));
     assert!(entering.iter().any(|e| e.local.max_element() > 0.0), "oblique faces return some light locally");

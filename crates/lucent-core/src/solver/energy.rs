@@ -59,7 +59,7 @@ pub fn uniform_report(
         })
         .collect();
     if let Some(cross) = cross {
-        cross.add(&mut bounded, &mut vec![Rgb::ZERO; ones.len()], &ones);
+        cross.add(&mut bounded, &mut vec![Rgb::ZERO; ones.len()], &ones, None);
     }
     UniformReport {
         max_b_uniform: max(&bounded),

@@ -34,6 +34,7 @@
 //! here.
 
 pub mod bound;
+pub mod cross_spread;
 pub mod energy;
 mod evaluate;
 pub mod exact;

@@ -32,15 +32,25 @@
 //! head-on); `shading::transmitted_exit` gives the transmitted share of each vertex's `B` the
 //! slab's exact lobe (at `η = 1`; elsewhere the half-space's).
 //!
-//! Left out: the slab's transmittance at oblique incidence (`E_k` carries the half-space's
-//! entry term, whose albedo ratio rises toward grazing where a slab transmits less), the energy
-//! bound's factor on the replaced share (1 on a slab), and the lateral spread of the
-//! transmitted light (about the thickness).
+//! `E_k` is the far side's irradiance averaged over the slab's lateral spread around the point
+//! across ([`super::cross_spread`]; the weights sum to 1, so a uniform far side gives the
+//! one-point term). Light arriving at the far side at a slant collides nearer its face and
+//! crosses less: at `η = 1` the slab's share `s T` is scaled by `T(τ, μ) / T(τ, 1)`
+//! ([`ObliqueTable`], the same transport with a slanted source) over the entry term's carried
+//! share at `μ` relative to head-on (which `E_k` already holds), `μ` the far side's mean
+//! incidence cosine ([`crate::irradiance::Entering::mean_cos`], averaged with the same weights).
+//!
+//! Left out: the slant at `η ≠ 1` (the term stays head-on), the energy bound's factor on the
+//! replaced share (1 on a slab), and the light that leaves through a part's sides.
 
 use crate::Rgb;
+use crate::bssrdf::Entry;
 use crate::bssrdf::Profile;
 use crate::bssrdf::slab::SlabTable;
+use crate::bssrdf::slab_oblique::ObliqueTable;
 use crate::mesh::Mesh;
+use crate::mesh::bvh::Bvh;
+use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -100,6 +110,9 @@ pub struct CrossBody {
     /// Per face: `s (T - G X)` per channel (unitless; negative where the profile carries more
     /// than the slab transmits).
     coef: Vec<Rgb>,
+    /// Per face: the slab's share of `coef`, `s T` per channel (unitless, >= 0), which the
+    /// oblique factor scales.
+    slab: Vec<Rgb>,
     /// Per face: what of the far side's irradiance it sends out after the term, the
     /// transmitted light, `s T + (1 - s) G X` per channel (unitless, >= 0).
     transmitted: Vec<Rgb>,
@@ -109,6 +122,14 @@ pub struct CrossBody {
     sigma_t: [f64; 3],
     /// The slab tables per channel.
     tables: [Arc<SlabTable>; 3],
+    /// The slab's transmittance at a slant over head-on per channel (`None` where `η ≠ 1`:
+    /// not modelled, the term is the head-on one).
+    oblique: Option<[Arc<ObliqueTable>; 3]>,
+    /// The entry term the carried irradiance went through (`bssrdf::entry`).
+    entry: Arc<Entry>,
+    /// Where the far side's irradiance is averaged around the point across
+    /// ([`super::cross_spread`]); `None`: at that point alone.
+    spread: Option<Spread>,
 }
 
 impl CrossBody {
@@ -124,10 +145,10 @@ impl CrossBody {
         gains: &[Rgb],
     ) -> Self {
         let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
-        let rows: Vec<(u32, Rgb, Rgb, f32)> = (0..mesh.triangles.len())
+        let rows: Vec<(u32, Rgb, Rgb, f32, Rgb)> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0);
+                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO);
                 let (Some((t, s)), Some(k)) = (rays.body(mesh, f, offset), rays.inward_face(f)) else {
                     return none;
                 };
@@ -142,34 +163,86 @@ impl CrossBody {
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
                 let sent =
                     std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
-                (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t)
+                let slab = std::array::from_fn(|c| (s * exact[c]) as f32);
+                (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t, Rgb::from_array(slab))
             })
             .collect();
+        let oblique = (profile.eta == 1.0)
+            .then(|| std::array::from_fn(|c| ObliqueTable::cached(profile.alpha_prime[c])));
         CrossBody {
             far: rows.iter().map(|r| r.0).collect(),
             coef: rows.iter().map(|r| r.1).collect(),
             transmitted: rows.iter().map(|r| r.2).collect(),
             thickness: rows.iter().map(|r| r.3).collect(),
+            slab: rows.iter().map(|r| r.4).collect(),
             sigma_t: profile.sigma_t,
             tables,
+            oblique,
+            entry: profile.entry.clone(),
+            spread: None,
         }
     }
 
+    /// The same terms with the far side's irradiance averaged over the slab's lateral spread
+    /// ([`super::cross_spread`]), its rays traced against `bvh` (over `mesh`, the pose these
+    /// terms were made for) from `offset` inside the faces.
+    pub fn with_spread(mut self, profile: &Profile, mesh: &Mesh, bvh: &Bvh, offset: f32) -> Self {
+        if self.far.len() == mesh.triangles.len() {
+            self.spread = Some(Spread::trace(profile, mesh, bvh, offset, &self.far, &self.thickness));
+        }
+        self
+    }
+
     /// Adds each face's term for the irradiance `carried` (per face, what enters and the
-    /// profile carries) to `b`, keeping `B` non-negative, and the transmitted light it then
-    /// holds to `sent` (per face; `shading::transmitted_exit` reads it).
-    pub fn add(&self, b: &mut [Rgb], sent: &mut [Rgb], carried: &[Rgb]) {
+    /// profile carries; `cos`, if given, its mean incidence cosine per face,
+    /// [`crate::irradiance::Entering::mean_cos`]; else head-on) to `b`, keeping `B`
+    /// non-negative, and the transmitted light it then holds to `sent` (per face;
+    /// `shading::transmitted_exit` reads it).
+    pub fn add(&self, b: &mut [Rgb], sent: &mut [Rgb], carried: &[Rgb], cos: Option<&[Rgb]>) {
         if self.far.len() != b.len() || carried.len() != b.len() || sent.len() != b.len() {
             return;
         }
+        let cos = cos.filter(|c| c.len() == b.len());
         b.par_iter_mut().zip(sent.par_iter_mut()).enumerate().for_each(|(f, (b, sent))| {
             let k = self.far[f];
             if k != u32::MAX {
-                let e = carried[k as usize];
-                *b = (*b + self.coef[f] * e).max(Rgb::ZERO);
-                *sent += (self.transmitted[f] * e).min(*b);
+                let k = k as usize;
+                let (e, e_cos) = match (&self.spread, cos) {
+                    (Some(s), Some(c)) => {
+                        (s.average(f, k, |j| carried[j]), s.average(f, k, |j| carried[j] * c[j]))
+                    }
+                    (Some(s), None) => (s.average(f, k, |j| carried[j]), Rgb::ZERO),
+                    (None, Some(c)) => (carried[k], carried[k] * c[k]),
+                    (None, None) => (carried[k], Rgb::ZERO),
+                };
+                let slant = match cos {
+                    Some(_) => self.slant(f, e, e_cos),
+                    None => Rgb::ONE,
+                };
+                let extra = self.slab[f] * (slant - Rgb::ONE) * e;
+                *b = (*b + self.coef[f] * e + extra).max(Rgb::ZERO);
+                *sent += (self.transmitted[f] * e + extra).max(Rgb::ZERO).min(*b);
             }
         });
+    }
+
+    /// The oblique factor of face `f` per channel for far-side light `e` arriving at the mean
+    /// cosine `e_cos / e`: the slab's `T(τ, μ) / T(τ, 1)` over the entry term's carried share
+    /// at `μ` (relative to head-on), which `e` already holds (module docs). 1 where not
+    /// modelled.
+    fn slant(&self, f: usize, e: Rgb, e_cos: Rgb) -> Rgb {
+        let Some(oblique) = &self.oblique else { return Rgb::ONE };
+        let head_on = self.entry.at(1.0);
+        let (e, e_cos, head_on) = (e.to_array(), e_cos.to_array(), head_on.to_array());
+        Rgb::from_array(std::array::from_fn(|c| {
+            if e[c] <= 0.0 || head_on[c] <= 0.0 {
+                return 1.0;
+            }
+            let mu = (e_cos[c] / e[c]).clamp(0.0, 1.0);
+            let carried = self.entry.at(mu).to_array()[c] / head_on[c];
+            let tau = self.sigma_t[c] * self.thickness[f] as f64;
+            if carried <= 0.0 { 1.0 } else { (oblique[c].ratio(tau, mu as f64) / carried as f64) as f32 }
+        }))
     }
 
     /// Per face: the thickness under it (mesh units; 0 where it has no term).
