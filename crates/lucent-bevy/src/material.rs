@@ -20,11 +20,13 @@ pub const LUCENT_SHADER: Handle<Shader> = uuid_handle!("6b1f0a52-3c1e-4e8e-9a55-
 /// Lights the highlight uses at most (as lucent's mesh pass).
 pub const MAX_LIGHTS: usize = 8;
 
-/// The shader source: lucent.wgsl, then lucent-gpu's `spot_falloff` (WGSL has no includes; the
-/// same file lucent's own mesh pass prepends, so the two falloffs cannot drift apart).
+/// The shader source: lucent.wgsl, then lucent-gpu's `spot_falloff` and `fresnel_dielectric`
+/// (WGSL has no includes; the same files lucent's own mesh pass prepends, so the two cannot
+/// drift apart).
 pub fn shader_source() -> String {
     let spot = include_str!("../../lucent-gpu/src/shaders/spot.wgsl");
-    format!("{}\n{}", include_str!("lucent.wgsl"), spot)
+    let fresnel = include_str!("../../lucent-gpu/src/shaders/fresnel.wgsl");
+    format!("{}\n{}\n{}", include_str!("lucent.wgsl"), spot, fresnel)
 }
 
 /// One light of the highlight, as the shader reads it.

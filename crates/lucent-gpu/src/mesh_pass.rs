@@ -360,7 +360,12 @@ impl MeshPass {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lucent mesh.wgsl"),
             source: wgpu::ShaderSource::Wgsl(
-                concat!(include_str!("shaders/spot.wgsl"), include_str!("shaders/mesh.wgsl")).into(),
+                concat!(
+                    include_str!("shaders/spot.wgsl"),
+                    include_str!("shaders/fresnel.wgsl"),
+                    include_str!("shaders/mesh.wgsl")
+                )
+                .into(),
             ),
         });
         let uniform_layout = uniform_layout(device);
