@@ -243,6 +243,13 @@ impl Default for Shading {
     }
 }
 
+/// mesh.wgsl after the functions it shares (WGSL has no includes).
+const MESH_WGSL: &str = concat!(
+    include_str!("shaders/spot.wgsl"),
+    include_str!("shaders/fresnel.wgsl"),
+    include_str!("shaders/mesh.wgsl")
+);
+
 /// GPU layout of `Uniforms` in `mesh.wgsl` (std140-compatible by construction: only vec4s).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -359,14 +366,7 @@ impl MeshPass {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lucent mesh.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                concat!(
-                    include_str!("shaders/spot.wgsl"),
-                    include_str!("shaders/fresnel.wgsl"),
-                    include_str!("shaders/mesh.wgsl")
-                )
-                .into(),
-            ),
+            source: wgpu::ShaderSource::Wgsl(MESH_WGSL.into()),
         });
         let uniform_layout = uniform_layout(device);
         let env_layout = texture_layout(device, "lucent mesh environment");
@@ -483,9 +483,8 @@ impl MeshPass {
         self.draw_background.set(shading.background > 0.0);
     }
 
-    /// The mesh pass's render pass: drawn into the multisampled `msaa`, resolved into
-    /// `resolved`, both cleared to transparent (alpha 0 marks the background for the tone-map
-    /// pass), with `depth` cleared to the far plane; nothing kept but the resolve.
+    /// The mesh pass's render pass: into `msaa` resolved to `resolved`, cleared to transparent
+    /// (alpha 0 marks the background for tone mapping), `depth` cleared; only the resolve kept.
     pub fn begin<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
         label: &str,
@@ -512,9 +511,7 @@ impl MeshPass {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
+            ..Default::default()
         })
     }
 
