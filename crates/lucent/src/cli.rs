@@ -439,6 +439,10 @@ pub struct BenchArgs {
     /// `bench energy` only: the diffusion profile (as `lucent render --profile`). Default pbd.
     #[arg(long, value_parser = parse_profile)]
     pub profile: Option<ProfileKind>,
+    /// `bench htsm` only: the transport model (as `lucent render --htsm-model`). Default: the
+    /// render's default (`diffusion` with the scene's material).
+    #[arg(long, value_enum)]
+    pub htsm_model: Option<HtsmModel>,
 }
 
 impl BenchArgs {

@@ -8,7 +8,7 @@
 //! `memory_bytes` is what the thesis counts: reference images with mips plus the density volume
 //! with mips.
 
-use crate::cli::{BenchArgs, Cli, Command, RenderArgs};
+use crate::cli::{BenchArgs, Cli, Command, HtsmModel, RenderArgs};
 use crate::render::Scene;
 use crate::render::htsm::{build_volume, htsm_medium, htsm_params};
 use anyhow::{Context, Result};
@@ -30,7 +30,16 @@ const MAX_FRAMES: usize = 50;
 const BUDGET: Duration = Duration::from_secs(3);
 
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let render_args: RenderArgs = match Cli::parse_from(["lucent", "render", "--method", "htsm"]).command {
+    let mut argv = vec!["lucent", "render", "--method", "htsm"];
+    if let Some(model) = args.htsm_model {
+        let name = match model {
+            HtsmModel::Thesis => "thesis",
+            HtsmModel::BeerLambert => "beer-lambert",
+            HtsmModel::Diffusion => "diffusion",
+        };
+        argv.extend(["--htsm-model", name]);
+    }
+    let render_args: RenderArgs = match Cli::parse_from(argv).command {
         Some(Command::Render(a)) => a,
         _ => unreachable!("render is a subcommand"),
     };
@@ -94,6 +103,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         "width": size,
                         "height": size,
                         "steps": params.steps,
+                        "model": format!("{:?}", params.model),
                         "ms_per_frame": ms,
                         "fps": 1e3 / ms,
                         "frames": times.len(),
