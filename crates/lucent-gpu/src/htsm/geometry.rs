@@ -24,6 +24,9 @@ pub(super) struct Geometry {
     pub box_size: Vec3,
     /// Bounding sphere of the current (deformed) positions, for the light frusta.
     pub sphere: (Vec3, f32),
+    /// Whether any deformed position differs from its rest position. At rest every deformation
+    /// offset is exactly zero, so the camera pass skips reading the lit surface's.
+    pub deformed: bool,
 }
 
 fn validate_mesh(mesh: &Mesh) -> Result<(), HtsmError> {
@@ -79,6 +82,7 @@ impl Geometry {
             box_min,
             box_size: box_max - box_min,
             sphere: bounding_sphere(&mesh.positions),
+            deformed: false,
         })
     }
 
@@ -97,6 +101,7 @@ impl Geometry {
         let data = vertices(positions, &self.rest, &self.triangles);
         queue.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&data));
         self.sphere = bounding_sphere(positions);
+        self.deformed = positions != self.rest.as_slice();
         Ok(())
     }
 

@@ -278,7 +278,12 @@ impl HtsmRenderer {
             sigma: sigma_a.extend(0.0).to_array(),
             scatter: sigma_s.extend(0.0).to_array(),
             density_absorption: sigma_d.extend(0.0).to_array(),
-            material: [params.f0(), params.shadow_bias, (self.camera.density_levels - 1) as f32, 0.0],
+            material: [
+                params.f0(),
+                params.shadow_bias,
+                (self.camera.density_levels - 1) as f32,
+                if self.geometry.deformed { 1.0 } else { 0.0 },
+            ],
             shading: [params.diffuse, params.specular, params.shininess, 0.0],
             counts: [
                 params.samples as f32,

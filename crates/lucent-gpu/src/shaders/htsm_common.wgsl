@@ -23,7 +23,7 @@ struct Frame {
     // rgb: absorption added at density 1; w: unused.
     density_absorption: vec4<f32>,
     // x: Schlick F0; y: shadow bias (object units); z: largest mip level of the density volume;
-    // w: unused.
+    // w: 1 when the mesh is deformed, 0 at rest (every deformation offset is then zero).
     material: vec4<f32>,
     // x: diffuse weight; y: specular weight; z: Blinn-Phong exponent; w: unused.
     shading: vec4<f32>,

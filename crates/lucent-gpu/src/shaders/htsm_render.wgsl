@@ -116,8 +116,12 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         let end = tcc.xyz / tcc.a;
         let dir = end - tc;
         // The ray on the deformed mesh, object units: its rest vector plus how much farther
-        // deformation moved its end than its start (zero without deformation).
-        let end_moved = textureSampleLevel(ref_deformation, ref_sampler, suv, level).xyz / tcc.a;
+        // deformation moved its end than its start (zero without deformation, where the
+        // offset image holds zeros and is not read).
+        var end_moved = vec3<f32>(0.0);
+        if (g.material.w > 0.5) {
+            end_moved = textureSampleLevel(ref_deformation, ref_sampler, suv, level).xyz / tcc.a;
+        }
         let ray = tc_to_object(dir) + (end_moved - moved);
         let d_i = length(ray);
 
@@ -149,8 +153,6 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         if (d_i > 1e-6) {
             cos_theta = dot(ray / d_i, -n);
         }
-        let phase = textureSampleLevel(phase_table, ref_sampler, vec2<f32>(cos_theta * 0.5 + 0.5, 0.5), 0.0).r;
-
         if (diffusion) {
             // htsm/diffusion.rs: the kernel of the medium along the ray (its mean density, its
             // mean sigma_tr) integrated over the sample's annulus, times its total: the
@@ -171,14 +173,14 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         } else if (beer_lambert) {
             // Transmittance exp(-sigma D_i - alpha_i): the optical depth of the medium's
             // transport coefficient along the ray.
-            transport = transport + irr.rgb * exp(-tau) * phase;
+            transport = transport + irr.rgb * exp(-tau) * phase_at(cos_theta);
         } else {
             // Table 4.1. The printed equation has no irradiance term, yet light that reaches a
             // lit surface must scale what comes out: each ray carries its sample's irradiance.
             // The bracket is negative once D_i + alpha_i > 2 T_d, which would subtract light,
             // so it is clamped at zero: paths that long transmit nothing.
             let bracket = max((2.0 * t_d - (d_i + alpha_i)) / t_d, vec3<f32>(0.0));
-            transport = transport + irr.rgb * bracket * phase;
+            transport = transport + irr.rgb * bracket * phase_at(cos_theta);
         }
     }
     if (!diffusion) {
@@ -208,6 +210,12 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         radiance = radiance + environment_surface(in.world, n);
     }
     return vec4<f32>(radiance, 1.0);
+}
+
+// The phase function f(theta_i) of §4.3.4 from its table (the thesis and Beer-Lambert models
+// weigh each sample by it; the diffusion kernel is isotropic and does not read it).
+fn phase_at(cos_theta: f32) -> f32 {
+    return textureSampleLevel(phase_table, ref_sampler, vec2<f32>(cos_theta * 0.5 + 0.5, 0.5), 0.0).r;
 }
 
 // The medium at density rho (htsm/medium.rs), object units: the dipole's source depth z_r = 1 / sigma_t' and extrapolation distance z_b = 2 A / (3 sigma_t').
