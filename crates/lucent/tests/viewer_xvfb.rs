@@ -134,6 +134,36 @@ fn switching_to_htsm_draws_the_object_differently() {
     assert!(fraction > 0.05, "only {:.3}% of the 3D view changed", 100.0 * fraction);
 }
 
+/// HTSM's medium follows a later preset (issue 55): after `material:ketchup` the HTSM view
+/// shows the red sauce instead of skim milk's near white (its diffusion tables made on their
+/// own thread; the script waits for them).
+#[test]
+fn htsm_follows_the_material_preset() {
+    let dir = fresh_dir("viewer_xvfb_htsm_preset", &["skim.png", "ketchup.png"]);
+    let script = "light:0.2,0.6,-1.5;method:htsm;shot:skim.png;material:ketchup";
+    let Some(stdout) = run_viewer(&dir, script, "ketchup.png") else {
+        return;
+    };
+    let fraction = check_object_and_change(&dir, &stdout, "skim.png", "ketchup.png");
+    assert!(fraction > 0.05, "only {:.3}% of the HTSM view changed", 100.0 * fraction);
+    // Redder: the view's mean red over green grows.
+    let [x, y, w, h] = viewport_of(&stdout, "ketchup.png");
+    let red_over_green = |file: &str| {
+        let img = load(&dir.join(file));
+        let (mut r, mut g) = (0u64, 0u64);
+        for py in y..y + h {
+            for px in x..x + w {
+                let p = img.get_pixel(px, py).0;
+                r += p[0] as u64;
+                g += p[1] as u64;
+            }
+        }
+        r as f64 / g as f64
+    };
+    let (skim, ketchup) = (red_over_green("skim.png"), red_over_green("ketchup.png"));
+    assert!(ketchup > 1.2 * skim, "red/green {skim:.3} (skim milk) -> {ketchup:.3} (ketchup)");
+}
+
 /// The panel's "save material" as the script's `save:`: the scene file it writes reads back
 /// (as `lucent render --scene` reads it) to the material the viewer had.
 #[test]

@@ -86,6 +86,20 @@ pub struct DiffusionKey {
     pub samples: u32,
 }
 
+impl DiffusionKey {
+    /// The key of the tables `params` render with: `None` unless the model is
+    /// [`super::TransportModel::Diffusion`] with a medium.
+    pub fn of(params: &super::HtsmParams) -> Option<DiffusionKey> {
+        let coefficients = params.medium.filter(|_| params.model == super::TransportModel::Diffusion)?;
+        Some(DiffusionKey {
+            coefficients,
+            eta: params.eta,
+            kernel_radius: params.kernel_radius,
+            samples: params.samples,
+        })
+    }
+}
+
 /// `F(b)` of the module docs: the share of a dipole term with source depth `z` lying beyond
 /// lateral distance `b` (`None`: infinity, share 0), for transport coefficient `s`.
 pub fn kernel_share(b: Option<f64>, z: f64, s: f64) -> f64 {

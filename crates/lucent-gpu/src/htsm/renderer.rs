@@ -50,6 +50,8 @@ pub struct HtsmRenderer {
     targets: Option<Targets>,
     /// The diffusion model's tables for the last medium and pattern they were made for.
     diffusion: Option<(DiffusionKey, DiffusionUniforms)>,
+    /// Whether a frame whose tables are missing makes them ([`HtsmRenderer::set_make_tables`]).
+    make_tables: bool,
 }
 
 /// One light pass of a frame: the light, and whether it adds the lit side's diffuse and
@@ -114,6 +116,7 @@ impl HtsmRenderer {
             tonemaps,
             targets: None,
             diffusion: None,
+            make_tables: true,
         })
     }
 
@@ -238,20 +241,33 @@ impl HtsmRenderer {
         })
     }
 
+    /// Whether a frame makes the diffusion model's tables when the medium, index or pattern
+    /// changed (`true`, the default: every image has its own medium's tables), or renders with
+    /// the last tables it has (`false`; tables are made only when it has none). `false` is for
+    /// an interactive caller that makes them on another thread ([`DiffusionUniforms::new`], up
+    /// to seconds for a new medium) and hands them over with
+    /// [`HtsmRenderer::set_diffusion_tables`], so that a frame never waits for them.
+    pub fn set_make_tables(&mut self, make: bool) {
+        self.make_tables = make;
+    }
+
+    /// Hands over the diffusion model's tables made elsewhere for `key`
+    /// ([`DiffusionKey::of`]): frames of that medium use them instead of making their own.
+    pub fn set_diffusion_tables(&mut self, key: DiffusionKey, tables: DiffusionUniforms) {
+        if self.diffusion.as_ref().is_none_or(|(k, _)| *k != key) {
+            self.diffusion = Some((key, tables));
+        }
+    }
+
     /// The diffusion model's tables for `params` (made when the medium, index or pattern
-    /// changed; zeros for the other models).
+    /// changed, unless [`HtsmRenderer::set_make_tables`] said not to; zeros for the other
+    /// models).
     fn diffusion_uniforms(&mut self, params: &HtsmParams) -> DiffusionUniforms {
-        let Some(coefficients) = params.medium.filter(|_| params.model == TransportModel::Diffusion) else {
+        let Some(key) = DiffusionKey::of(params) else {
             return bytemuck::Zeroable::zeroed();
         };
-        let key = DiffusionKey {
-            coefficients,
-            eta: params.eta,
-            kernel_radius: params.kernel_radius,
-            samples: params.samples,
-        };
         match &self.diffusion {
-            Some((k, u)) if *k == key => *u,
+            Some((k, u)) if *k == key || !self.make_tables => *u,
             _ => {
                 let u = DiffusionUniforms::new(&key);
                 self.diffusion = Some((key, u));

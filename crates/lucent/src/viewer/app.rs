@@ -200,6 +200,9 @@ impl App {
             anyhow::bail!("loading the mesh: {e}");
         }
         self.input.update(&mut self.scene.state);
+        // HTSM's medium follows the material and scale however they changed (panel, script).
+        let st = &mut self.scene.state;
+        st.htsm.follow(&st.params.transport.material, st.params.transport.scale_m);
         let d = &mut self.scene.state.deform;
         if d.noise_animated && d.noise.amplitude != 0.0 {
             d.noise.offset += glam::Vec3::splat(dt * 0.5);
@@ -289,7 +292,8 @@ impl App {
         if self.animate_until.is_some() {
             return;
         }
-        let settled = self.scene.settled();
+        let htsm_building = self.surface.as_mut().is_some_and(|s| s.htsm.building());
+        let settled = self.scene.settled() && !htsm_building;
         let Some(auto) = &mut self.automation else { return };
         let step = auto.step(settled);
         match step {
@@ -546,14 +550,18 @@ impl ApplicationHandler<WorkerWake> for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let htsm = self.scene.state.method == ViewMethod::Htsm;
+        let Some(s) = &mut self.surface else { return };
+        // HTSM's tables being made on their thread: wake to draw with them when they come.
+        let htsm_building = htsm && s.htsm.building();
         let Some(s) = &self.surface else { return };
-        if !self.animating() && !self.scene.solving() {
+        if !self.animating() && !self.scene.solving() && !htsm_building {
             event_loop.set_control_flow(ControlFlow::Wait);
             return;
         }
         if !self.animating() {
-            // Only waiting for the worker: its reply wakes the loop; redraw four times a second
-            // for the elapsed time and the progress bar.
+            // Only waiting for the worker (its reply wakes the loop) or HTSM's tables: redraw
+            // four times a second for the elapsed time, the progress bar and the tables.
             event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(250)));
             return;
         }

@@ -9,6 +9,7 @@
 //! It re-renders only when something it depends on changed (camera, lights, environment, mesh,
 //! settings, viewport size), so an idle window costs nothing.
 
+use super::htsm_tables::{TableBuilder, Tables};
 use glam::Vec3;
 use lucent_core::bssrdf::Material;
 use lucent_core::camera::CameraView;
@@ -16,6 +17,7 @@ use lucent_core::irradiance::{Environment, Light};
 use lucent_core::mesh::Mesh;
 use lucent_core::volume::VolumeSpec;
 use lucent_gpu::GpuContext;
+use lucent_gpu::htsm::diffusion::DiffusionKey;
 use lucent_gpu::htsm::medium::DEFAULT_DENSITY_SIGMA_A;
 use lucent_gpu::htsm::{HtsmMedium, HtsmParams, HtsmRenderer, HtsmView, TransportModel, volume_dims_for};
 use lucent_gpu::tonemap::ToneMap;
@@ -41,6 +43,9 @@ pub struct HtsmSettings {
     /// ([`HtsmMedium::apply`]), `tone` from the viewer's exposure. Default: the `diffusion`
     /// model, phase g 0 (the medium's `sigma_s'` is isotropic).
     pub params: HtsmParams,
+    /// The viewer's material and scale (metres) `medium` and `params.eta` were last taken from:
+    /// [`HtsmSettings::follow`] takes them again when the viewer's change.
+    pub source: (Material, f64),
 }
 
 impl HtsmSettings {
@@ -62,7 +67,24 @@ impl HtsmSettings {
                 eta: material.eta as f32,
                 ..HtsmParams::default()
             },
+            source: (material.clone(), scale_m),
         }
+    }
+
+    /// Follows the viewer's material and scale: when they differ from [`HtsmSettings::source`]
+    /// (a preset chosen, a coefficient edited, a colour applied, a script's `material:` or
+    /// `scale:`), the medium's `sigma_s'`, `sigma_a`, size and the index become theirs; the
+    /// density's absorption, the volume and the sampling stay, and so do edits made in the
+    /// HTSM panel until the viewer's material or scale next changes. True when it changed.
+    pub fn follow(&mut self, material: &Material, scale_m: f64) -> bool {
+        if self.source.0 == *material && self.source.1 == scale_m {
+            return false;
+        }
+        let taken = Self::for_material(material, scale_m);
+        self.medium = HtsmMedium { density_sigma_a: self.medium.density_sigma_a, ..taken.medium };
+        self.params.eta = taken.params.eta;
+        self.source = taken.source;
+        true
     }
 
     /// The parameters the renderer takes: `params` with the medium applied.
@@ -94,21 +116,31 @@ struct Inputs {
     lights: Vec<Light>,
     environment: Option<Environment>,
     size: (u32, u32),
+    /// The medium whose diffusion tables the image is drawn with (`None` for the other models).
+    tables: Option<DiffusionKey>,
 }
 
 impl Inputs {
     /// The same mesh (by identity) and equal everything else.
     fn same_as(&self, other: &Inputs) -> bool {
         Arc::ptr_eq(&self.mesh, &other.mesh)
-            && (&self.volume, &self.params, &self.camera, &self.lights, &self.environment, self.size)
-                == (
-                    &other.volume,
-                    &other.params,
-                    &other.camera,
-                    &other.lights,
-                    &other.environment,
-                    other.size,
-                )
+            && (
+                &self.volume,
+                &self.params,
+                &self.camera,
+                &self.lights,
+                &self.environment,
+                self.size,
+                self.tables,
+            ) == (
+                &other.volume,
+                &other.params,
+                &other.camera,
+                &other.lights,
+                &other.environment,
+                other.size,
+                other.tables,
+            )
     }
 }
 
@@ -136,6 +168,8 @@ pub struct HtsmPanel {
     pub frame_ms: f64,
     /// Why the last draw failed (shown in the panel instead of an image).
     pub error: Option<String>,
+    /// The diffusion model's tables, made on their own thread.
+    tables: TableBuilder,
 }
 
 impl HtsmPanel {
@@ -155,20 +189,37 @@ impl HtsmPanel {
         tone: ToneMap,
         size: (u32, u32),
     ) {
+        let params = HtsmParams { tone, ..settings.render_params() };
+        // The diffusion model's tables: the newest made (drawn with until the medium's own
+        // come); none made yet, nothing to draw with: the last image stays.
+        let tables = match DiffusionKey::of(&params) {
+            Some(key) => match self.tables.get(key) {
+                Some(t) => Some(t.clone()),
+                None => return,
+            },
+            None => None,
+        };
         let inputs = Inputs {
             mesh: mesh.clone(),
             volume: settings.volume.clone(),
-            params: HtsmParams { tone, ..settings.render_params() },
+            params,
             camera,
             lights: lights.to_vec(),
             environment,
             size: (size.0.max(1), size.1.max(1)),
+            tables: tables.as_ref().map(|t| t.0),
         };
         if self.last.as_ref().is_some_and(|last| last.same_as(&inputs)) {
             return;
         }
         self.last = Some(inputs.clone());
-        self.error = self.draw(ctx, egui_renderer, &inputs).err().map(|e| format!("{e:#}"));
+        self.error = self.draw(ctx, egui_renderer, &inputs, tables).err().map(|e| format!("{e:#}"));
+    }
+
+    /// Whether the diffusion tables of the medium asked for are still being made (the panel
+    /// then draws again when they come).
+    pub fn building(&mut self) -> bool {
+        self.tables.building()
     }
 
     fn draw(
@@ -176,6 +227,7 @@ impl HtsmPanel {
         ctx: &GpuContext,
         egui_renderer: &mut egui_wgpu::Renderer,
         inputs: &Inputs,
+        tables: Option<Tables>,
     ) -> anyhow::Result<()> {
         inputs.params.validate()?;
         let mesh = &inputs.mesh;
@@ -189,6 +241,11 @@ impl HtsmPanel {
             self.positions = Some(mesh.clone());
         }
         let (_, _, renderer) = self.renderer.as_mut().expect("made above");
+        // Tables come from the table thread only: a frame never makes them.
+        renderer.set_make_tables(false);
+        if let Some((key, u)) = tables {
+            renderer.set_diffusion_tables(key, *u);
+        }
         if !self.positions.as_ref().is_some_and(|p| Arc::ptr_eq(p, mesh)) {
             renderer.set_positions(ctx, &mesh.positions)?;
             self.positions = Some(mesh.clone());
@@ -303,4 +360,33 @@ fn coefficient_row(ui: &mut egui::Ui, label: &str, v: &mut Vec3, range: std::ops
         *v = Vec3::from(c);
         ui.label(label);
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_medium_follows_a_later_material_and_scale() {
+        let skim = Material::by_name("skimmilk").unwrap();
+        let marble = Material::by_name("marble").unwrap();
+        let mut s = HtsmSettings::for_material(&skim, 0.05);
+        assert!(!s.follow(&skim, 0.05), "nothing changed");
+        // An edit in the HTSM panel stays while the viewer's material does not change.
+        s.medium.density_sigma_a = Vec3::splat(2.0);
+        s.medium.sigma_a.x = 1.0;
+        assert!(!s.follow(&skim, 0.05));
+        assert_eq!(s.medium.sigma_a.x, 1.0);
+        // A new preset: its coefficients and index; the density's absorption stays.
+        assert!(s.follow(&marble, 0.05));
+        let want = HtsmSettings::for_material(&marble, 0.05);
+        assert_eq!(s.medium.sigma_s_prime, want.medium.sigma_s_prime);
+        assert_eq!(s.medium.sigma_a, want.medium.sigma_a);
+        assert_eq!(s.params.eta, marble.eta as f32);
+        assert_eq!(s.medium.density_sigma_a, Vec3::splat(2.0));
+        // A new scale: the medium's size.
+        assert!(s.follow(&marble, 0.2));
+        assert_eq!(s.medium.scale_m, 0.2);
+        assert_eq!(s.render_params(), HtsmSettings { medium: s.medium, ..want.clone() }.render_params());
+    }
 }

@@ -10,7 +10,7 @@
 //! * [`framing`], [`input`], [`pick`]: what the orbit camera (`lucent_core::camera`) frames,
 //!   mouse handling, ray picking through the mesh's BVH.
 //! * [`state`], [`model`]: the editable state and the solve bookkeeping.
-//! * [`worker`]: the solve thread (coalesced requests).
+//! * [`worker`]: the solve thread (coalesced requests); [`htsm_tables`]: HTSM's table thread.
 //! * [`core_adapter`]: the panel's state mapped onto `lucent-core`'s frame session.
 //! * [`script`], [`screenshot`]: scripted runs and PNG screenshots.
 //! * [`scene_file`]: start-up state from the resolved scene (flags and a TOML scene file).
@@ -21,6 +21,7 @@ pub mod draw;
 pub mod framing;
 pub mod gfx;
 pub mod htsm;
+pub mod htsm_tables;
 pub mod input;
 pub mod model;
 pub mod pick;
