@@ -6,7 +6,8 @@
 //! mapping); its time is the wall time from encoding to the queue being idle again
 //! (`queue.submit` then `device.poll(wait)`), without read-back, median over the frames.
 //! `memory_bytes` is what the thesis counts: reference images with mips plus the density volume
-//! with mips.
+//! with mips. `--htsm-model` times another transport model than the render's default
+//! (`diffusion` with the scene's material); the JSON names the model timed.
 
 use crate::cli::{BenchArgs, Cli, Command, HtsmModel, RenderArgs};
 use crate::render::Scene;
@@ -29,9 +30,10 @@ const MIN_FRAMES: usize = 5;
 const MAX_FRAMES: usize = 50;
 const BUDGET: Duration = Duration::from_secs(3);
 
-pub fn run(args: &BenchArgs) -> Result<()> {
+/// `lucent render --method htsm`'s arguments, with `--htsm-model` when given.
+fn render_args(model: Option<HtsmModel>) -> RenderArgs {
     let mut argv = vec!["lucent", "render", "--method", "htsm"];
-    if let Some(model) = args.htsm_model {
+    if let Some(model) = model {
         let name = match model {
             HtsmModel::Thesis => "thesis",
             HtsmModel::BeerLambert => "beer-lambert",
@@ -39,10 +41,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         };
         argv.extend(["--htsm-model", name]);
     }
-    let render_args: RenderArgs = match Cli::parse_from(argv).command {
+    match Cli::parse_from(argv).command {
         Some(Command::Render(a)) => a,
         _ => unreachable!("render is a subcommand"),
-    };
+    }
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let render_args = render_args(args.htsm_model);
     let scene = Scene::resolve(&render_args.overrides())?;
     let light = scene.lights.first().context("the default scene has a light")?.light;
     let medium = htsm_medium(&render_args.htsm, scene.material(), scene.scale())?;
