@@ -8,7 +8,11 @@
 //! `memory_bytes` is what the thesis counts: reference images with mips plus the density volume
 //! with mips. `--htsm-model` times another transport model than the render's default
 //! (`diffusion` with the scene's material); the JSON names the model timed.
+//! `cpu_ms_per_frame` is the median CPU time of the process's threads per frame: on a software
+//! adapter (lavapipe) sharing its cores with other jobs the wall time swings with their load,
+//! the CPU time far less, so two models or builds compare by it there.
 
+use super::cpu_time::process_cpu_ns;
 use crate::cli::{BenchArgs, Cli, Command, HtsmModel, RenderArgs};
 use crate::render::Scene;
 use crate::render::htsm::{build_volume, htsm_medium, htsm_params};
@@ -29,6 +33,35 @@ const WARMUP: usize = 2;
 const MIN_FRAMES: usize = 5;
 const MAX_FRAMES: usize = 50;
 const BUDGET: Duration = Duration::from_secs(3);
+
+/// Frames of `params` after [`WARMUP`]: the median wall time (ms), the median CPU time of the
+/// process's threads (ms, where readable) and the number of frames timed.
+fn time_frames(
+    renderer: &mut HtsmRenderer,
+    ctx: &GpuContext,
+    view: &HtsmView,
+    params: &HtsmParams,
+) -> Result<(f64, Option<f64>, usize)> {
+    for _ in 0..WARMUP {
+        renderer.render_timed(ctx, view, params)?;
+    }
+    let started = Instant::now();
+    let (mut times, mut cpu) = (Vec::new(), Vec::new());
+    while times.len() < MIN_FRAMES || (times.len() < MAX_FRAMES && started.elapsed() < BUDGET) {
+        let before = process_cpu_ns();
+        times.push(renderer.render_timed(ctx, view, params)?.as_secs_f64() * 1e3);
+        if let (Some(b), Some(a)) = (before, process_cpu_ns()) {
+            cpu.push(a.saturating_sub(b) as f64 * 1e-6);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let frames = times.len();
+    let cpu_ms = (cpu.len() == frames).then(|| median(&mut cpu));
+    Ok((median(&mut times), cpu_ms, frames))
+}
 
 /// `lucent render --method htsm`'s arguments, with `--htsm-model` when given.
 fn render_args(model: Option<HtsmModel>) -> RenderArgs {
@@ -90,16 +123,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         };
         for samples in SAMPLES {
             let params = HtsmParams { samples, ..base };
-            for _ in 0..WARMUP {
-                renderer.render_timed(&ctx, &view, &params)?;
-            }
-            let started = Instant::now();
-            let mut times = Vec::new();
-            while times.len() < MIN_FRAMES || (times.len() < MAX_FRAMES && started.elapsed() < BUDGET) {
-                times.push(renderer.render_timed(&ctx, &view, &params)?.as_secs_f64() * 1e3);
-            }
-            times.sort_by(f64::total_cmp);
-            let ms = times[times.len() / 2];
+            let (ms, cpu_ms, frames) = time_frames(&mut renderer, &ctx, &view, &params)?;
             if args.json {
                 println!(
                     "{}",
@@ -112,8 +136,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         "model": format!("{:?}", params.model),
                         "ms_per_frame": ms,
                         "fps": 1e3 / ms,
-                        "frames": times.len(),
+                        "frames": frames,
                         "timing": "median of submit + device.poll(wait), no read-back",
+                        "cpu_ms_per_frame": cpu_ms,
+                        "cpu_timing": "median CPU time of all the process's threads per frame (Linux; null elsewhere)",
                         "memory_bytes": memory.thesis_bytes(),
                         "reference_size": renderer.reference_size(),
                         "volume_dims": volume.dims,
@@ -126,7 +152,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     "{samples:>3} {:>11} {ms:>12.2} {:>9.1} {:>7}",
                     format!("{size}x{size}"),
                     1e3 / ms,
-                    times.len()
+                    frames
                 );
             }
         }

@@ -3,6 +3,7 @@
 use crate::cli::{BenchArgs, BenchTarget};
 
 mod albedo;
+mod cpu_time;
 mod energy;
 mod formfactor;
 mod htsm;
