@@ -175,8 +175,9 @@ pub struct RenderArgs {
     pub view_terms: lucent_core::session::ViewTerms,
     /// Light that crosses the body to a face on its far side (homogeneous profiles with a
     /// finite-body gain): `slab` (default: the exact transmittance of a slab of the face's
-    /// thickness in place of the profile's far-side share) or `halfspace` (the profile at the
-    /// chord, as before issue 50).
+    /// thickness in place of the profile's far-side share), `curved` (the slab's on slab-like
+    /// parts and a sphere's random walk on curved ones, at `eta = 1`; docs/transmission.md) or
+    /// `halfspace` (the profile at the chord, as before issue 50).
     #[arg(long, value_parser = parse_transmission)]
     pub transmission: Option<Transmission>,
     /// Solver: `hierarchical` (Mertens 2003's hierarchical boundary elements, default), `exact`
