@@ -69,23 +69,23 @@ pub enum Transmission {
     /// The profile at the chord, scaled by the finite-body gain (lucent before issue 50).
     HalfSpace,
     /// The exact slab transmittance at the face's thickness in place of the profile's far-side
-    /// share, weighted by the slabness (module docs). The default.
-    #[default]
+    /// share, weighted by the slabness (module docs).
     Slab,
     /// [`Transmission::Slab`] on slab-like parts and the sphere's random walk on curved ones,
-    /// by the slabness (`super::sphere_term`; `η = 1` only, elsewhere as `Slab`).
+    /// by the slabness (`super::sphere_term`; `η = 1` only, elsewhere as `Slab`). The default.
+    #[default]
     Curved,
 }
 
 impl Transmission {
     /// Every mode, in the order the command line lists them.
-    pub const ALL: [Transmission; 3] = [Transmission::Slab, Transmission::Curved, Transmission::HalfSpace];
+    pub const ALL: [Transmission; 3] = [Transmission::Curved, Transmission::Slab, Transmission::HalfSpace];
 
     /// The name the command line and scene files use.
     pub fn name(self) -> &'static str {
         match self {
-            Transmission::Slab => "slab",
             Transmission::Curved => "curved",
+            Transmission::Slab => "slab",
             Transmission::HalfSpace => "halfspace",
         }
     }
@@ -97,7 +97,7 @@ pub struct UnknownTransmission(pub String);
 
 impl std::fmt::Display for UnknownTransmission {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "unknown transmission {:?} (expected slab, curved or halfspace)", self.0)
+        write!(f, "unknown transmission {:?} (expected curved, slab or halfspace)", self.0)
     }
 }
 
