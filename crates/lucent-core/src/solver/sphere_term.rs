@@ -75,7 +75,7 @@ impl SphereTerm {
     pub(crate) fn carried(&self, thickness: f32) -> [f64; 3] {
         let t = thickness as f64;
         let n = self.t.len();
-        if !(t > self.t[0]) {
+        if t.is_nan() || t <= self.t[0] {
             return self.x[0];
         }
         if t >= self.t[n - 1] {
