@@ -1,6 +1,7 @@
 //! One translucent body's state between frames: its frame session (Mertens §5.5, lucent-core's
-//! `session`), the solve running on Bevy's async compute pool, and what the session was last
-//! given, so that only a real change starts a solve.
+//! `session`), the solve running on Bevy's async compute pool (its work on the plugin's
+//! [`crate::SolvePool`]), and what the session was last given, so that only a real change
+//! starts a solve.
 
 use crate::convert::Weld;
 use crate::lights::MappedLight;
@@ -39,6 +40,8 @@ pub struct Finished {
     pub inputs: Inputs,
     /// Wall-clock time of the solve on the pool, milliseconds.
     pub ms: f32,
+    /// When it finished.
+    pub done: Instant,
 }
 
 /// A body's solve state (the plugin adds it next to [`crate::Translucent`]).
@@ -73,14 +76,17 @@ pub struct SolveStatus {
     pub last_ms: f32,
     /// Whether a solve is running now (the last result is shown meanwhile).
     pub solving: bool,
+    /// When the last shown solve finished on the pool (`None` before the first). The plugin
+    /// shows it in the first frame whose `PostUpdate` runs after this instant.
+    pub last_done: Option<Instant>,
     /// Why the body cannot be solved, if it cannot (the mesh or the material); logged once.
     pub error: Option<String>,
 }
 
 impl LucentBody {
     /// Gives the session `inputs` (only what changed) and starts its solve on the async compute
-    /// pool. Does nothing while a solve runs or without a session.
-    pub(crate) fn start(&mut self, inputs: Inputs) {
+    /// pool, its work on `pool`. Does nothing while a solve runs or without a session.
+    pub(crate) fn start(&mut self, inputs: Inputs, pool: &crate::SolvePool) {
         let Some(mut session) = self.session.take() else { return };
         let old = self.sent.as_ref();
         if old.is_none_or(|o| o.positions != inputs.positions) {
@@ -93,10 +99,13 @@ impl LucentBody {
         session.set_settings(inputs.settings);
         session.set_eye(inputs.eye);
         self.sent = Some(inputs.clone());
+        let pool = pool.pool();
         self.task = Some(AsyncComputeTaskPool::get().spawn(async move {
             let started = Instant::now();
-            let solved = session.solve().clone();
-            Finished { session, solved, inputs, ms: started.elapsed().as_secs_f32() * 1e3 }
+            // The async compute thread waits; the solve's stages run on the pool's threads.
+            let solved = pool.install(|| session.solve().clone());
+            let done = Instant::now();
+            Finished { session, solved, inputs, ms: (done - started).as_secs_f32() * 1e3, done }
         }));
     }
 }

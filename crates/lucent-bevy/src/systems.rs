@@ -2,11 +2,11 @@
 //! material, take in finished solves, and start a solve where the mesh, the lights, the
 //! material or the camera changed. None of them waits for a solve.
 
-use crate::Translucent;
 use crate::body::{Finished, Inputs, LucentBody, SolveStatus};
 use crate::convert::{Weld, positions};
 use crate::lights::{MappedLight, gather};
 use crate::material::{LucentMaterial, ShadingUniform, vertex_records};
+use crate::{SolvePool, Translucent};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::Camera3d;
 use bevy::prelude::*;
@@ -97,7 +97,9 @@ pub(crate) fn collect(
 ) {
     for (mut body, translucent, mut status) in &mut bodies {
         let Some(task) = body.task.as_mut() else { continue };
-        let Some(Finished { session, solved, inputs, ms }) = block_on(poll_once(task)) else { continue };
+        let Some(Finished { session, solved, inputs, ms, done }) = block_on(poll_once(task)) else {
+            continue;
+        };
         body.task = None;
         let eta = session.transport().material.eta as f32;
         body.session = Some(session);
@@ -121,6 +123,7 @@ pub(crate) fn collect(
         );
         status.solves += 1;
         status.last_ms = ms;
+        status.last_done = Some(done);
         status.solving = false;
         status.error = None;
     }
@@ -141,7 +144,10 @@ pub(crate) fn start(
     spots: Query<(&SpotLight, &GlobalTransform)>,
     suns: Query<(&DirectionalLight, &GlobalTransform)>,
     cameras: Query<(&Camera, &GlobalTransform), With<Camera3d>>,
+    pool: Option<Res<SolvePool>>,
 ) {
+    // No pool: the plugin logged why at start; nothing can solve.
+    let Some(pool) = pool else { return };
     let world_lights = gather(&points, &spots, &suns);
     let eye = eye(&cameras);
     for (entity, mut body, translucent, mesh3d, transform, mut status) in &mut bodies {
@@ -166,7 +172,7 @@ pub(crate) fn start(
         };
         if body.sent.as_ref() != Some(&inputs) {
             status.solving = true;
-            body.start(inputs);
+            body.start(inputs, &pool);
         }
     }
 }
