@@ -49,6 +49,7 @@ pub use lucent_core::bssrdf::ProfileKind;
 pub use material::{LUCENT_SHADER, LucentMaterial, ShadingUniform, shader_source, vertex_records};
 pub use pool::{SolvePool, SolveThreads};
 
+use bevy::asset::AssetEventSystems;
 use bevy::pbr::MaterialPlugin;
 use bevy::prelude::*;
 use bevy::shader::Shader;
@@ -65,8 +66,8 @@ pub struct LucentPlugin {
     pub solve_nice: u8,
 }
 
-/// The plugin's systems, in `PostUpdate` after transforms propagate: order your own systems
-/// that read [`SolveStatus`] after this set.
+/// The plugin's systems, in `PostUpdate` after transforms propagate and before the asset events
+/// are sent: order your own systems that read [`SolveStatus`] after this set.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub struct LucentSystems;
 
@@ -87,7 +88,10 @@ impl Plugin for LucentPlugin {
             (systems::collect, systems::attach, systems::start)
                 .chain()
                 .in_set(LucentSystems)
-                .after(TransformSystems::Propagate),
+                .after(TransformSystems::Propagate)
+                // The material and buffer a finished solve writes must be in this frame's asset
+                // events, which the render world extracts: otherwise it shows a frame later.
+                .before(AssetEventSystems),
         );
     }
 }
