@@ -89,21 +89,27 @@ impl LucentBody {
     pub(crate) fn start(&mut self, inputs: Inputs, pool: &crate::SolvePool) {
         let Some(mut session) = self.session.take() else { return };
         let old = self.sent.as_ref();
-        if old.is_none_or(|o| o.positions != inputs.positions) {
-            session.set_positions(&inputs.positions);
-        }
-        if old.is_none_or(|o| o.lights != inputs.lights) {
-            session.set_lights(inputs.lights.clone());
-        }
-        session.set_transport(inputs.transport.clone());
-        session.set_settings(inputs.settings);
-        session.set_eye(inputs.eye);
+        let moved = old.is_none_or(|o| o.positions != inputs.positions);
+        let relit = old.is_none_or(|o| o.lights != inputs.lights);
         self.sent = Some(inputs.clone());
         let pool = pool.pool();
+        // Everything the session does with the change happens on the pool, not in the frame: a
+        // new material's profile tables take long enough to stall it.
         self.task = Some(AsyncComputeTaskPool::get().spawn(async move {
             let started = Instant::now();
             // The async compute thread waits; the solve's stages run on the pool's threads.
-            let solved = pool.install(|| session.solve().clone());
+            let solved = pool.install(|| {
+                if moved {
+                    session.set_positions(&inputs.positions);
+                }
+                if relit {
+                    session.set_lights(inputs.lights.clone());
+                }
+                session.set_transport(inputs.transport.clone());
+                session.set_settings(inputs.settings);
+                session.set_eye(inputs.eye);
+                session.solve().clone()
+            });
             let done = Instant::now();
             Finished { session, solved, inputs, ms: (done - started).as_secs_f32() * 1e3, done }
         }));

@@ -56,14 +56,27 @@ use bevy::shader::Shader;
 use bevy::transform::TransformSystems;
 
 /// Solves every [`Translucent`] body with lucent and draws it (see the crate documentation).
-#[derive(Clone, Copy, Debug, Default)]
+///
+/// The default keeps Bevy's frame rate while solving and solves as fast as that allows: on
+/// Linux every core at nice 10 (the scheduler gives Bevy's threads the cores whenever they want
+/// them, the solve the rest; docs/bevy.md has the frame and solve times of each choice),
+/// elsewhere, where a thread's priority cannot be lowered alone, all cores but one.
+#[derive(Clone, Copy, Debug)]
 pub struct LucentPlugin {
     /// Threads the solves run on (the plugin's own rayon pool, [`SolvePool`]). Default
-    /// [`SolveThreads::LeaveOne`]: all cores but one, so that Bevy's frames keep a core.
+    /// [`SolveThreads::All`] on Linux, [`SolveThreads::LeaveOne`] elsewhere.
     pub solve_threads: SolveThreads,
     /// How far below Bevy's threads the solve threads run in the OS scheduler: a Unix nice
-    /// increment, 0..=19 (Linux only). Default 0 (the same priority).
+    /// increment, 0 (Bevy's priority)..=19. Applied on Linux only. Default 10.
     pub solve_nice: u8,
+}
+
+impl Default for LucentPlugin {
+    fn default() -> Self {
+        let solve_threads =
+            if cfg!(target_os = "linux") { SolveThreads::All } else { SolveThreads::LeaveOne };
+        LucentPlugin { solve_threads, solve_nice: 10 }
+    }
 }
 
 /// The plugin's systems, in `PostUpdate` after transforms propagate and before the asset events

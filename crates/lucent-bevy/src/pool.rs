@@ -16,15 +16,14 @@ use std::sync::Arc;
 const STACK_BYTES: usize = 512 << 20;
 
 /// How many threads solve.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolveThreads {
     /// One per core (`std::thread::available_parallelism`): the fastest solve; Bevy's frames
-    /// share every core with it while it runs.
+    /// share every core with it while it runs (unless the threads run at a lower priority,
+    /// [`crate::LucentPlugin::solve_nice`]). The plugin's default on Linux.
     All,
     /// One fewer than the cores, at least one: one core stays with Bevy's main and render
-    /// threads while a solve runs. Default (see docs/bevy.md for the frame times and solve
-    /// times both ways).
-    #[default]
+    /// threads while a solve runs. The plugin's default elsewhere (no per-thread priority).
     LeaveOne,
     /// Exactly this many (at least one).
     Count(usize),
