@@ -53,6 +53,9 @@ pub struct LucentBody {
     pub(crate) weld: Weld,
     /// The session while no solve runs (a running solve owns it).
     pub(crate) session: Option<FrameSession>,
+    /// The welded mesh, until the first solve makes the session from it on the solve pool (a new
+    /// session's profile tables would stall the frame).
+    pub(crate) rest: Option<lucent_core::mesh::Mesh>,
     /// The running solve.
     pub(crate) task: Option<Task<Finished>>,
     /// What the session was last given (a solve runs only when this differs).
@@ -72,7 +75,7 @@ pub struct LucentBody {
 pub struct SolveStatus {
     /// Solves finished and shown since the body appeared.
     pub solves: u64,
-    /// Wall-clock time of the last finished solve on the async compute pool, milliseconds.
+    /// Wall-clock time of the last finished solve (off the frame, on the solve pool), milliseconds.
     pub last_ms: f32,
     /// Whether a solve is running now (the last result is shown meanwhile).
     pub solving: bool,
@@ -85,9 +88,14 @@ pub struct SolveStatus {
 
 impl LucentBody {
     /// Gives the session `inputs` (only what changed) and starts its solve on the async compute
-    /// pool, its work on `pool`. Does nothing while a solve runs or without a session.
+    /// pool, its work on `pool` (the first solve makes the session). Does nothing while a solve
+    /// runs.
     pub(crate) fn start(&mut self, inputs: Inputs, pool: &crate::SolvePool) {
-        let Some(mut session) = self.session.take() else { return };
+        let session = match (self.session.take(), self.rest.take()) {
+            (Some(session), _) => Ok(session),
+            (None, Some(mesh)) => Err(mesh),
+            (None, None) => return,
+        };
         let old = self.sent.as_ref();
         let moved = old.is_none_or(|o| o.positions != inputs.positions);
         let relit = old.is_none_or(|o| o.lights != inputs.lights);
@@ -97,8 +105,11 @@ impl LucentBody {
         // new material's profile tables take long enough to stall it.
         self.task = Some(AsyncComputeTaskPool::get().spawn(async move {
             let started = Instant::now();
-            // The async compute thread waits; the solve's stages run on the pool's threads.
-            let solved = pool.install(|| {
+            // The async compute thread waits; the session's work runs on the pool's threads.
+            let (session, solved) = pool.install(|| {
+                let mut session = session.unwrap_or_else(|mesh| {
+                    FrameSession::new(mesh, None, inputs.transport.clone(), inputs.settings)
+                });
                 if moved {
                     session.set_positions(&inputs.positions);
                 }
@@ -108,7 +119,8 @@ impl LucentBody {
                 session.set_transport(inputs.transport.clone());
                 session.set_settings(inputs.settings);
                 session.set_eye(inputs.eye);
-                session.solve().clone()
+                let solved = session.solve().clone();
+                (session, solved)
             });
             let done = Instant::now();
             Finished { session, solved, inputs, ms: (done - started).as_secs_f32() * 1e3, done }

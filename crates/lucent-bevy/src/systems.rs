@@ -12,7 +12,6 @@ use bevy::camera::Camera3d;
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 use bevy::tasks::{block_on, poll_once};
-use lucent_core::session::FrameSession;
 
 /// Gives every new [`Translucent`] entity its state and a [`LucentMaterial`] in place of a
 /// `StandardMaterial`.
@@ -29,10 +28,9 @@ pub(crate) fn attach(
         let made = Weld::new(mesh).and_then(|(m, weld)| {
             let scale_m = translucent.scale_m.unwrap_or_else(|| world_extent(&m, transform));
             let transport = translucent.transport(scale_m)?;
-            let session = FrameSession::new(m, None, transport.clone(), translucent.settings());
-            Ok((session, weld, scale_m, transport))
+            Ok((m, weld, scale_m, transport))
         });
-        let (session, weld, scale_m, transport) = match made {
+        let (rest, weld, scale_m, transport) = match made {
             Ok(made) => made,
             Err(e) => {
                 match status.get_mut(entity) {
@@ -56,7 +54,8 @@ pub(crate) fn attach(
             LucentBody {
                 mesh: mesh3d.0.id(),
                 weld,
-                session: Some(session),
+                session: None,
+                rest: Some(rest),
                 task: None,
                 sent: None,
                 scale_m,
@@ -156,7 +155,7 @@ pub(crate) fn start(
         }
         let Some(mesh) = meshes.get(&mesh3d.0) else { continue };
         if mesh3d.0.id() != body.mesh || !body.weld.same_topology(mesh) {
-            // A new mesh: a new session (attach makes it).
+            // A new mesh: a new session (attach starts it over).
             commands.entity(entity).remove::<LucentBody>();
             continue;
         }

@@ -1,5 +1,5 @@
 //! The Stanford bunny in marble (10 cm tall) on a plane, with a point light orbiting it; lucent
-//! solves the subsurface light on Bevy's async compute pool while the frames keep coming.
+//! solves the subsurface light off the frame (its own thread pool) while the frames keep coming.
 //!
 //! `cargo run --release -p lucent-bevy --example bunny`
 //!
@@ -149,7 +149,7 @@ fn report(
     for s in &bodies {
         if s.solves > demo.logged {
             demo.logged = s.solves;
-            info!("solve {} took {:.0} ms on the async compute pool", s.solves, s.last_ms);
+            info!("solve {} took {:.0} ms off the frame", s.solves, s.last_ms);
         }
     }
     let Ok(path) = std::env::var("LUCENT_BEVY_SCREENSHOT") else { return };
