@@ -21,6 +21,10 @@
 //! with light), and of the radiance the mesh pass draws per vertex (`radiance + single` against
 //! the fresh one's, vertices seen), median and 95th percentile.
 //!
+//! Before the actions, the `light-paths` rows (`bench/light_paths.rs`): the view stage with
+//! the light paths' shortcut against every path traced, lights in front, at the side and
+//! behind; `LUCENT_BENCH_LIGHT_PATHS_ONLY` set, only those.
+//!
 //! `LUCENT_BENCH_MAX_TRIANGLES` (default 60,000: the bunny, the 11K and the 48K dragons, a few
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
 //! for `bench solver --real`.
@@ -94,7 +98,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         );
     }
     each_case(json, 60_000, |name, mesh, material, scale_m| {
-        for row in measure(name, mesh, material, scale_m)? {
+        for row in measure(name, mesh, material, scale_m, json)? {
             print_row(&row, json)?;
         }
         Ok(())
@@ -152,7 +156,13 @@ fn session(
 }
 
 /// Every action's row for one mesh and material.
-fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> anyhow::Result<Vec<Row>> {
+fn measure(
+    name: &str,
+    rest: &Mesh,
+    material: &'static str,
+    scale_m: f64,
+    json: bool,
+) -> anyhow::Result<Vec<Row>> {
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
     let (mut lights, light_at) = lights(rest);
     let (lo, hi) = rest.bounds();
@@ -166,6 +176,12 @@ fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> any
     };
     let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
     s.solve();
+    for r in super::light_paths::rows(name, material, &mut s, eye)? {
+        super::light_paths::print(&r, json)?;
+    }
+    if std::env::var_os("LUCENT_BENCH_LIGHT_PATHS_ONLY").is_some() {
+        return Ok(Vec::new());
+    }
     let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
     let mut rows = Vec::new();
     let mut row = |action: &'static str, s: &mut FrameSession, state: &State, times: Vec<(Timings, f64)>| {

@@ -7,6 +7,7 @@ mod energy;
 mod formfactor;
 mod htsm;
 mod interactive;
+mod light_paths;
 mod solver;
 mod solver_locality;
 mod solver_real;
