@@ -164,7 +164,7 @@ pub(super) fn print(r: &Row, json: bool) -> anyhow::Result<()> {
 }
 
 /// CPU milliseconds this process's threads have run (Linux `schedstat`; 0 elsewhere).
-fn cpu_ms() -> f64 {
+pub(super) fn cpu_ms() -> f64 {
     let Ok(tasks) = std::fs::read_dir("/proc/self/task") else { return 0.0 };
     tasks
         .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
