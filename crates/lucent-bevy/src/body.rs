@@ -1,6 +1,7 @@
 //! One translucent body's state between frames: its frame session (Mertens §5.5, lucent-core's
-//! `session`), the solve running on Bevy's async compute pool, and what the session was last
-//! given, so that only a real change starts a solve.
+//! `session`), the solve running on Bevy's async compute pool (its work on the plugin's
+//! [`crate::SolvePool`]), and what the session was last given, so that only a real change
+//! starts a solve.
 
 use crate::convert::Weld;
 use crate::lights::MappedLight;
@@ -39,6 +40,8 @@ pub struct Finished {
     pub inputs: Inputs,
     /// Wall-clock time of the solve on the pool, milliseconds.
     pub ms: f32,
+    /// When it finished.
+    pub done: Instant,
 }
 
 /// A body's solve state (the plugin adds it next to [`crate::Translucent`]).
@@ -50,6 +53,9 @@ pub struct LucentBody {
     pub(crate) weld: Weld,
     /// The session while no solve runs (a running solve owns it).
     pub(crate) session: Option<FrameSession>,
+    /// The welded mesh, until the first solve makes the session from it on the solve pool (a new
+    /// session's profile tables would stall the frame).
+    pub(crate) rest: Option<lucent_core::mesh::Mesh>,
     /// The running solve.
     pub(crate) task: Option<Task<Finished>>,
     /// What the session was last given (a solve runs only when this differs).
@@ -69,34 +75,55 @@ pub struct LucentBody {
 pub struct SolveStatus {
     /// Solves finished and shown since the body appeared.
     pub solves: u64,
-    /// Wall-clock time of the last finished solve on the async compute pool, milliseconds.
+    /// Wall-clock time of the last finished solve (off the frame, on the solve pool), milliseconds.
     pub last_ms: f32,
     /// Whether a solve is running now (the last result is shown meanwhile).
     pub solving: bool,
+    /// When the last shown solve finished on the pool (`None` before the first). The plugin
+    /// shows it in the first frame whose `PostUpdate` runs after this instant.
+    pub last_done: Option<Instant>,
     /// Why the body cannot be solved, if it cannot (the mesh or the material); logged once.
     pub error: Option<String>,
 }
 
 impl LucentBody {
     /// Gives the session `inputs` (only what changed) and starts its solve on the async compute
-    /// pool. Does nothing while a solve runs or without a session.
-    pub(crate) fn start(&mut self, inputs: Inputs) {
-        let Some(mut session) = self.session.take() else { return };
+    /// pool, its work on `pool` (the first solve makes the session). Does nothing while a solve
+    /// runs.
+    pub(crate) fn start(&mut self, inputs: Inputs, pool: &crate::SolvePool) {
+        let session = match (self.session.take(), self.rest.take()) {
+            (Some(session), _) => Ok(session),
+            (None, Some(mesh)) => Err(mesh),
+            (None, None) => return,
+        };
         let old = self.sent.as_ref();
-        if old.is_none_or(|o| o.positions != inputs.positions) {
-            session.set_positions(&inputs.positions);
-        }
-        if old.is_none_or(|o| o.lights != inputs.lights) {
-            session.set_lights(inputs.lights.clone());
-        }
-        session.set_transport(inputs.transport.clone());
-        session.set_settings(inputs.settings);
-        session.set_eye(inputs.eye);
+        let moved = old.is_none_or(|o| o.positions != inputs.positions);
+        let relit = old.is_none_or(|o| o.lights != inputs.lights);
         self.sent = Some(inputs.clone());
+        let pool = pool.pool();
+        // Everything the session does with the change happens on the pool, not in the frame: a
+        // new material's profile tables take long enough to stall it.
         self.task = Some(AsyncComputeTaskPool::get().spawn(async move {
             let started = Instant::now();
-            let solved = session.solve().clone();
-            Finished { session, solved, inputs, ms: started.elapsed().as_secs_f32() * 1e3 }
+            // The async compute thread waits; the session's work runs on the pool's threads.
+            let (session, solved) = pool.install(|| {
+                let mut session = session.unwrap_or_else(|mesh| {
+                    FrameSession::new(mesh, None, inputs.transport.clone(), inputs.settings)
+                });
+                if moved {
+                    session.set_positions(&inputs.positions);
+                }
+                if relit {
+                    session.set_lights(inputs.lights.clone());
+                }
+                session.set_transport(inputs.transport.clone());
+                session.set_settings(inputs.settings);
+                session.set_eye(inputs.eye);
+                let solved = session.solve().clone();
+                (session, solved)
+            });
+            let done = Instant::now();
+            Finished { session, solved, inputs, ms: (done - started).as_secs_f32() * 1e3, done }
         }));
     }
 }

@@ -5,8 +5,8 @@
 // by the vertex), Gouraud-interpolated (single scattering geometrically, as lucent's mesh pass),
 // then multiplied by Bevy's camera exposure like every Bevy light (and tone mapped here where
 // the camera tone maps in the material shaders, as Bevy's own materials do). Lights are in world units,
-// already mapped from Bevy's lumens and lux (see `lights.rs`). spot_falloff (lucent-gpu's
-// spot.wgsl) is appended to this file when the plugin builds the shader.
+// already mapped from Bevy's lumens and lux (see `lights.rs`). lucent-gpu's spot.wgsl,
+// fresnel.wgsl and exit.wgsl are appended to this file when the plugin builds the shader.
 
 #import bevy_pbr::{
     mesh_bindings::mesh,
@@ -50,7 +50,8 @@ struct VertexRadiance {
     single: vec4<f32>,
 };
 
-@group(#{MATERIAL_BIND_GROUP}) @binding(0) var<uniform> shading: LucentShading;
+// `u`, as lucent's mesh pass names its uniform: exit.wgsl reads it.
+@group(#{MATERIAL_BIND_GROUP}) @binding(0) var<uniform> u: LucentShading;
 @group(#{MATERIAL_BIND_GROUP}) @binding(1) var<storage, read> per_vertex: array<VertexRadiance>;
 
 struct Vertex {
@@ -89,47 +90,12 @@ fn vertex(v: Vertex) -> VertexOutput {
     return o;
 }
 
-// fresnel_dielectric: fresnel.wgsl, appended.
-
-// The exit lobe T at exit cosine cos_o, linear between samples as lucent-core's ExitLobe::at.
-fn exit_lobe(cos_o: f32) -> vec3<f32> {
-    let x = clamp(cos_o, 0.0, 1.0) * f32(EXIT_SAMPLES - 1u);
-    let k = min(u32(x), EXIT_SAMPLES - 2u);
-    return mix(shading.exit_lobe[k].rgb, shading.exit_lobe[k + 1u].rgb, x - f32(k));
-}
-
-// The Fresnel-weighted, normalised Blinn-Phong highlight of lucent's mesh pass.
-fn highlight(world: vec3<f32>, n: vec3<f32>, v: vec3<f32>, eta: f32) -> vec3<f32> {
-    var l = vec3<f32>(0.0);
-    let spec = shading.params.y;
-    let shininess = shading.params.z;
-    let count = min(shading.counts.x, MAX_LIGHTS);
-    for (var i = 0u; i < count; i = i + 1u) {
-        let light = shading.lights[i];
-        var wi: vec3<f32>;
-        var e: vec3<f32>;
-        if (light.position.w > 0.5) {
-            let d = light.position.xyz - world;
-            let d2 = max(dot(d, d), 1e-12);
-            wi = d * inverseSqrt(d2);
-            e = light.intensity.rgb / d2 * spot_falloff(dot(light.spot.xyz, -wi), light.spot.w, light.intensity.w);
-        } else {
-            wi = -normalize(light.position.xyz);
-            e = light.intensity.rgb;
-        }
-        let cos_i = dot(n, wi);
-        if (cos_i > 0.0) {
-            let h = normalize(wi + v);
-            let lobe = (shininess + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), shininess);
-            l += spec * fresnel_dielectric(dot(h, v), eta) * lobe * cos_i * e;
-        }
-    }
-    return l;
-}
+// fresnel_dielectric (fresnel.wgsl), exit_lobe and add_highlight (exit.wgsl, which reads the
+// uniform `u`): appended.
 
 @fragment
 fn fragment(in: VertexOutput, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    let eta = shading.params.x;
+    let eta = u.params.x;
     let v = normalize(view.world_position - in.world);
     // The side seen: flipped only where the winding and the normal both say it is the back.
     var n = normalize(in.normal);
@@ -138,13 +104,13 @@ fn fragment(in: VertexOutput, @builtin(front_facing) front: bool) -> @location(0
     }
     let cos_o = dot(n, v);
     var single = exp(in.log_single);
-    if (shading.counts.y == 1u) {
+    if (u.counts.y == 1u) {
         single = max(in.single, vec3<f32>(0.0));
     }
     let subsurface = max(in.radiance, vec3<f32>(0.0)) * exit_lobe(cos_o) + single;
     var l = (1.0 - fresnel_dielectric(cos_o, eta)) * subsurface;
-    if (shading.params.y > 0.0 && cos_o > 0.0) {
-        l += highlight(in.world, n, v, eta);
+    if (u.params.y > 0.0 && cos_o > 0.0) {
+        l = add_highlight(l, in.world, n, v, eta);
     }
     var out = vec4<f32>(l * view.exposure, 1.0);
 #ifdef TONEMAP_IN_SHADER

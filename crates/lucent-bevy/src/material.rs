@@ -14,19 +14,20 @@ use bevy::shader::{Shader, ShaderRef};
 use lucent_core::bssrdf::ExitLobe;
 use lucent_core::session::Solved;
 
-/// The shader of [`LucentMaterial`] (lucent.wgsl with lucent-gpu's spot falloff appended).
+/// The shader of [`LucentMaterial`] (lucent.wgsl with lucent-gpu's shared shader files appended).
 pub const LUCENT_SHADER: Handle<Shader> = uuid_handle!("6b1f0a52-3c1e-4e8e-9a55-2f51c0de5301");
 
 /// Lights the highlight uses at most (as lucent's mesh pass).
 pub const MAX_LIGHTS: usize = 8;
 
-/// The shader source: lucent.wgsl, then lucent-gpu's `spot_falloff` and `fresnel_dielectric`
-/// (WGSL has no includes; the same files lucent's own mesh pass prepends, so the two cannot
-/// drift apart).
+/// The shader source: lucent.wgsl, then lucent-gpu's `spot_falloff`, `fresnel_dielectric`,
+/// `exit_lobe` and `add_highlight` (WGSL has no includes; the same files lucent's own mesh pass
+/// prepends, so the two cannot drift apart).
 pub fn shader_source() -> String {
     let spot = include_str!("../../lucent-gpu/src/shaders/spot.wgsl");
     let fresnel = include_str!("../../lucent-gpu/src/shaders/fresnel.wgsl");
-    format!("{}\n{}\n{}", include_str!("lucent.wgsl"), spot, fresnel)
+    let exit = include_str!("../../lucent-gpu/src/shaders/exit.wgsl");
+    format!("{}\n{}\n{}\n{}", include_str!("lucent.wgsl"), spot, fresnel, exit)
 }
 
 /// One light of the highlight, as the shader reads it.

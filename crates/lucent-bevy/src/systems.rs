@@ -2,17 +2,16 @@
 //! material, take in finished solves, and start a solve where the mesh, the lights, the
 //! material or the camera changed. None of them waits for a solve.
 
-use crate::Translucent;
 use crate::body::{Finished, Inputs, LucentBody, SolveStatus};
 use crate::convert::{Weld, positions};
 use crate::lights::{MappedLight, gather};
 use crate::material::{LucentMaterial, ShadingUniform, vertex_records};
+use crate::{SolvePool, Translucent};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::Camera3d;
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 use bevy::tasks::{block_on, poll_once};
-use lucent_core::session::FrameSession;
 
 /// Gives every new [`Translucent`] entity its state and a [`LucentMaterial`] in place of a
 /// `StandardMaterial`.
@@ -29,10 +28,9 @@ pub(crate) fn attach(
         let made = Weld::new(mesh).and_then(|(m, weld)| {
             let scale_m = translucent.scale_m.unwrap_or_else(|| world_extent(&m, transform));
             let transport = translucent.transport(scale_m)?;
-            let session = FrameSession::new(m, None, transport.clone(), translucent.settings());
-            Ok((session, weld, scale_m, transport))
+            Ok((m, weld, scale_m, transport))
         });
-        let (session, weld, scale_m, transport) = match made {
+        let (rest, weld, scale_m, transport) = match made {
             Ok(made) => made,
             Err(e) => {
                 match status.get_mut(entity) {
@@ -56,7 +54,8 @@ pub(crate) fn attach(
             LucentBody {
                 mesh: mesh3d.0.id(),
                 weld,
-                session: Some(session),
+                session: None,
+                rest: Some(rest),
                 task: None,
                 sent: None,
                 scale_m,
@@ -97,7 +96,9 @@ pub(crate) fn collect(
 ) {
     for (mut body, translucent, mut status) in &mut bodies {
         let Some(task) = body.task.as_mut() else { continue };
-        let Some(Finished { session, solved, inputs, ms }) = block_on(poll_once(task)) else { continue };
+        let Some(Finished { session, solved, inputs, ms, done }) = block_on(poll_once(task)) else {
+            continue;
+        };
         body.task = None;
         let eta = session.transport().material.eta as f32;
         body.session = Some(session);
@@ -121,6 +122,7 @@ pub(crate) fn collect(
         );
         status.solves += 1;
         status.last_ms = ms;
+        status.last_done = Some(done);
         status.solving = false;
         status.error = None;
     }
@@ -141,7 +143,10 @@ pub(crate) fn start(
     spots: Query<(&SpotLight, &GlobalTransform)>,
     suns: Query<(&DirectionalLight, &GlobalTransform)>,
     cameras: Query<(&Camera, &GlobalTransform), With<Camera3d>>,
+    pool: Option<Res<SolvePool>>,
 ) {
+    // No pool: the plugin logged why at start; nothing can solve.
+    let Some(pool) = pool else { return };
     let world_lights = gather(&points, &spots, &suns);
     let eye = eye(&cameras);
     for (entity, mut body, translucent, mesh3d, transform, mut status) in &mut bodies {
@@ -150,7 +155,7 @@ pub(crate) fn start(
         }
         let Some(mesh) = meshes.get(&mesh3d.0) else { continue };
         if mesh3d.0.id() != body.mesh || !body.weld.same_topology(mesh) {
-            // A new mesh: a new session (attach makes it).
+            // A new mesh: a new session (attach starts it over).
             commands.entity(entity).remove::<LucentBody>();
             continue;
         }
@@ -166,7 +171,7 @@ pub(crate) fn start(
         };
         if body.sent.as_ref() != Some(&inputs) {
             status.solving = true;
-            body.start(inputs);
+            body.start(inputs, &pool);
         }
     }
 }

@@ -6,8 +6,13 @@
 //! light and camera. Target (issue 53): the median relative difference over the object within
 //! 5%.
 //!
-//! Then the mesh asset's positions are edited, and the plugin must solve the new pose in the
-//! same session (its deformation path), without a new one.
+//! Then the `Translucent` component's material is changed to skim milk, and the image must match
+//! `lucent render --material skimmilk` by the same criterion, solved in the same session (its
+//! material path, refit mode), not a new one. Then the mesh asset's positions are edited, and
+//! the plugin must solve the new pose in the same session (its deformation path).
+//!
+//! A second test presses the bunny example's `M` key (its key handling, without a window) and
+//! checks that the component's material follows the example's list.
 //!
 //! `LUCENT_BEVY_DEBUG=1` prints what each frame read back; `LUCENT_BEVY_LIMIT_S` changes the
 //! 300 s limit on reaching a stable frame.
@@ -16,27 +21,15 @@
 //! and a Vulkan or GL driver; without them the test says SKIPPED and what to do (under CI, a
 //! failure).
 
-use bevy::camera::{Exposure, Hdr, RenderTarget};
-use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::prelude::*;
-use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy::window::ExitCondition;
-use lucent_bevy::lucent_core::camera::{CameraView, OrbitCamera, bounding_sphere};
-use lucent_bevy::lucent_core::mesh::{Mesh as LucentMesh, embedded};
-use lucent_bevy::{LucentPlugin, SolveStatus, Translucent, bevy_mesh};
+use common::{HEIGHT, LIGHT, Latest, Pixels, WIDTH, decode, headless_app, lucent_view, scene};
+use lucent_bevy::{LucentPlugin, SolveStatus, Translucent, TranslucentMaterial};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-const WIDTH: u32 = 256;
-const HEIGHT: u32 = 192;
-/// The direction the light travels (`lucent render --light dir:...`): from the front, above
-/// and to the right.
-const LIGHT: [f32; 3] = [-0.5, -0.6, -1.0];
-
-/// Linear RGBA per pixel, rows from the top.
-type Pixels = Vec<[f32; 4]>;
+mod common;
+#[path = "../examples/bunny/keys.rs"]
+mod keys;
 
 /// How to get a driver on Debian without a GPU (lucent-gpu's `test_support::INSTALL_ADAPTER`).
 const INSTALL_ADAPTER: &str = "apt-get install mesa-vulkan-drivers libegl1 libgl1-mesa-dri";
@@ -56,8 +49,9 @@ fn lucent_binary() -> Option<PathBuf> {
     bin.is_file().then_some(bin)
 }
 
-/// `lucent render` of the scene as linear radiance, or `None` after saying why it cannot run.
-fn lucent_render(out: &std::path::Path) -> Option<Pixels> {
+/// `lucent render` of the scene in `material` as linear radiance, or `None` after saying why it
+/// cannot run.
+fn lucent_render(out: &std::path::Path, material: &str) -> Option<Pixels> {
     let Some(bin) = lucent_binary() else {
         skip("no lucent binary beside the tests", "cargo build --release -p lucent");
         return None;
@@ -65,7 +59,7 @@ fn lucent_render(out: &std::path::Path) -> Option<Pixels> {
     let light = format!("dir:{},{},{}", LIGHT[0], LIGHT[1], LIGHT[2]);
     let size = [WIDTH.to_string(), HEIGHT.to_string()];
     let run = std::process::Command::new(bin)
-        .args(["render", "--material", "marble", "--scale", "0.1", "--refine", "0", "--mode", "refit"])
+        .args(["render", "--material", material, "--scale", "0.1", "--refine", "0", "--mode", "refit"])
         .args(["--light", &light, "--width", &size[0], "--height", &size[1], "--format", "exr", "--out"])
         .arg(out)
         .output()
@@ -89,85 +83,37 @@ fn lucent_render(out: &std::path::Path) -> Option<Pixels> {
     Some(image.layer_data.channel_data.pixels)
 }
 
-/// A headless Bevy app with the plugin (no window, no winit), its plugins finished.
-fn headless_app() -> App {
-    let mut app = App::new();
-    app.add_plugins((
-        DefaultPlugins
-            .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
-            .disable::<bevy::winit::WinitPlugin>(),
-        LucentPlugin,
-    ));
-    while app.plugins_state() == bevy::app::PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
-    app
-}
-
-/// The bunny, the light and lucent's camera `view` in `app`; returns the target image.
-fn scene(app: &mut App, bunny: &LucentMesh, view: &CameraView) -> Handle<Image> {
-    let world = app.world_mut();
-    let mut target = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba32Float, None);
-    // Read back to the CPU.
-    target.texture_descriptor.usage |= TextureUsages::COPY_SRC;
-    let image = world.resource_mut::<Assets<Image>>().add(target);
-    let mesh = world.resource_mut::<Assets<Mesh>>().add(bevy_mesh(bunny));
-    world.spawn((Mesh3d(mesh), Translucent::preset("marble").with_scale(0.1), Transform::IDENTITY));
-    let light = Transform::default().looking_to(Vec3::from(LIGHT), Vec3::Y);
-    world.spawn((DirectionalLight { illuminance: 1.0, color: Color::WHITE, ..default() }, light));
-    let world_from_view = Mat4::from_cols_array(&view.view.inverse().to_cols_array());
-    world.spawn((
-        Camera3d::default(),
-        Camera { clear_color: ClearColorConfig::Custom(Color::NONE), ..default() },
-        RenderTarget::Image(image.clone().into()),
-        Projection::Perspective(PerspectiveProjection {
-            fov: OrbitCamera::default().fov_y_deg.to_radians(),
-            ..default()
-        }),
-        Transform::from_matrix(world_from_view),
-        // Linear radiance as the shader writes it: exposure 1, no tone curve, no dither.
-        (Hdr, Tonemapping::None, DebandDither::Disabled, Msaa::Off, Exposure { ev100: -(1.2f32).log2() }),
-    ));
-    image
-}
-
-/// Runs `app` until the plugin has shown its first solve and two read-backs of `image` agree
-/// (the pipelines compile asynchronously), at most `limit`.
-fn render(app: &mut App, image: Handle<Image>, limit: Duration) -> Pixels {
-    let latest: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
-    let sink = latest.clone();
-    app.world_mut().spawn(Readback::texture(image)).observe(move |event: On<ReadbackComplete>| {
-        *sink.lock().unwrap() = Some(event.data.clone());
-    });
+/// Runs `app` until the plugin has shown `solves` solves and two read-backs agree (the
+/// pipelines compile asynchronously; read-backs of frames before the solve was shown are let
+/// pass), at most `limit`.
+fn render(app: &mut App, latest: &Latest, solves: u64, limit: Duration) -> Pixels {
+    /// Frames after the solve is shown before a read-back counts (read-backs lag a few frames).
+    const SETTLE: u32 = 8;
     let started = Instant::now();
     let mut previous: Option<Pixels> = None;
+    let mut since_shown = 0;
     loop {
-        assert!(started.elapsed() < limit, "no stable Bevy frame with the solve within {limit:?}");
+        assert!(started.elapsed() < limit, "no stable Bevy frame with solve {solves} within {limit:?}");
         app.update();
-        let solved = {
-            let world = app.world_mut();
-            let mut status = world.query::<&SolveStatus>();
-            status.iter(world).any(|s| s.solves >= 1 && !s.solving)
-        };
-        if let Some(err) =
-            app.world_mut().query::<&SolveStatus>().iter(app.world()).find_map(|s| s.error.clone())
-        {
+        let status = status(app);
+        if let Some(err) = status.error {
             panic!("the plugin could not solve the bunny: {err}");
         }
+        let shown = status.solves >= solves && !status.solving;
+        since_shown = if shown { since_shown + 1 } else { 0 };
         let got = latest.lock().unwrap().take();
         if std::env::var_os("LUCENT_BEVY_DEBUG").is_some() {
             let covered = got.as_ref().map(|b| decode(b).iter().filter(|p| p[3] > 0.999).count());
             let lit = got.as_ref().map(|b| decode(b).iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count());
             eprintln!(
-                "t {:.1}s solved {solved} read back {:?} covered {covered:?} lit {lit:?}",
+                "t {:.1}s solves {} read back {:?} covered {covered:?} lit {lit:?}",
                 started.elapsed().as_secs_f32(),
+                status.solves,
                 got.as_ref().map(Vec::len)
             );
         }
         let Some(bytes) = got else { continue };
-        if !solved {
+        if since_shown < SETTLE {
             std::thread::sleep(Duration::from_millis(20));
             continue;
         }
@@ -180,11 +126,10 @@ fn render(app: &mut App, image: Handle<Image>, limit: Duration) -> Pixels {
     }
 }
 
-/// `Rgba32Float` texels (rows of 256 pixels are 4,096 bytes: no row padding).
-fn decode(bytes: &[u8]) -> Pixels {
-    let f =
-        |i: usize| f32::from_le_bytes([bytes[4 * i], bytes[4 * i + 1], bytes[4 * i + 2], bytes[4 * i + 3]]);
-    (0..(WIDTH * HEIGHT) as usize).map(|p| [f(4 * p), f(4 * p + 1), f(4 * p + 2), f(4 * p + 3)]).collect()
+/// The one body's [`SolveStatus`].
+fn status(app: &mut App) -> SolveStatus {
+    let world = app.world_mut();
+    world.query::<&SolveStatus>().single(world).expect("one body").clone()
 }
 
 /// Whether pixel `i` and its four neighbours are fully covered in `image`.
@@ -199,6 +144,7 @@ fn interior(image: &Pixels, i: usize) -> bool {
 /// Stretches the body's mesh asset by 10% along y (a system editing the mesh would do the same)
 /// and runs `app` until the plugin has solved it; returns the body's solve count then.
 fn stretch(app: &mut App, limit: Duration) -> u64 {
+    let before = status(app).solves;
     {
         let world = app.world_mut();
         let handle = world.query::<&Mesh3d>().single(world).expect("one body").0.clone();
@@ -215,13 +161,19 @@ fn stretch(app: &mut App, limit: Duration) -> u64 {
     loop {
         assert!(started.elapsed() < limit, "no solve of the stretched mesh within {limit:?}");
         app.update();
-        let world = app.world_mut();
-        let status = world.query::<&SolveStatus>().single(world).expect("one body").clone();
-        if status.solves != 1 && !status.solving {
+        let status = status(app);
+        if status.solves != before && !status.solving {
             return status.solves;
         }
         std::thread::sleep(Duration::from_millis(5));
     }
+}
+
+/// Sets the body's material to the preset `name`, as a game (or the example's `M` key) would.
+fn set_material(app: &mut App, name: &str) {
+    let world = app.world_mut();
+    let mut body = world.query::<&mut Translucent>().single_mut(world).expect("one body");
+    body.material = TranslucentMaterial::Preset(name.into());
 }
 
 fn luminance(p: &[f32; 4]) -> f32 {
@@ -233,29 +185,16 @@ fn median(mut v: Vec<f32>) -> f32 {
     v[v.len() / 2]
 }
 
-#[test]
-fn the_bevy_image_matches_lucent_render_within_5_percent_median_over_the_object() {
-    let dir = std::env::temp_dir().join(format!("lucent-bevy-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let Some(reference) = lucent_render(&dir.join("lucent.exr")) else { return };
-    let bunny = embedded::bunny();
-    let (center, radius) = bounding_sphere(&bunny.positions);
-    let view = OrbitCamera::default().frame(center, radius, WIDTH as f32 / HEIGHT as f32);
-    let mut app = headless_app();
-    let image = scene(&mut app, &bunny, &view);
-    let bevy = render(
-        &mut app,
-        image,
-        Duration::from_secs(
-            std::env::var("LUCENT_BEVY_LIMIT_S").ok().and_then(|s| s.parse().ok()).unwrap_or(300),
-        ),
-    );
+/// Compares Bevy's image of `what` with `lucent render`'s over the pixels both fully cover:
+/// asserts the issue's 5% median and that the silhouettes agree, and prints the figures.
+fn compare(bevy: &Pixels, reference: &Pixels, what: &str) {
     let pairs: Vec<(f32, f32)> = (0..bevy.len())
-        .filter(|&i| interior(&bevy, i) && interior(&reference, i))
+        .filter(|&i| interior(bevy, i) && interior(reference, i))
         .map(|i| (luminance(&bevy[i]), luminance(&reference[i])))
         .filter(|&(_, l)| l > 0.0)
         .collect();
     let both = pairs.len();
+    assert!(both > 2000, "{what}: the object covers only {both} pixels in both images");
     let only_one = (0..bevy.len()).filter(|&i| (bevy[i][3] > 0.999) != (reference[i][3] > 0.999)).count();
     let relative = median(pairs.iter().map(|&(b, l)| (b - l).abs() / l).collect());
     let ratio = median(pairs.iter().map(|&(b, l)| b / l).collect());
@@ -264,16 +203,66 @@ fn the_bevy_image_matches_lucent_render_within_5_percent_median_over_the_object(
     let p95 = sorted[sorted.len() * 95 / 100];
     let (bm, lm) = (median(pairs.iter().map(|p| p.0).collect()), median(pairs.iter().map(|p| p.1).collect()));
     println!(
-        "bevy vs lucent render over {both} interior pixels ({only_one} covered in one image only): \
-         median |rel diff| {:.3}% (95th percentile {:.3}%), median ratio {ratio:.5}, median luminance \
-         {bm:.4e} vs {lm:.4e}",
+        "{what}: bevy vs lucent render over {both} interior pixels ({only_one} covered in one image \
+         only): median |rel diff| {:.3}% (95th percentile {:.3}%), median ratio {ratio:.5}, median \
+         luminance {bm:.4e} vs {lm:.4e}",
         relative * 100.0,
         p95 * 100.0
     );
+    assert!(
+        only_one * 20 < both,
+        "{what}: the silhouettes differ: {only_one} pixels covered in one image only"
+    );
+    assert!(relative < 0.05, "{what}: median relative difference {:.2}% over the object", relative * 100.0);
+}
+
+#[test]
+fn the_bevy_image_matches_lucent_render_within_5_percent_median_over_the_object() {
+    let dir = std::env::temp_dir().join(format!("lucent-bevy-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let Some(marble) = lucent_render(&dir.join("marble.exr"), "marble") else { return };
+    let Some(skimmilk) = lucent_render(&dir.join("skimmilk.exr"), "skimmilk") else { return };
     std::fs::remove_dir_all(&dir).ok();
-    // Moved vertices are a deformation of the same session (a new session would count from 0).
-    assert_eq!(stretch(&mut app, Duration::from_secs(120)), 2, "the stretch was not solved as a deformation");
-    assert!(both > 2000, "the object covers only {both} pixels in both images");
-    assert!(only_one * 20 < both, "the silhouettes differ: {only_one} pixels covered in one image only");
-    assert!(relative < 0.05, "median relative difference {:.2}% over the object", relative * 100.0);
+    let limit = Duration::from_secs(
+        std::env::var("LUCENT_BEVY_LIMIT_S").ok().and_then(|s| s.parse().ok()).unwrap_or(300),
+    );
+    let mut app = headless_app(LucentPlugin::default());
+    let latest = scene(&mut app, &lucent_view());
+    compare(&render(&mut app, &latest, 1, limit), &marble, "marble");
+    // A new material is the session's material path (a new session would count from 0 again).
+    set_material(&mut app, "skimmilk");
+    compare(&render(&mut app, &latest, 2, limit), &skimmilk, "skim milk after marble");
+    assert_eq!(status(&mut app).solves, 2, "the material change was not solved in the body's session");
+    // Moved vertices are a deformation of the same session.
+    assert_eq!(stretch(&mut app, Duration::from_secs(120)), 3, "the stretch was not solved as a deformation");
+}
+
+#[test]
+fn the_bunny_examples_m_key_sets_the_next_material() {
+    let mut app = App::new();
+    app.init_resource::<ButtonInput<KeyCode>>()
+        .init_resource::<keys::Controls>()
+        .add_systems(Update, keys::keys);
+    let body = app.world_mut().spawn(Translucent::preset("marble")).id();
+    let press = |app: &mut App, key: KeyCode| {
+        app.world_mut().resource_mut::<ButtonInput<KeyCode>>().press(key);
+        app.update();
+        // What Bevy's input system does between frames.
+        let mut input = app.world_mut().resource_mut::<ButtonInput<KeyCode>>();
+        input.release(key);
+        input.clear();
+    };
+    let all = keys::materials();
+    assert_eq!(all[0].1, TranslucentMaterial::Preset("marble".into()), "the example starts in marble");
+    for step in 1..=all.len() {
+        press(&mut app, KeyCode::KeyM);
+        let material = &app.world().get::<Translucent>(body).expect("the body").material;
+        assert_eq!(*material, all[step % all.len()].1, "M pressed {step} times");
+    }
+    // The other keys leave the material alone.
+    press(&mut app, KeyCode::KeyD);
+    press(&mut app, KeyCode::Space);
+    assert_eq!(app.world().get::<Translucent>(body).expect("the body").material, all[0].1);
+    let controls = app.world().resource::<keys::Controls>();
+    assert!(controls.bulge && controls.paused, "D and Space toggle the bulge and the pause");
 }

@@ -6,10 +6,9 @@
 //! radiance, where the session computes it per vertex, is added before that factor and
 //! interpolated geometrically (the exponential of the blended logarithms): it falls off
 //! exponentially past the terminator, by up to a thousand times across one face of a coarse
-//! mesh, and a linear blend there overstates it several times. Optional additions
-//! in the same pass: a Fresnel-weighted normalised Blinn-Phong highlight for the lights and a
-//! Fresnel-weighted reflection of an equirectangular environment map (the paper's "reflection
-//! mapping or phong shading").
+//! mesh, and a linear blend there overstates it several times. Optional additions in the same
+//! pass: a Fresnel-weighted normalised Blinn-Phong highlight for the lights and a Fresnel-weighted
+//! reflection of an equirectangular environment map (the paper's "reflection mapping or phong shading").
 //!
 //! Output is HDR radiance in an [`HDR_FORMAT`](crate::HDR_FORMAT) target with alpha = coverage;
 //! [`crate::tonemap`] turns it into an image. Optionally the environment map itself is drawn
@@ -247,6 +246,7 @@ impl Default for Shading {
 const MESH_WGSL: &str = concat!(
     include_str!("shaders/spot.wgsl"),
     include_str!("shaders/fresnel.wgsl"),
+    include_str!("shaders/exit.wgsl"),
     include_str!("shaders/mesh.wgsl")
 );
 

@@ -92,12 +92,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
 
 // fresnel_dielectric: fresnel.wgsl, prepended.
 
-// The exit lobe T at exit cosine cos_o, interpolated linearly as lucent-core's ExitLobe::at.
-fn exit_lobe(cos_o: f32) -> vec3<f32> {
-    let x = clamp(cos_o, 0.0, 1.0) * f32(EXIT_SAMPLES - 1u);
-    let k = min(u32(x), EXIT_SAMPLES - 2u);
-    return mix(u.exit_lobe[k].rgb, u.exit_lobe[k + 1u].rgb, x - f32(k));
-}
+// exit_lobe, add_highlight: exit.wgsl, prepended.
 
 // spot_falloff: spot.wgsl, prepended.
 
@@ -132,30 +127,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 
     // Highlight: normalised Blinn-Phong lobe weighted by the Fresnel reflectance at the
     // half vector (the light the surface reflects is the light it does not transmit).
-    let spec = u.params.y;
-    let shininess = u.params.z;
-    if (spec > 0.0 && cos_o > 0.0) {
-        let count = min(u.counts.x, MAX_LIGHTS);
-        for (var i = 0u; i < count; i = i + 1u) {
-            let light = u.lights[i];
-            var wi: vec3<f32>;
-            var e: vec3<f32>;
-            if (light.position.w > 0.5) {
-                let d = light.position.xyz - in.world;
-                let d2 = max(dot(d, d), 1e-12);
-                wi = d * inverseSqrt(d2);
-                e = light.intensity.rgb / d2 * spot_falloff(dot(light.spot.xyz, -wi), light.spot.w, light.intensity.w);
-            } else {
-                wi = -normalize(light.position.xyz);
-                e = light.intensity.rgb;
-            }
-            let cos_i = dot(n, wi);
-            if (cos_i > 0.0) {
-                let h = normalize(wi + v);
-                let lobe = (shininess + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), shininess);
-                l += spec * fresnel_dielectric(dot(h, v), eta) * lobe * cos_i * e;
-            }
-        }
+    if (u.params.y > 0.0 && cos_o > 0.0) {
+        l = add_highlight(l, in.world, n, v, eta);
     }
 
     // Environment reflection hook, weighted by F_r(eta, w_o) like the paper's reflection map.

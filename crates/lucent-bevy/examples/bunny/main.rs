@@ -1,5 +1,5 @@
 //! The Stanford bunny in marble (10 cm tall) on a plane, with a point light orbiting it; lucent
-//! solves the subsurface light on Bevy's async compute pool while the frames keep coming.
+//! solves the subsurface light off the frame (its own thread pool) while the frames keep coming.
 //!
 //! `cargo run --release -p lucent-bevy --example bunny`
 //!
@@ -12,34 +12,14 @@
 
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, save_to_disk};
-use lucent_bevy::{LucentPlugin, LucentSystems, SolveStatus, Translucent, TranslucentMaterial, bevy_mesh};
+use lucent_bevy::{LucentPlugin, LucentSystems, SolveStatus, Translucent, bevy_mesh};
 
-/// The materials `M` cycles through.
-fn materials() -> Vec<(&'static str, TranslucentMaterial)> {
-    let preset = |n: &str| TranslucentMaterial::Preset(n.into());
-    vec![
-        ("marble", preset("marble")),
-        ("skin1", preset("skin1")),
-        ("ketchup", preset("ketchup")),
-        ("wax", preset("wax")),
-        ("skimmilk", preset("skimmilk")),
-        (
-            "jade (albedo 0.35,0.8,0.45; scatter 2,6,3 mm)",
-            TranslucentMaterial::Colour {
-                albedo: [0.35, 0.8, 0.45],
-                scatter_distance_mm: [2.0, 6.0, 3.0],
-                eta: 1.6,
-            },
-        ),
-    ]
-}
+mod keys;
+use keys::{Controls, keys};
 
 /// The example's state.
 #[derive(Resource, Default)]
 struct Demo {
-    material: usize,
-    paused: bool,
-    bulge: bool,
     time: f32,
     /// The bunny's rest positions (the bulge deforms from them).
     rest: Vec<[f32; 3]>,
@@ -58,9 +38,10 @@ fn main() {
                 primary_window: Some(Window { title: "lucent in Bevy".into(), ..default() }),
                 ..default()
             }),
-            LucentPlugin,
+            LucentPlugin::default(),
         ))
         .init_resource::<Demo>()
+        .init_resource::<Controls>()
         .add_systems(Startup, setup)
         .add_systems(Update, (keys, orbit, deform))
         .add_systems(PostUpdate, report.after(LucentSystems))
@@ -110,26 +91,14 @@ fn setup(
     ));
 }
 
-fn keys(input: Res<ButtonInput<KeyCode>>, mut demo: ResMut<Demo>, mut bodies: Query<&mut Translucent>) {
-    if input.just_pressed(KeyCode::Space) {
-        demo.paused = !demo.paused;
-    }
-    if input.just_pressed(KeyCode::KeyD) {
-        demo.bulge = !demo.bulge;
-    }
-    if input.just_pressed(KeyCode::KeyM) {
-        let all = materials();
-        demo.material = (demo.material + 1) % all.len();
-        info!("material: {}", all[demo.material].0);
-        for mut t in &mut bodies {
-            t.material = all[demo.material].1.clone();
-        }
-    }
-}
-
 /// The light circles the bunny once every 12 seconds.
-fn orbit(time: Res<Time>, mut demo: ResMut<Demo>, mut lights: Query<&mut Transform, With<Orbiting>>) {
-    if demo.paused {
+fn orbit(
+    time: Res<Time>,
+    controls: Res<Controls>,
+    mut demo: ResMut<Demo>,
+    mut lights: Query<&mut Transform, With<Orbiting>>,
+) {
+    if controls.paused {
         return;
     }
     demo.time += time.delta_secs();
@@ -141,8 +110,13 @@ fn orbit(time: Res<Time>, mut demo: ResMut<Demo>, mut lights: Query<&mut Transfo
 
 /// With `D`, a bulge that breathes on the bunny's back: a system editing the mesh asset, which
 /// the plugin takes as a deformation.
-fn deform(demo: Res<Demo>, bodies: Query<&Mesh3d, With<Translucent>>, mut meshes: ResMut<Assets<Mesh>>) {
-    if !demo.bulge || demo.rest.is_empty() {
+fn deform(
+    demo: Res<Demo>,
+    controls: Res<Controls>,
+    bodies: Query<&Mesh3d, With<Translucent>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+) {
+    if !controls.bulge || demo.rest.is_empty() {
         return;
     }
     let centre = Vec3::new(-1.0, 7.0, -1.0);
@@ -167,6 +141,7 @@ fn deform(demo: Res<Demo>, bodies: Query<&Mesh3d, With<Translucent>>, mut meshes
 fn report(
     mut commands: Commands,
     mut demo: ResMut<Demo>,
+    mut controls: ResMut<Controls>,
     bodies: Query<&SolveStatus>,
     mut exit: MessageWriter<AppExit>,
     time: Res<Time>,
@@ -174,7 +149,7 @@ fn report(
     for s in &bodies {
         if s.solves > demo.logged {
             demo.logged = s.solves;
-            info!("solve {} took {:.0} ms on the async compute pool", s.solves, s.last_ms);
+            info!("solve {} took {:.0} ms off the frame", s.solves, s.last_ms);
         }
     }
     let Ok(path) = std::env::var("LUCENT_BEVY_SCREENSHOT") else { return };
@@ -182,7 +157,7 @@ fn report(
         // Bevy compiles its pipelines in the background: on a software driver the first frames
         // show nothing for some seconds.
         None if demo.logged >= 3 && time.elapsed_secs() > 15.0 => {
-            demo.paused = true;
+            controls.paused = true;
             demo.since_screenshot = Some(0);
             commands.spawn(Screenshot::primary_window()).observe(save_to_disk(path));
         }
