@@ -58,10 +58,10 @@ impl Bounces {
         self.make_rays_current(f, irradiance.caster());
         let oracle = bounce_oracle(f);
         let key = (f.profile.exit_normalization(), f.profile.eta);
-        if let Some(rays) = self.rays.as_ref().filter(|_| f.settings.bounces > 0) {
-            if self.weights.as_ref().is_none_or(|(k, _)| *k != key) {
-                self.weights = Some((key, hit_weights(rays, &f.profile)));
-            }
+        if let Some(rays) = self.rays.as_ref().filter(|_| f.settings.bounces > 0)
+            && self.weights.as_ref().is_none_or(|(k, _)| *k != key)
+        {
+            self.weights = Some((key, hit_weights(rays, &f.profile)));
         }
         for _ in 0..f.settings.bounces {
             let (Some(rays), Some((_, weights))) = (&self.rays, &self.weights) else { break };
