@@ -13,7 +13,7 @@
 //! surface = true             # false: subsurface term only (no reflection, no highlight)
 //! profile = "pbd"             # diffusion profile, as --profile
 //! single_scattering = "view"  # along the view ray (default), "profile" or "off"
-//! transmission = "slab"       # light crossing the body: "slab" (default) or "halfspace"
+//! transmission = "curved"     # light crossing the body: "curved" (default), "slab" or "halfspace"
 //! deform = ["twist:30"]       # twist:DEGREES, bump:x,y,z,radius,height, noise:amplitude,frequency
 //!
 //! [[light]]                   # any number; every type and key: `LightSpec` (scene/light.rs)
@@ -110,8 +110,9 @@ pub struct SceneFile {
     #[serde(default)]
     pub single_scattering: Option<SingleScatteringKey>,
     /// Light that crosses the body to a face on its far side, as `lucent render
-    /// --transmission`: `"slab"` (default: the exact slab transmittance at the face's
-    /// thickness) or `"halfspace"` (the profile at the chord, as before issue 50).
+    /// --transmission`: `"curved"` (default: the exact slab transmittance at the face's
+    /// thickness on slab-like parts and a sphere's, by random walk, on curved ones), `"slab"`
+    /// (the slab's alone) or `"halfspace"` (the profile at the chord, as before issue 50).
     #[serde(default)]
     pub transmission: Option<String>,
     /// Splits of every face into four before the solve, as `lucent render --refine`: `"auto"`

@@ -174,8 +174,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "per-eye", value_parser = |s: &str| s.parse::<lucent_core::session::ViewTerms>())]
     pub view_terms: lucent_core::session::ViewTerms,
     /// Light that crosses the body to a face on its far side (homogeneous profiles with a
-    /// finite-body gain): `slab` (default: the exact transmittance of a slab of the face's
-    /// thickness in place of the profile's far-side share) or `halfspace` (the profile at the
+    /// finite-body gain): `curved` (default: the exact transmittance of a slab of the face's
+    /// thickness in place of the profile's far-side share on slab-like parts, and of a sphere
+    /// of that diameter, by random walk, on curved ones, the latter at `eta = 1` only;
+    /// docs/transmission.md), `slab` (the slab's alone) or `halfspace` (the profile at the
     /// chord, as before issue 50).
     #[arg(long, value_parser = parse_transmission)]
     pub transmission: Option<Transmission>,

@@ -114,13 +114,10 @@ impl Body {
             true => vec![Rgb::ONE; mesh.triangles.len()],
             false => fb.gains_along(mesh, &rays, caster.offset()),
         };
-        if f.transport.transmission == Transmission::Slab {
-            let cross = CrossBody::new(profile, fb, mesh, &rays, caster.offset(), &gains).with_spread(
-                profile,
-                mesh,
-                caster.bvh(),
-                caster.offset(),
-            );
+        if f.transport.transmission != Transmission::HalfSpace {
+            let mode = f.transport.transmission;
+            let cross = CrossBody::for_mode(profile, fb, mesh, &rays, caster.offset(), &gains, mode)
+                .with_spread(profile, mesh, caster.bvh(), caster.offset());
             if !cross.is_empty() {
                 self.face_term = Some(Arc::new(cross.uniform_terms()));
                 self.cross_body = Some(Arc::new(cross));

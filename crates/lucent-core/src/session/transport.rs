@@ -17,7 +17,7 @@ pub struct Transport {
     /// profile has none whatever this says).
     pub single_scattering: SingleScattering,
     /// How light crossing the body to a face on its far side is carried (default
-    /// [`Transmission::Slab`]; only the profiles with a finite-body gain have it).
+    /// [`Transmission::Curved`]; only the profiles with a finite-body gain have it).
     pub transmission: Transmission,
 }
 

@@ -38,14 +38,23 @@ pub fn uniform_report(
     let raw = solver.solve_on_the_fly(&ones);
     let max = |b: &[Rgb]| b.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
     // As a render does: the finite-body gain of each face, applied with the bound, and the
-    // slab transmission across the body (`super::transmission`, the default).
+    // transmission across the body (`super::transmission`, the default mode).
     let mut cross: Option<super::transmission::CrossBody> = None;
     let gain = profile.bounds_energy().then(|| {
         let caster = crate::irradiance::ShadowCaster::new(mesh);
         let fb = super::finite_body::FiniteBody::new(profile);
         let rays = super::finite_body::ThicknessRays::trace(mesh, caster.bvh(), caster.offset());
         let gains = fb.gains_along(mesh, &rays, caster.offset());
-        cross = Some(super::transmission::CrossBody::new(profile, &fb, mesh, &rays, caster.offset(), &gains));
+        let mode = super::transmission::Transmission::default();
+        cross = Some(super::transmission::CrossBody::for_mode(
+            profile,
+            &fb,
+            mesh,
+            &rays,
+            caster.offset(),
+            &gains,
+            mode,
+        ));
         gains
     });
     let mut bounded: Vec<Rgb> = raw

@@ -46,6 +46,7 @@ pub mod local;
 mod near_face;
 pub mod oracle;
 pub mod point_sample;
+mod sphere_term;
 pub mod transmission;
 
 pub use crate::progress::Progress;

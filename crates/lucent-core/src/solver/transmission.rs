@@ -40,6 +40,13 @@
 //! share at `μ` relative to head-on (which `E_k` already holds), `μ` the far side's mean
 //! incidence cosine ([`crate::irradiance::Entering::mean_cos`], averaged with the same weights).
 //!
+//! With [`Transmission::Curved`] the share `1 - s` does the same for a sphere whose diameter is
+//! the face's thickness ([`super::sphere_term`]): the sphere's random walk
+//! ([`crate::bssrdf::sphere_walk`]) in place of what the profile and gain gather at its
+//! antipode, `(1 - s) (T_sph - G X_sph) (E_k - E_f)` with `E_k` at the point across alone (the
+//! sphere was walked lit head-on, as the slab was), less the same times the face's own `E_f`, so
+//! that under uniform light, where the walked gain is exact, it adds nothing; at `η = 1` only.
+//!
 //! Left out: the slant at `η ≠ 1` (the term stays head-on), the energy bound's factor on the
 //! replaced share (1 on a slab), and the light that leaves through a part's sides.
 
@@ -52,6 +59,7 @@ use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
+use crate::solver::sphere_term::SphereTerm;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -61,18 +69,22 @@ pub enum Transmission {
     /// The profile at the chord, scaled by the finite-body gain (lucent before issue 50).
     HalfSpace,
     /// The exact slab transmittance at the face's thickness in place of the profile's far-side
-    /// share, weighted by the slabness (module docs). The default.
-    #[default]
+    /// share, weighted by the slabness (module docs).
     Slab,
+    /// [`Transmission::Slab`] on slab-like parts and the sphere's random walk on curved ones,
+    /// by the slabness (`super::sphere_term`; `η = 1` only, elsewhere as `Slab`). The default.
+    #[default]
+    Curved,
 }
 
 impl Transmission {
     /// Every mode, in the order the command line lists them.
-    pub const ALL: [Transmission; 2] = [Transmission::Slab, Transmission::HalfSpace];
+    pub const ALL: [Transmission; 3] = [Transmission::Curved, Transmission::Slab, Transmission::HalfSpace];
 
     /// The name the command line and scene files use.
     pub fn name(self) -> &'static str {
         match self {
+            Transmission::Curved => "curved",
             Transmission::Slab => "slab",
             Transmission::HalfSpace => "halfspace",
         }
@@ -85,7 +97,7 @@ pub struct UnknownTransmission(pub String);
 
 impl std::fmt::Display for UnknownTransmission {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "unknown transmission {:?} (expected slab or halfspace)", self.0)
+        write!(f, "unknown transmission {:?} (expected curved, slab or halfspace)", self.0)
     }
 }
 
@@ -113,6 +125,10 @@ pub struct CrossBody {
     /// Per face: the slab's share of `coef`, `s T` per channel (unitless, >= 0), which the
     /// oblique factor scales.
     slab: Vec<Rgb>,
+    /// Per face: the sphere's share, `(1 - s) (T_sph - G X_sph)` per channel (unitless; 0 but
+    /// for [`Transmission::Curved`]), times the irradiance at the point across alone (as the
+    /// sphere's walk was lit) less the face's own (`super::sphere_term`).
+    round: Vec<Rgb>,
     /// Per face: what of the far side's irradiance it sends out after the term, the
     /// transmitted light, `s T + (1 - s) G X` per channel (unitless, >= 0).
     transmitted: Vec<Rgb>,
@@ -144,27 +160,53 @@ impl CrossBody {
         offset: f32,
         gains: &[Rgb],
     ) -> Self {
+        Self::for_mode(profile, fb, mesh, rays, offset, gains, Transmission::Slab)
+    }
+
+    /// [`CrossBody::new`] for `mode`: with the sphere's share on curved parts for
+    /// [`Transmission::Curved`] (`super::sphere_term`), the slab's alone otherwise.
+    pub fn for_mode(
+        profile: &Profile,
+        fb: &FiniteBody,
+        mesh: &Mesh,
+        rays: &ThicknessRays,
+        offset: f32,
+        gains: &[Rgb],
+        mode: Transmission,
+    ) -> Self {
         let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
-        let rows: Vec<(u32, Rgb, Rgb, f32, Rgb)> = (0..mesh.triangles.len())
+        let sphere =
+            (mode == Transmission::Curved).then(|| sphere_term(profile, mesh, rays, offset)).flatten();
+        let rows: Vec<(u32, Rgb, Rgb, f32, Rgb, Rgb)> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO);
+                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, Rgb::ZERO);
                 let (Some((t, s)), Some(k)) = (rays.body(mesh, f, offset), rays.inward_face(f)) else {
                     return none;
                 };
                 // Only across the body: the face hit must face away from this one.
-                if mesh.face_normal(k).dot(mesh.face_normal(f)) >= 0.0 || s <= 0.0 {
+                if mesh.face_normal(k).dot(mesh.face_normal(f)) >= 0.0 || (s <= 0.0 && sphere.is_none()) {
                     return none;
                 }
                 let carried = fb.slab_carried(t);
                 let g = gains[f].to_array();
                 let exact: [f64; 3] =
                     std::array::from_fn(|c| tables[c].at(profile.sigma_t[c] * t as f64).transmitted);
+                // The sphere's share (`super::sphere_term`): what the profile and gain carry to
+                // the antipode of a sphere of this diameter, replaced by the sphere's walk.
+                let round: [f64; 3] = match &sphere {
+                    Some(sp) => {
+                        let (x, e) = (sp.carried(t), sp.exact(t));
+                        std::array::from_fn(|c| (1.0 - s) * (e[c] - g[c] as f64 * x[c]))
+                    }
+                    None => [0.0; 3],
+                };
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
                 let sent =
                     std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
+                let round = Rgb::from_array(round.map(|v| v as f32));
                 let slab = std::array::from_fn(|c| (s * exact[c]) as f32);
-                (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t, Rgb::from_array(slab))
+                (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t, Rgb::from_array(slab), round)
             })
             .collect();
         let oblique = (profile.eta == 1.0)
@@ -175,6 +217,7 @@ impl CrossBody {
             transmitted: rows.iter().map(|r| r.2).collect(),
             thickness: rows.iter().map(|r| r.3).collect(),
             slab: rows.iter().map(|r| r.4).collect(),
+            round: rows.iter().map(|r| r.5).collect(),
             sigma_t: profile.sigma_t,
             tables,
             oblique,
@@ -220,8 +263,11 @@ impl CrossBody {
                     None => Rgb::ONE,
                 };
                 let extra = self.slab[f] * (slant - Rgb::ONE) * e;
-                *b = (*b + self.coef[f] * e + extra).max(Rgb::ZERO);
-                *sent += (self.transmitted[f] * e + extra).max(Rgb::ZERO).min(*b);
+                // The sphere's share moves light from the face's own side to the far side's:
+                // under uniform light it adds nothing (the walked gain is exact there).
+                let across = self.round[f] * carried[k];
+                *b = (*b + self.coef[f] * e + extra + across - self.round[f] * carried[f]).max(Rgb::ZERO);
+                *sent += (self.transmitted[f] * e + extra + across).max(Rgb::ZERO).min(*b);
             }
         });
     }
@@ -277,6 +323,16 @@ impl CrossBody {
     pub fn is_empty(&self) -> bool {
         self.far.iter().all(|&k| k == u32::MAX)
     }
+}
+
+/// The sphere's share of the term for the thicknesses under `mesh`'s faces (`None` where it is
+/// not modelled, [`SphereTerm::new`]).
+fn sphere_term(profile: &Profile, mesh: &Mesh, rays: &ThicknessRays, offset: f32) -> Option<SphereTerm> {
+    let (lo, hi) = (0..mesh.triangles.len())
+        .filter_map(|f| rays.body(mesh, f, offset).map(|b| b.0))
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .fold((f32::INFINITY, 0.0f32), |(lo, hi), t| (lo.min(t), hi.max(t)));
+    SphereTerm::new(profile, lo, hi)
 }
 
 #[cfg(test)]

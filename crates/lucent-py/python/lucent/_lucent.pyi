@@ -106,9 +106,10 @@ def render(
     width, height: image size, pixels (1..=16384). Default 800 x 600.
     profile: ``"pbd"`` (default), ``"dipole"`` or ``"mertens"``.
     single_scattering: ``"view"`` (default), ``"profile"`` or ``"off"``.
-    transmission: light that crosses the body to a face on its far side: ``"slab"`` (default:
-        the exact transmittance of a slab of the face's thickness) or ``"halfspace"`` (the
-        profile at the chord, as before issue 50).
+    transmission: light that crosses the body to a face on its far side: ``"curved"``
+        (default: the exact transmittance of a slab of the face's thickness on slab-like parts,
+        of a sphere of that diameter, by random walk, on curved ones), ``"slab"`` (the slab's
+        alone) or ``"halfspace"`` (the profile at the chord, as before issue 50).
     method: ``"hierarchical"`` (default) or ``"exact"`` (O(N^2), the reference). HTSM is not
         offered here.
     mode: ``"render"``, ``"incremental"`` or ``"on-the-fly"``. Default as ``lucent render``:

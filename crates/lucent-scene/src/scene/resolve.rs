@@ -55,7 +55,7 @@ pub struct Overrides {
     pub profile: Option<ProfileKind>,
     /// Where single scattering is computed.
     pub single_scattering: Option<lucent_core::shading::SingleScattering>,
-    /// How light crossing the body is carried (`slab`, default, or `halfspace`).
+    /// How light crossing the body is carried (`curved`, default, `slab` or `halfspace`).
     pub transmission: Option<lucent_core::solver::transmission::Transmission>,
     /// Lights as `point:x,y,z` or `dir:x,y,z`; any replaces all of the file's lights.
     pub lights: Vec<String>,

@@ -47,7 +47,7 @@ where
         .map(|s| s.parse::<T>().expect("one of the possible values"))
 }
 
-/// `--transmission NAME`: `slab` or `halfspace`, case-insensitive.
+/// `--transmission NAME`: `curved`, `slab` or `halfspace`, case-insensitive.
 pub fn parse_transmission(s: &str) -> Result<lucent_core::solver::transmission::Transmission, String> {
     s.parse::<lucent_core::solver::transmission::Transmission>().map_err(|e| e.to_string())
 }
