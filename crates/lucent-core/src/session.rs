@@ -367,7 +367,11 @@ impl FrameSession {
         self.changes.method |= s.method != settings.method || s.mode != settings.mode;
         self.changes.light |=
             s.environment_shadows != settings.environment_shadows || s.bounces != settings.bounces;
-        if s.ablate != settings.ablate {
+        let view_only = Ablations { light_paths: settings.ablate.light_paths, ..s.ablate } == settings.ablate;
+        if s.ablate != settings.ablate && view_only {
+            // Only how the view terms trace their light paths.
+            self.changes.view = true;
+        } else if s.ablate != settings.ablate {
             // The entry term is the profile's, and the gain's terms the body's.
             self.frame.profile =
                 settings.ablate.applied(self.frame.transport.profile_at(self.frame.rest_extent));

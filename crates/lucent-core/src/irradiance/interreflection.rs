@@ -224,18 +224,35 @@ impl BounceRays {
 /// entry term, in both its parts), along the traced `rays`. Zero where a face sees no other
 /// face's front.
 pub fn bounced_irradiance(rays: &BounceRays, face_b: &[Rgb], profile: &Profile) -> Vec<Entering> {
-    assert_eq!(face_b.len() + 1, rays.offsets.len());
+    bounced_irradiance_with(rays, &hit_weights(rays, profile), face_b, profile)
+}
+
+/// Each stored hit's weight in [`bounced_irradiance`] under `profile`: its own weight times
+/// the exit term and the Fresnel transmittance at its exit cosine, fixed while the rays and
+/// the profile stay (so that a light move gathers without them).
+pub fn hit_weights(rays: &BounceRays, profile: &Profile) -> Vec<f32> {
     let exit = (profile.exit_normalization() / std::f64::consts::PI) as f32;
     let eta = profile.eta;
+    rays.hits.par_iter().map(|h| h.weight * exit * fresnel_transmittance(h.mu_k as f64, eta) as f32).collect()
+}
+
+/// [`bounced_irradiance`] with the hits' weights `weights` ([`hit_weights`]) given.
+pub fn bounced_irradiance_with(
+    rays: &BounceRays,
+    weights: &[f32],
+    face_b: &[Rgb],
+    profile: &Profile,
+) -> Vec<Entering> {
+    assert_eq!(face_b.len() + 1, rays.offsets.len());
+    assert_eq!(weights.len(), rays.hits.len());
     let weight = std::f32::consts::PI / (rays.strata * rays.strata) as f32;
     rays.offsets
         .par_windows(2)
         .map(|w| {
             let mut e = Entering::default();
-            for h in &rays.hits[w[0] as usize..w[1] as usize] {
-                let radiance = face_b[h.k as usize]
-                    * (h.weight * exit * fresnel_transmittance(h.mu_k as f64, eta) as f32);
-                e.add(radiance, &profile.entry, h.cos);
+            let range = w[0] as usize..w[1] as usize;
+            for (h, hit_weight) in rays.hits[range.clone()].iter().zip(&weights[range]) {
+                e.add(face_b[h.k as usize] * *hit_weight, &profile.entry, h.cos);
             }
             e * weight
         })

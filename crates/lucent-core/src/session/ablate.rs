@@ -42,11 +42,15 @@ pub struct Ablations {
     /// The exclusion of the direct light's single scattering from the bounces (a choice made
     /// on the fit cases, `session/bounces.rs`): with this the first bounce sends it on too.
     pub direct_single_unbounced: bool,
+    /// The view ray's light paths taken without a ray where their outcome is certain
+    /// (`shading::single_scattering::light_paths`, a shortcut rather than a correction): with this every path is
+    /// traced, the reference the shortcut is measured against.
+    pub light_paths: bool,
 }
 
 impl Ablations {
     /// The names `--ablate` takes, each with what it switches off.
-    pub const NAMES: [(&'static str, &'static str); 11] = [
+    pub const NAMES: [(&'static str, &'static str); 12] = [
         ("gain", "the finite-body gain (every face's gain 1)"),
         ("slab-share", "the gain's division by the profile's share through a slab-like part"),
         ("reach", "the gain's per-channel reach factor"),
@@ -58,6 +62,7 @@ impl Ablations {
         ("env-shadows", "the environment's shadow by the mesh"),
         ("single-blend", "the geometric blend of view-ray single scattering: linear"),
         ("unbounced-single", "the direct light's single scattering left out of the bounces: bounced"),
+        ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -78,6 +83,7 @@ impl Ablations {
             "env-shadows" => &mut self.env_shadows,
             "single-blend" => &mut self.single_blend,
             "unbounced-single" => &mut self.direct_single_unbounced,
+            "light-paths" => &mut self.light_paths,
             _ => return None,
         })
     }

@@ -9,7 +9,7 @@ use super::subsurface::Subsurface;
 use super::{Changes, Frame, SolveMode, Timings};
 use crate::Rgb;
 use crate::irradiance::ShadowCaster;
-use crate::irradiance::interreflection::{BounceRays, bounced_irradiance};
+use crate::irradiance::interreflection::{BounceRays, bounced_irradiance_with, hit_weights};
 use crate::solver::Oracle;
 
 /// How much looser the oracle's thresholds are for a bounce solved on the fly than for the
@@ -26,6 +26,9 @@ pub(super) struct Bounces {
     rays: Option<BounceRays>,
     /// Whether the mesh moved since `rays` were traced or last refitted.
     moved: bool,
+    /// The hits' weights for `rays` under the profile of exit term and refractive index
+    /// `key` (`hit_weights`), kept across light moves.
+    weights: Option<((f64, f64), Vec<f32>)>,
 }
 
 impl Bounces {
@@ -54,9 +57,15 @@ impl Bounces {
         }
         self.make_rays_current(f, irradiance.caster());
         let oracle = bounce_oracle(f);
+        let key = (f.profile.exit_normalization(), f.profile.eta);
+        if let Some(rays) = self.rays.as_ref().filter(|_| f.settings.bounces > 0)
+            && self.weights.as_ref().is_none_or(|(k, _)| *k != key)
+        {
+            self.weights = Some((key, hit_weights(rays, &f.profile)));
+        }
         for _ in 0..f.settings.bounces {
-            let Some(rays) = &self.rays else { break };
-            let e = bounced_irradiance(rays, &last, &f.profile);
+            let (Some(rays), Some((_, weights))) = (&self.rays, &self.weights) else { break };
+            let e = bounced_irradiance_with(rays, weights, &last, &f.profile);
             let carried = irradiance.carried(&e);
             last =
                 subsurface.solve(f, body, &carried, &Changes::default(), oracle, &mut Timings::default()).0;
@@ -76,11 +85,13 @@ impl Bounces {
             Some(rays) if rays.fits(&f.mesh, &f.profile) => {
                 if self.moved {
                     rays.refit(&f.mesh, caster);
+                    self.weights = None;
                 }
             }
             _ => {
                 let progress = f.progress.as_deref();
                 self.rays = Some(BounceRays::trace(&f.mesh, caster, &f.profile, progress));
+                self.weights = None;
             }
         }
         self.moved = false;

@@ -13,7 +13,9 @@ use crate::irradiance::ShadowCaster;
 use crate::mesh::Mesh;
 use crate::shading::diffuse_radiance;
 use crate::shading::exit_chord::ExitChord;
-use crate::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_rays};
+use crate::shading::single_scattering::{
+    ViewRay, ViewRayScene, face_view_rays, view_ray_radiance_along, view_rays,
+};
 use crate::shading::transmitted_exit;
 use crate::shading::view_basis::{ViewBasis, ViewTerms};
 use glam::Vec3;
@@ -35,6 +37,33 @@ pub(super) struct View {
     /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
     /// crossed the body.
     transmitted: (Vec<Rgb>, Vec<Rgb>),
+    /// The view rays of the last eye, pose and refractive index, which a light move keeps.
+    rays: RayCache,
+}
+
+/// View rays kept while the eye, the pose and the refractive index stay: per vertex (the
+/// chord factor's) and per face (the single scattering's), each made when first asked for.
+#[derive(Default)]
+struct RayCache {
+    key: Option<(Vec3, f32, Vec<Vec3>, usize)>,
+    vertex: Option<Vec<Option<ViewRay>>>,
+    face: Option<Vec<Option<ViewRay>>>,
+}
+
+impl RayCache {
+    /// Empties the cache unless it was made for `eye` and `scene`'s pose and material.
+    fn keep_if_current(&mut self, scene: &ViewRayScene, eye: Vec3) {
+        let (eta, mesh) = (scene.profile.eta as f32, scene.mesh);
+        let current = self.key.as_ref().is_some_and(|(e, n, p, t)| {
+            *e == eye && *n == eta && *t == mesh.triangles.len() && *p == mesh.positions
+        });
+        if !current {
+            *self = RayCache {
+                key: Some((eye, eta, mesh.positions.clone(), mesh.triangles.len())),
+                ..Default::default()
+            };
+        }
+    }
 }
 
 impl View {
@@ -108,21 +137,29 @@ impl View {
         }
         let normals = f.mesh.vertex_normals();
         let scene = view_ray_scene(f, irradiance, caster, &normals);
+        self.rays.keep_if_current(&scene, eye);
         let diffuse = match exit_chord {
             Some((chord, means)) => {
-                let rays = view_rays(&scene, eye);
-                let mut factors = chord.vertex_factors(&rays, means);
+                let rays = &*self.rays.vertex.get_or_insert_with(|| view_rays(&scene, eye));
+                let mut factors = chord.vertex_factors(rays, means);
                 let (face_b, sent) = &self.transmitted;
                 if let Some(cross) = body.cross_body().filter(|c| c.len() == sent.len()) {
                     let lobe = &f.profile.exit_lobe;
                     factors =
-                        transmitted_exit::exit_factors(cross, &f.mesh, face_b, sent, &rays, lobe, &factors);
+                        transmitted_exit::exit_factors(cross, &f.mesh, face_b, sent, rays, lobe, &factors);
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }
             None => self.diffuse.clone(),
         };
-        let single = if single { view_ray_radiance(&scene, eye) } else { Vec::new() };
+        let single = if single {
+            // The drawn diffuse radiance sets what a light path may leave out.
+            let diffuse = Some(self.diffuse.as_slice()).filter(|_| !f.settings.ablate.light_paths);
+            let rays = self.rays.face.get_or_insert_with(|| face_view_rays(&scene, eye));
+            view_ray_radiance_along(&scene, rays, diffuse)
+        } else {
+            Vec::new()
+        };
         (diffuse, single)
     }
 }

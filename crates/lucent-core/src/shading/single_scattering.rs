@@ -42,13 +42,15 @@
 //! does not blacken its faces, each vertex keeps at least [`NEIGHBOUR_FLOOR`] of its brightest
 //! neighbour.
 
+pub mod light_paths;
 use crate::Rgb;
 use crate::bssrdf::{Profile, fresnel_transmittance, zonal_band_weights};
 use crate::irradiance::sh::BandWeights;
-use crate::irradiance::{Environment, SceneLight};
+use crate::irradiance::{Environment, Incident, SceneLight};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use glam::Vec3;
+use light_paths::LightPaths;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
@@ -142,38 +144,72 @@ pub struct ViewRayScene<'a> {
 /// the faces' interiors (on the 5 cm skim-milk bunny's head, 8-21% more, the most in the
 /// channels with short mean free paths).
 pub fn view_ray_radiance(scene: &ViewRayScene, eye: Vec3) -> Vec<Rgb> {
-    let rays = face_view_rays(scene, eye);
-    let faces = radiance_along(scene, &rays);
+    view_ray_radiance_with(scene, eye, None)
+}
+
+/// [`view_ray_radiance`] with the light paths whose outcome is certain taken without a ray
+/// where `diffuse` (per vertex, the drawn diffuse radiance `B / (c π)` the single scattering is
+/// added to) is given ([`light_paths`]); `None`: every path traced.
+pub fn view_ray_radiance_with(scene: &ViewRayScene, eye: Vec3, diffuse: Option<&[Rgb]>) -> Vec<Rgb> {
+    view_ray_radiance_along(scene, &face_view_rays(scene, eye), diffuse)
+}
+
+/// [`view_ray_radiance_with`] along the faces' view rays `rays` ([`face_view_rays`]), which
+/// the lights do not change.
+pub(crate) fn view_ray_radiance_along(
+    scene: &ViewRayScene,
+    rays: &[Option<ViewRay>],
+    diffuse: Option<&[Rgb]>,
+) -> Vec<Rgb> {
+    let paths = diffuse.map(|d| LightPaths::new(scene, d));
+    let faces = radiance_along(scene, rays, paths.as_ref());
     let mut radiance = scene.mesh.face_to_vertex_over(&faces, |f| rays[f].is_some());
     floor_at_neighbours(scene.mesh, &mut radiance);
     radiance
 }
 
 /// Single-scattered radiance along each face's view ray (`Rgb::ZERO` where there is none),
-/// before the exit Fresnel factor.
-fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>]) -> Vec<Rgb> {
+/// before the exit Fresnel factor. Without `paths`, every channel has its own four points
+/// and every light path is traced; with them, channels share points
+/// ([`LightPaths::channel_groups`]) and the paths go through [`LightPaths::fluxes`].
+fn radiance_along(scene: &ViewRayScene, rays: &[Option<ViewRay>], paths: Option<&LightPaths>) -> Vec<Rgb> {
     let d = scene.profile;
     let eta = d.eta as f32;
     let env = scene.environment.map(|e| (e, EnvironmentKernel::new(d)));
     let sigma_t = d.sigma_t.map(|s| s as f32);
     let albedo = d.alpha_prime.map(|a| a as f32);
+    let groups = match paths {
+        Some(_) => LightPaths::channel_groups(sigma_t),
+        None => (0..3).map(|c| (sigma_t[c], vec![c])).collect(),
+    };
     // Faces in the tree's leaf order: neighbours' shadow rays walk the same nodes.
     debug_assert_eq!(rays.len(), scene.mesh.triangles.len(), "one view ray a face");
     scene.bvh.map_faces(|f| {
         let Some(ray) = &rays[f] else { return Rgb::ZERO };
         let mut l = Rgb::ZERO;
         if !scene.lights.is_empty() {
-            for c in 0..3 {
-                let u_max = 1.0 - (-sigma_t[c] * ray.exit).exp();
-                let mut sum = 0.0;
-                for (node, weight) in GAUSS_4 {
-                    let t = -(-u_max * node).ln_1p() / sigma_t[c];
-                    let p = ray.origin + ray.w_t * t;
-                    for light in scene.lights {
-                        sum += weight * light_flux_at(scene, light, p, eta, c, sigma_t[c]);
+            for (sigma, channels) in &groups {
+                let u_max = 1.0 - (-sigma * ray.exit).exp();
+                let t = GAUSS_4.map(|(node, _)| -(-u_max * node).ln_1p() / sigma);
+                let points = t.map(|t| ray.origin + ray.w_t * t);
+                let flux: Vec<[Rgb; 4]> = (0..scene.lights.len())
+                    .map(|i| match paths {
+                        Some(paths) => paths.fluxes(scene, f, i, &points),
+                        None => points.map(|p| light_flux_rgb(scene, &scene.lights[i], p, eta, sigma_t)),
+                    })
+                    .collect();
+                for &c in channels {
+                    // The channel's own attenuation beyond the group's, and its measure's ratio.
+                    let ratio = sigma_t[c] / sigma;
+                    let mut sum = 0.0;
+                    for (k, (_, weight)) in GAUSS_4.iter().enumerate() {
+                        let extra = ratio * (-(sigma_t[c] - sigma) * t[k]).exp();
+                        for light in &flux {
+                            sum += weight * (extra * light[k][c]);
+                        }
                     }
+                    l[c] = albedo[c] / (4.0 * PI) * sum * u_max;
                 }
-                l[c] = albedo[c] / (4.0 * PI) * sum * u_max;
             }
         }
         if let Some((e, kernel)) = &env {
@@ -238,7 +274,7 @@ pub(crate) fn view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>>
 
 /// The view ray at the centroid of every face that faces `eye`, with the mean of its
 /// vertices' normals there; `None` for the rest.
-fn face_view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
+pub(crate) fn face_view_rays(scene: &ViewRayScene, eye: Vec3) -> Vec<Option<ViewRay>> {
     let mesh = scene.mesh;
     (0..mesh.triangles.len())
         .into_par_iter()
@@ -292,17 +328,10 @@ pub(crate) fn refract_inward(w_o: Vec3, n: Vec3, mu_o: f32, eta: f32) -> Vec3 {
     (-w_o / eta + (mu_o / eta - cos_t) * n).normalize_or_zero()
 }
 
-/// `F_in e^{-σ_t s'}` at the point `p` inside the body, channel `c`: the light of `light`
-/// refracted in where the straight ray from `p` towards it leaves the surface, attenuated
-/// along the refracted path back to `p`.
-fn light_flux_at(scene: &ViewRayScene, light: &SceneLight, p: Vec3, eta: f32, c: usize, sigma_t: f32) -> f32 {
-    let mut s = [0.0; 3];
-    s[c] = sigma_t;
-    light_flux_rgb(scene, light, p, eta, s)[c]
-}
-
-/// [`light_flux_at`] for the three channels at once (extinctions `sigma_t`, mesh units): one
-/// ray to the surface and one shadow ray.
+/// `F_in e^{-σ_t s'}` at the point `p` inside the body, per channel (extinctions `sigma_t`,
+/// mesh units): the light of `light` refracted in where the straight ray from `p` towards it
+/// leaves the surface, attenuated along the refracted path back to `p`. One ray to the
+/// surface and one shadow ray.
 pub(crate) fn light_flux_rgb(
     scene: &ViewRayScene,
     light: &SceneLight,
@@ -315,17 +344,27 @@ pub(crate) fn light_flux_rgb(
         // `p` lies outside the body (an open mesh): no material on the way.
         return Rgb::ZERO;
     };
-    let mut n_h = scene.mesh.face_normal(face as usize);
-    if n_h.dot(inc.to_light) < 0.0 {
-        n_h = -n_h;
-    }
-    let mu_i = n_h.dot(inc.to_light).clamp(1e-4, 1.0);
+    let n_h = facing(scene.mesh.face_normal(face as usize), inc.to_light);
     if light.shadows {
         let entry = p + inc.to_light * s + n_h * scene.offset;
         if scene.bvh.occluded(entry, inc.to_light, 0.0, inc.distance - s - scene.offset) {
             return Rgb::ZERO;
         }
     }
+    refracted_flux(&inc, s, n_h, eta, sigma_t)
+}
+
+/// The unit normal `n` turned to face `w`.
+pub(crate) fn facing(n: Vec3, w: Vec3) -> Vec3 {
+    if n.dot(w) < 0.0 { -n } else { n }
+}
+
+/// `F_in e^{-σ_t s'}` per channel at a point inside the body whose straight path towards the
+/// light `inc` meets the surface, unshadowed, after `s` (mesh units) where its unit normal
+/// (facing the light) is `n_h`: the refracted flux, attenuated along the refracted path
+/// `s' = s μ_i / μ_t` (module docs).
+pub(crate) fn refracted_flux(inc: &Incident, s: f32, n_h: Vec3, eta: f32, sigma_t: [f32; 3]) -> Rgb {
+    let mu_i = n_h.dot(inc.to_light).clamp(1e-4, 1.0);
     let mu_t = (1.0 - (1.0 - mu_i * mu_i) / (eta * eta)).max(1e-4).sqrt();
     let f_t = fresnel_transmittance(mu_i as f64, eta as f64) as f32;
     let s_refracted = s * mu_i / mu_t;

@@ -53,6 +53,7 @@ use rayon::prelude::*;
 use std::f32::consts::PI;
 
 use super::exit_chord::{ExitChord, MAX_FACTOR};
+use super::single_scattering::light_paths::vertex_faces;
 use super::single_scattering::{
     ENV_MU_SAMPLES, EnvironmentKernel, NEIGHBOUR_FLOOR, ViewRay, ViewRayScene, environment_through_body,
     light_flux_rgb, refract_inward,
@@ -368,28 +369,6 @@ impl ViewBasis {
         }
         (l / (self.eta * self.eta)).max(Rgb::ZERO)
     }
-}
-
-/// Each vertex's faces as compressed rows `(offsets, faces)`.
-fn vertex_faces(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
-    let mut offsets = vec![0u32; mesh.positions.len() + 1];
-    for tri in &mesh.triangles {
-        for &v in tri {
-            offsets[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..mesh.positions.len() {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut next = offsets.clone();
-    let mut faces = vec![0u32; offsets[mesh.positions.len()] as usize];
-    for (f, tri) in mesh.triangles.iter().enumerate() {
-        for &v in tri {
-            faces[next[v as usize] as usize] = f as u32;
-            next[v as usize] += 1;
-        }
-    }
-    (offsets, faces)
 }
 
 /// Every face's frame and chords (five rays per face).

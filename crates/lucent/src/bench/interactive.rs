@@ -21,6 +21,10 @@
 //! with light), and of the radiance the mesh pass draws per vertex (`radiance + single` against
 //! the fresh one's, vertices seen), median and 95th percentile.
 //!
+//! Before the actions, the `light-paths` rows (`bench/light_paths.rs`): the view stage with
+//! the light paths' shortcut against every path traced, lights in front, at the side and
+//! behind. With `LUCENT_BENCH_LIGHT_ONLY` set, those and the `light` action only.
+//!
 //! `LUCENT_BENCH_MAX_TRIANGLES` (default 60,000: the bunny, the 11K and the 48K dragons, a few
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
 //! for `bench solver --real`.
@@ -55,6 +59,9 @@ struct Row {
     timings: Timings,
     /// Median wall-clock milliseconds of the whole `solve`.
     wall_ms: f64,
+    /// Median CPU milliseconds of the whole `solve`, every thread of the process (steadier
+    /// than the wall clock on a loaded machine).
+    cpu_ms: f64,
     /// `B` per face against a fresh solve: median and 95th percentile relative difference.
     b_err_median: f64,
     b_err_p95: f64,
@@ -94,7 +101,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         );
     }
     each_case(json, 60_000, |name, mesh, material, scale_m| {
-        for row in measure(name, mesh, material, scale_m)? {
+        for row in measure(name, mesh, material, scale_m, json)? {
             print_row(&row, json)?;
         }
         Ok(())
@@ -152,7 +159,13 @@ fn session(
 }
 
 /// Every action's row for one mesh and material.
-fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> anyhow::Result<Vec<Row>> {
+fn measure(
+    name: &str,
+    rest: &Mesh,
+    material: &'static str,
+    scale_m: f64,
+    json: bool,
+) -> anyhow::Result<Vec<Row>> {
     let transport = Transport::new(Material::by_name(material).context("material preset")?, scale_m);
     let (mut lights, light_at) = lights(rest);
     let (lo, hi) = rest.bounds();
@@ -166,30 +179,37 @@ fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> any
     };
     let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
     s.solve();
+    for r in super::light_paths::rows(name, material, &mut s, eye)? {
+        super::light_paths::print(&r, json)?;
+    }
     let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
     let mut rows = Vec::new();
-    let mut row = |action: &'static str, s: &mut FrameSession, state: &State, times: Vec<(Timings, f64)>| {
-        let (b, view) = errors(rest, s, state);
-        let mut wall: Vec<f64> = times.iter().map(|(_, w)| *w).collect();
-        wall.sort_by(f64::total_cmp);
-        let t: Vec<Timings> = times.iter().map(|(t, _)| *t).collect();
-        rows.push(Row {
-            bench: "interactive",
-            mesh: name.to_string(),
-            triangles: rest.triangles.len(),
-            material,
-            scale_m,
-            action,
-            reps: REPS,
-            timings: Timings::median(&t),
-            wall_ms: wall[wall.len() / 2],
-            b_err_median: b.0,
-            b_err_p95: b.1,
-            view_err_median: view.0,
-            view_err_p95: view.1,
-            threads: rayon::current_num_threads(),
-        });
-    };
+    let mut row =
+        |action: &'static str, s: &mut FrameSession, state: &State, times: Vec<(Timings, (f64, f64))>| {
+            let (b, view) = errors(rest, s, state);
+            let mut wall: Vec<f64> = times.iter().map(|(_, w)| w.0).collect();
+            wall.sort_by(f64::total_cmp);
+            let mut cpu: Vec<f64> = times.iter().map(|(_, w)| w.1).collect();
+            cpu.sort_by(f64::total_cmp);
+            let t: Vec<Timings> = times.iter().map(|(t, _)| *t).collect();
+            rows.push(Row {
+                bench: "interactive",
+                mesh: name.to_string(),
+                triangles: rest.triangles.len(),
+                material,
+                scale_m,
+                action,
+                reps: REPS,
+                timings: Timings::median(&t),
+                wall_ms: wall[wall.len() / 2],
+                cpu_ms: cpu[cpu.len() / 2],
+                b_err_median: b.0,
+                b_err_p95: b.1,
+                view_err_median: view.0,
+                view_err_p95: view.1,
+                threads: rayon::current_num_threads(),
+            });
+        };
     // The light.
     let times = repeat(&mut s, |s| {
         lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
@@ -197,6 +217,9 @@ fn measure(name: &str, rest: &Mesh, material: &'static str, scale_m: f64) -> any
     });
     state.lights = lights.clone();
     row("light", &mut s, &state, times);
+    if std::env::var_os("LUCENT_BENCH_LIGHT_ONLY").is_some() {
+        return Ok(rows);
+    }
     // The camera, split and per eye.
     for (action, terms) in [("camera", ViewTerms::Split), ("camera-per-eye", ViewTerms::PerEye)] {
         s.set_view_terms(terms);
@@ -245,16 +268,17 @@ fn turn_light(l: &SceneLight, turn: &impl Fn(Vec3) -> Vec3) -> SceneLight {
     SceneLight { light, ..*l }
 }
 
-/// One warm-up and [`REPS`] timed repetitions of `act` then a solve: `(stages, wall ms)`.
-fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(Timings, f64)> {
+/// One warm-up and [`REPS`] timed repetitions of `act` then a solve: `(stages, (wall ms, CPU
+/// ms))`.
+fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(Timings, (f64, f64))> {
     act(s);
     s.solve();
     (0..REPS)
         .map(|_| {
             act(s);
-            let t = Instant::now();
+            let (t, cpu) = (Instant::now(), super::light_paths::cpu_ms());
             let timings = s.solve().timings;
-            (timings, lucent_core::clock::ms_since(t))
+            (timings, (lucent_core::clock::ms_since(t), super::light_paths::cpu_ms() - cpu))
         })
         .collect()
 }

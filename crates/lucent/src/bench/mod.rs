@@ -8,6 +8,7 @@ mod energy;
 mod formfactor;
 mod htsm;
 mod interactive;
+mod light_paths;
 mod solver;
 mod solver_locality;
 mod solver_real;
