@@ -170,6 +170,9 @@ pub struct HtsmPanel {
     pub error: Option<String>,
     /// The diffusion model's tables, made on their own thread.
     tables: TableBuilder,
+    /// Whether the current medium's diffusion tables are still being made (the panel says so:
+    /// the image is the last medium's, or none before the first tables come).
+    pub making_tables: bool,
 }
 
 impl HtsmPanel {
@@ -192,13 +195,12 @@ impl HtsmPanel {
         let params = HtsmParams { tone, ..settings.render_params() };
         // The diffusion model's tables: the newest made (drawn with until the medium's own
         // come); none made yet, nothing to draw with: the last image stays.
-        let tables = match DiffusionKey::of(&params) {
-            Some(key) => match self.tables.get(key) {
-                Some(t) => Some(t.clone()),
-                None => return,
-            },
-            None => None,
-        };
+        let key = DiffusionKey::of(&params);
+        let tables = key.and_then(|key| self.tables.get(key).cloned());
+        self.making_tables = key.is_some() && self.tables.building();
+        if key.is_some() && tables.is_none() {
+            return;
+        }
         let inputs = Inputs {
             mesh: mesh.clone(),
             volume: settings.volume.clone(),
@@ -340,6 +342,9 @@ pub fn controls(ui: &mut egui::Ui, s: &mut HtsmSettings, panel: &HtsmPanel) {
         ui.radio_value(&mut p.model, TransportModel::Thesis, "thesis (table 4.1)");
     });
     ui.label(MEASURED_ERROR);
+    if panel.making_tables {
+        ui.label("making the diffusion tables of this medium (a few seconds): the last ones draw until then");
+    }
     match &panel.error {
         Some(e) => {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
