@@ -150,6 +150,29 @@ impl Mesh {
         }
         sum.iter().zip(&weight).map(|(s, w)| if *w > 0.0 { *s / *w } else { Vec3::ZERO }).collect()
     }
+
+    /// Each vertex's faces as compressed rows `(offsets, faces)`: vertex `v`'s faces are
+    /// `faces[offsets[v]..offsets[v + 1]]`.
+    pub fn vertex_faces(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut offsets = vec![0u32; self.positions.len() + 1];
+        for tri in &self.triangles {
+            for &v in tri {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..self.positions.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut next = offsets.clone();
+        let mut faces = vec![0u32; offsets[self.positions.len()] as usize];
+        for (f, tri) in self.triangles.iter().enumerate() {
+            for &v in tri {
+                faces[next[v as usize] as usize] = f as u32;
+                next[v as usize] += 1;
+            }
+        }
+        (offsets, faces)
+    }
 }
 
 /// `(from, to)` pairs, sorted, as compressed rows over `n` sources: the `to`s of source `i`

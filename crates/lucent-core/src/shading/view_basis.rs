@@ -53,7 +53,6 @@ use rayon::prelude::*;
 use std::f32::consts::PI;
 
 use super::exit_chord::{ExitChord, MAX_FACTOR};
-use super::single_scattering::light_paths::vertex_faces;
 use super::single_scattering::{
     ENV_MU_SAMPLES, EnvironmentKernel, NEIGHBOUR_FLOOR, ViewRay, ViewRayScene, environment_through_body,
     light_flux_rgb, refract_inward,
@@ -136,7 +135,7 @@ impl ViewBasis {
         let (positions, frames, offsets, vertex_faces) = match reuse {
             Some(p) => (p.positions, p.frames, p.offsets, p.vertex_faces),
             None => {
-                let (offsets, vertex_faces) = vertex_faces(scene.mesh);
+                let (offsets, vertex_faces) = scene.mesh.vertex_faces();
                 (scene.mesh.positions.clone(), face_frames(scene, sin_tilt), offsets, vertex_faces)
             }
         };

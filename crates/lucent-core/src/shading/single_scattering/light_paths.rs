@@ -84,7 +84,7 @@ impl LightPaths {
                 (0..mesh.triangles.len()).into_par_iter().map(|f| face_lit(scene, light, f)).collect()
             })
             .collect();
-        let (offsets, vertex_faces) = vertex_faces(mesh);
+        let (offsets, vertex_faces) = mesh.vertex_faces();
         let share = 1.0 / scene.lights.len().max(1) as f32;
         let diffuse = if diffuse.len() == mesh.positions.len() {
             mesh.triangles
@@ -213,26 +213,4 @@ fn face_lit(scene: &ViewRayScene, light: &SceneLight, f: usize) -> bool {
     }
     let origin = centroid + n * scene.offset;
     !light.shadows || !scene.bvh.occluded(origin, inc.to_light, 0.0, inc.distance - scene.offset)
-}
-
-/// Each vertex's faces as compressed rows `(offsets, faces)`.
-pub(crate) fn vertex_faces(mesh: &crate::mesh::Mesh) -> (Vec<u32>, Vec<u32>) {
-    let mut offsets = vec![0u32; mesh.positions.len() + 1];
-    for tri in &mesh.triangles {
-        for &v in tri {
-            offsets[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..mesh.positions.len() {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut next = offsets.clone();
-    let mut faces = vec![0u32; offsets[mesh.positions.len()] as usize];
-    for (f, tri) in mesh.triangles.iter().enumerate() {
-        for &v in tri {
-            faces[next[v as usize] as usize] = f as u32;
-            next[v as usize] += 1;
-        }
-    }
-    (offsets, faces)
 }
