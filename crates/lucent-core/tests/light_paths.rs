@@ -4,44 +4,30 @@
 //! and within a bound on the embedded bunny, what the mesh pass draws, lights in front, at the
 //! side and behind.
 
+mod view_ray_util;
+
 use glam::Vec3;
 use lucent_core::Rgb;
-use lucent_core::bssrdf::{Material, Profile, ProfileKind};
+use lucent_core::bssrdf::{Material, Profile};
 use lucent_core::irradiance::{Light, SceneLight};
-use lucent_core::mesh::bvh::Bvh;
-use lucent_core::mesh::{Mesh, embedded, generate};
+use lucent_core::mesh::{Mesh, embedded};
 use lucent_core::session::{Ablations, FrameSession, FrameSettings, Solved, Transport};
-use lucent_core::shading::single_scattering::{ViewRayScene, view_ray_radiance, view_ray_radiance_with};
-
-/// A cube 2 units wide, mean free path a thousandth of a unit in every channel (albedos 0.3,
-/// 0.9, 0.99): a half-space under the middle of each face.
-fn half_space() -> (Mesh, Profile) {
-    let m = Material::custom("test", [3.0, 9.0, 9.9], [7.0, 1.0, 0.1], 1.3).unwrap();
-    (generate::cube(8), Profile::of_kind(&m, 100.0, ProfileKind::Pbd, false))
-}
+use lucent_core::shading::single_scattering::{view_ray_radiance, view_ray_radiance_with};
+use view_ray_util::{half_space, with_scene};
 
 /// `(traced, shortcut)` single scattering at every vertex of `mesh` seen from `eye`, with a
 /// drawn diffuse radiance of 1 everywhere.
 fn both(mesh: &Mesh, d: &Profile, lights: &[SceneLight], eye: Vec3) -> (Vec<Rgb>, Vec<Rgb>) {
-    let normals = mesh.vertex_normals();
-    let bvh = Bvh::build(mesh);
-    let scene = ViewRayScene {
-        mesh,
-        normals: &normals,
-        bvh: &bvh,
-        offset: 1e-5,
-        profile: d,
-        lights,
-        environment: None,
-    };
     let diffuse = vec![Rgb::ONE; mesh.positions.len()];
-    (view_ray_radiance(&scene, eye), view_ray_radiance_with(&scene, eye, Some(&diffuse)))
+    with_scene(mesh, d, lights, None, |scene| {
+        (view_ray_radiance(scene, eye), view_ray_radiance_with(scene, eye, Some(&diffuse)))
+    })
 }
 
 /// On a flat face lit from any angle the half-space's closed form is the traced paths' sum.
 #[test]
 fn a_lit_flat_face_takes_the_half_space_closed_form() {
-    let (mesh, d) = half_space();
+    let (mesh, d) = half_space(1.3);
     let top = mesh.positions.iter().position(|p| p.distance(Vec3::Y) < 1e-6).unwrap();
     for mu_i in [1.0f32, 0.7, 0.3] {
         let to_light = Vec3::new((1.0 - mu_i * mu_i).sqrt(), mu_i, 0.0);
@@ -59,7 +45,7 @@ fn a_lit_flat_face_takes_the_half_space_closed_form() {
 /// thick, nothing arrives: the shortcut leaves it out, as tracing finds.
 #[test]
 fn a_face_behind_a_thick_body_gets_nothing() {
-    let (mesh, d) = half_space();
+    let (mesh, d) = half_space(1.3);
     let light = Light::Directional { direction: Vec3::Y, irradiance: Rgb::ONE };
     let eye = Vec3::new(0.2, 1.0, 0.1) * 1e4;
     let (traced, fast) = both(&mesh, &d, &[SceneLight { light, shadows: true }], eye);

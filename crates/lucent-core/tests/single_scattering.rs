@@ -2,25 +2,17 @@
 //! closed form on a half-space, the same with the environment's closed form, an exact integral
 //! over a small sphere under a sky, and shadowing.
 
+mod view_ray_util;
+
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::bssrdf::{Material, Profile, ProfileKind, fresnel_transmittance};
 use lucent_core::irradiance::sh::Sh9;
 use lucent_core::irradiance::{Environment, Light, SceneLight};
-use lucent_core::mesh::bvh::Bvh;
 use lucent_core::mesh::{Mesh, generate};
 use lucent_core::shading::SingleScattering;
-use lucent_core::shading::single_scattering::{NEIGHBOUR_FLOOR, ViewRayScene, view_ray_radiance};
-
-/// A cube 2 units wide of a material with a mean free path of a thousandth of a unit: a
-/// half-space seen from the middle of a face. Albedos 0.3, 0.9, 0.99.
-fn half_space(eta: f64) -> (Mesh, Profile) {
-    let sigma_s = [3.0, 9.0, 9.9];
-    let sigma_a = [7.0, 1.0, 0.1];
-    let m = Material::custom("test", sigma_s, sigma_a, eta).unwrap();
-    // 10 mm^-1 total, 100 mm per unit: σ_t = 1000 per unit.
-    (generate::cube(8), Profile::of_kind(&m, 100.0, ProfileKind::Pbd, false))
-}
+use lucent_core::shading::single_scattering::{NEIGHBOUR_FLOOR, view_ray_radiance};
+use view_ray_util::{half_space, with_scene};
 
 /// The top face's centre vertex (0, 1, 0).
 fn top_centre(mesh: &Mesh) -> usize {
@@ -35,27 +27,6 @@ fn closed_form(d: &Profile, mu_i: f64, mu_o: f64) -> [f64; 3] {
     std::array::from_fn(|c| {
         d.alpha_prime[c] * fresnel_transmittance(mu_i, eta) * mu_i
             / (4.0 * std::f64::consts::PI * eta * eta * (refracted(mu_i) + refracted(mu_o)))
-    })
-}
-
-/// `f` of the view-ray scene of `mesh` (its vertex normals, a BVH over it).
-fn with_scene<R>(
-    mesh: &Mesh,
-    d: &Profile,
-    lights: &[SceneLight],
-    env: Option<&Environment>,
-    f: impl FnOnce(&ViewRayScene) -> R,
-) -> R {
-    let normals = mesh.vertex_normals();
-    let bvh = Bvh::build(mesh);
-    f(&ViewRayScene {
-        mesh,
-        normals: &normals,
-        bvh: &bvh,
-        offset: 1e-5,
-        profile: d,
-        lights,
-        environment: env,
     })
 }
 
