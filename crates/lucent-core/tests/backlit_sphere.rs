@@ -81,7 +81,7 @@ fn the_sphere_share_adds_nothing_under_uniform_light() {
     let bvh = Bvh::build(&mesh);
     let rays = ThicknessRays::trace(&mesh, &bvh, 1e-4);
     let gains = fb.face_gains(&mesh, &bvh, 1e-4);
-    let make = |mode| CrossBody::for_mode(&profile, &fb, &mesh, &rays, 1e-4, &gains, mode);
+    let make = |mode| CrossBody::new(&profile, &fb, &mesh, &rays, 1e-4, &gains, mode);
     let (slab, curved) = (make(Transmission::Slab), make(Transmission::Curved));
     let n = mesh.triangles.len();
     let run = |cross: &CrossBody, carried: &[Rgb]| {

@@ -116,8 +116,12 @@ impl Body {
         };
         if f.transport.transmission != Transmission::HalfSpace {
             let mode = f.transport.transmission;
-            let cross = CrossBody::for_mode(profile, fb, mesh, &rays, caster.offset(), &gains, mode)
-                .with_spread(profile, mesh, caster.bvh(), caster.offset());
+            let cross = CrossBody::new(profile, fb, mesh, &rays, caster.offset(), &gains, mode).with_spread(
+                profile,
+                mesh,
+                caster.bvh(),
+                caster.offset(),
+            );
             if !cross.is_empty() {
                 self.face_term = Some(Arc::new(cross.uniform_terms()));
                 self.cross_body = Some(Arc::new(cross));

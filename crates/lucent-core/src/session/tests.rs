@@ -7,7 +7,7 @@ use crate::mesh::deform::{self, Deformer as _};
 use crate::mesh::generate;
 use crate::shading;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
-use crate::solver::transmission::CrossBody;
+use crate::solver::transmission::{CrossBody, Transmission};
 
 fn marble() -> Transport {
     Transport::new(Material::by_name("marble").unwrap(), 0.05)
@@ -52,12 +52,8 @@ fn on_the_fly_matches_the_solver_called_directly() {
     let gain = fb.gains_along(&mesh, &rays, caster.offset());
     assert!(gain.iter().all(|g| g.min_element() > 1.0), "a small marble sphere gains");
     // And the slab transmission across the body, with room for it under the bound.
-    let cross = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gain).with_spread(
-        &profile,
-        &mesh,
-        caster.bvh(),
-        caster.offset(),
-    );
+    let cross = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gain, Transmission::Slab)
+        .with_spread(&profile, &mesh, caster.bvh(), caster.offset());
     solver.set_face_gain(Some(Arc::new(gain)));
     if !cross.is_empty() {
         solver.set_face_term(Some(Arc::new(cross.uniform_terms())));

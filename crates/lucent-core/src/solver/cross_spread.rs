@@ -179,7 +179,7 @@ mod tests {
     use crate::mesh::generate;
     use crate::session::Transport;
     use crate::solver::finite_body::{FiniteBody, ThicknessRays};
-    use crate::solver::transmission::CrossBody;
+    use crate::solver::transmission::{CrossBody, Transmission};
 
     /// A 50 x 50 x 3 mm box of `material` (index 1) and its terms with and without the spread.
     fn box_terms(material: &str) -> (crate::mesh::Mesh, CrossBody, CrossBody) {
@@ -192,7 +192,7 @@ mod tests {
         let fb = FiniteBody::new(&profile);
         let rays = ThicknessRays::trace(&mesh, caster.bvh(), caster.offset());
         let gains = fb.gains_along(&mesh, &rays, caster.offset());
-        let point = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gains);
+        let point = CrossBody::new(&profile, &fb, &mesh, &rays, caster.offset(), &gains, Transmission::Slab);
         let spread = point.clone().with_spread(&profile, &mesh, caster.bvh(), caster.offset());
         (mesh, point, spread)
     }

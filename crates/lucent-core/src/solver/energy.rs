@@ -46,7 +46,7 @@ pub fn uniform_report(
         let rays = super::finite_body::ThicknessRays::trace(mesh, caster.bvh(), caster.offset());
         let gains = fb.gains_along(mesh, &rays, caster.offset());
         let mode = super::transmission::Transmission::default();
-        cross = Some(super::transmission::CrossBody::for_mode(
+        cross = Some(super::transmission::CrossBody::new(
             profile,
             &fb,
             mesh,

@@ -151,21 +151,9 @@ pub struct CrossBody {
 impl CrossBody {
     /// The terms of every face of `mesh` for `profile`, from the body's rays (`offset` inside
     /// the faces) and each face's finite-body gain `gains` (what multiplied the gathered far
-    /// side's share).
+    /// side's share): with the sphere's share on curved parts for [`Transmission::Curved`]
+    /// (`super::sphere_term`), the slab's alone otherwise.
     pub fn new(
-        profile: &Profile,
-        fb: &FiniteBody,
-        mesh: &Mesh,
-        rays: &ThicknessRays,
-        offset: f32,
-        gains: &[Rgb],
-    ) -> Self {
-        Self::for_mode(profile, fb, mesh, rays, offset, gains, Transmission::Slab)
-    }
-
-    /// [`CrossBody::new`] for `mode`: with the sphere's share on curved parts for
-    /// [`Transmission::Curved`] (`super::sphere_term`), the slab's alone otherwise.
-    pub fn for_mode(
         profile: &Profile,
         fb: &FiniteBody,
         mesh: &Mesh,
