@@ -24,9 +24,8 @@
 //! walk's boundary); no constant was chosen on any case.
 
 use crate::bssrdf::Profile;
-use crate::bssrdf::sphere_walk::SphereTable;
+use crate::bssrdf::sphere_table::SphereTable;
 use std::f64::consts::PI;
-use std::sync::Arc;
 
 /// Thicknesses of the gathered-share table of a [`SphereTerm`].
 const STEPS: usize = 48;
@@ -35,8 +34,8 @@ const STEPS: usize = 48;
 /// the profile gathers, over the thickness under a face.
 #[derive(Clone, Debug)]
 pub(crate) struct SphereTerm {
-    /// The sphere walk per channel.
-    tables: [Arc<SphereTable>; 3],
+    /// The sphere's walked transmittance per channel (the committed table at its albedo).
+    tables: [SphereTable; 3],
     /// Extinction `σ_t` per mesh unit, per channel.
     sigma_t: [f64; 3],
     /// Thicknesses (mesh units) of the gathered share, log-spaced.
@@ -52,7 +51,7 @@ impl SphereTerm {
         if profile.eta != 1.0 || !(t_min > 0.0 && t_max >= t_min && t_max.is_finite()) {
             return None;
         }
-        let tables = std::array::from_fn(|c| SphereTable::cached(profile.alpha_prime[c]));
+        let tables = std::array::from_fn(|c| SphereTable::for_albedo(profile.alpha_prime[c]));
         let (lo, hi) = (t_min as f64, (t_max as f64).max(t_min as f64 * 1.001));
         let t: Vec<f64> = (0..STEPS).map(|k| lo * (hi / lo).powf(k as f64 / (STEPS - 1) as f64)).collect();
         let entry = &profile.entry;
@@ -167,7 +166,7 @@ mod tests {
         }
         // The table against the walk itself at 2 cm (`sphere_walk::transmitted`, 40,000 photons
         // for red, 8,192 for green and blue): 0.00360 / 0.00190 / 0.00089 (R / G / B), standard
-        // errors 3%, 3% and 3.5%; the table's own error at radius 22 is about 5% after smoothing.
+        // errors 3%, 3% and 3.5%; the committed table's own at radius 22 is about 2.5%.
         let exact = term.exact(2.0);
         for (c, want) in [0.0036, 0.0019, 0.00089].into_iter().enumerate() {
             assert!((exact[c] / want - 1.0).abs() < 0.15, "channel {c}: {exact:?}");
