@@ -15,6 +15,9 @@ use lucent_core::bssrdf::sphere_walk::transmitted;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// One point's walk: (albedo, radius) indices, photons, `T` and its standard error per angle.
+type Walk = ((usize, usize), usize, Vec<f64>, Vec<f64>);
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let value = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1));
@@ -33,7 +36,7 @@ fn main() {
     let mut points: Vec<(usize, usize)> =
         (0..albedo.len()).flat_map(|a| (0..radius.len()).map(move |r| (a, r))).collect();
     points.sort_by_key(|&(a, r)| (a, std::cmp::Reverse(r)));
-    let walked: Vec<((usize, usize), usize, Vec<f64>, Vec<f64>)> = points
+    let walked: Vec<Walk> = points
         .par_iter()
         .map(|&(a, r)| {
             let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);

@@ -120,7 +120,7 @@ impl Walked {
         (a * self.radius.len() + r) * self.theta_deg.len() + t
     }
 
-    /// The little-endian bytes of the file: [`MAGIC`], the three counts (u32), the albedos,
+    /// The little-endian bytes of the file: `LSPHT001`, the three counts (u32), the albedos,
     /// radii and angles (f64), the photon counts (u32), `ln T` and the relative errors (f32).
     pub fn encode(&self) -> Vec<u8> {
         let mut out = MAGIC.to_vec();
