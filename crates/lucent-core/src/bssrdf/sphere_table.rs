@@ -35,7 +35,7 @@ pub const RADIUS_STEPS: usize = 24;
 /// Smallest radius of the table (mean free paths).
 pub const MIN_RADIUS: f64 = 0.25;
 /// Exit angles of the table, degrees from the antipode of the lit pole.
-pub const THETA_DEG: [f64; 7] = [0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0];
+pub const THETA_DEG: [f64; 10] = [0.0, 15.0, 30.0, 45.0, 55.0, 65.0, 72.0, 78.0, 83.0, 87.0];
 /// Smallest nonzero decay rate `κ` of the albedo grid (per mean free path; `ρ ≈ 1 - 3e-6`).
 const KAPPA_FIRST: f64 = 0.003;
 /// Ratio of successive decay rates of the albedo grid.
@@ -234,7 +234,7 @@ impl SphereTable {
     }
 
     /// `T(θ)` of a sphere `radius` mean free paths in radius at `theta` radians from the
-    /// antipode of the lit pole (clamped to the table's angles, 0..85°): bilinear in `ln R` and
+    /// antipode of the lit pole (clamped to the table's angles, 0..87°): bilinear in `ln R` and
     /// `θ` between the table's points, as `R³` below its radii, falling as `e^{-2 κ R}` beyond
     /// (module docs).
     pub fn at_angle(&self, radius: f64, theta: f64) -> f64 {

@@ -6,9 +6,9 @@ use crate::bssrdf::sphere_walk::transmitted;
 /// The interpolation's bias bound, relative, up to 45 degrees from the antipode: halfway between
 /// the table's points in radius, albedo and angle at once, `cargo run --release -p lucent-core
 /// --example sphere_table -- --check 200000` found the table within 3.1% of fresh walks there
-/// where `T > 1e-4` (each within two standard errors; docs/transmission.md). Toward the
-/// terminator, where `T(θ)` bends upward between the angles, it is larger (up to 15-27% at
-/// 67-80 degrees where `κ R > 2`).
+/// where `T > 1e-3` (mean +0.2%, each within 1.5 combined standard errors; docs/transmission.md).
+/// Toward the terminator, where `T(θ)` bends upward between the angles, it is larger (up to 6-11%
+/// at 80-85 degrees where `κ R > 2`).
 const INTERPOLATION_BIAS: f64 = 0.03;
 
 /// The committed file is the generator's grid, every value walked, and reads back as written.
