@@ -27,7 +27,9 @@
 //!
 //! `LUCENT_BENCH_MAX_TRIANGLES` (default 60,000: the bunny, the 11K and the 48K dragons, a few
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
-//! for `bench solver --real`.
+//! for `bench solver --real`. `LUCENT_BENCH_ACTIONS` (comma-separated names, `light-paths`
+//! among them; default all) picks the rows, `LUCENT_BENCH_REPS` the repetitions (default
+//! [`REPS`]).
 
 use super::solver_real::{bump, each_case, lights};
 use anyhow::Context;
@@ -43,8 +45,18 @@ use lucent_core::session::{
 use serde::Serialize;
 use std::time::Instant;
 
-/// Timed repetitions of each action (after one warm-up).
+/// Timed repetitions of each action (after one warm-up), unless `LUCENT_BENCH_REPS` says.
 const REPS: usize = 3;
+
+/// The repetitions: `LUCENT_BENCH_REPS`, else [`REPS`].
+fn reps() -> usize {
+    std::env::var("LUCENT_BENCH_REPS").ok().and_then(|r| r.trim().parse().ok()).filter(|r| *r > 0).unwrap_or(REPS)
+}
+
+/// Whether `LUCENT_BENCH_ACTIONS` (comma-separated; unset: all) asks for the rows `action`.
+fn wants(action: &str) -> bool {
+    std::env::var("LUCENT_BENCH_ACTIONS").map_or(true, |a| a.split(',').any(|n| n.trim() == action))
+}
 
 #[derive(Serialize)]
 struct Row {
@@ -68,6 +80,8 @@ struct Row {
     /// The drawn radiance per vertex against a fresh solve with per-eye view terms.
     view_err_median: f64,
     view_err_p95: f64,
+    /// The load average over the last minute when the row was measured (`/proc/loadavg`).
+    load: f64,
     threads: usize,
 }
 
@@ -82,7 +96,7 @@ struct State {
 pub fn run(json: bool) -> anyhow::Result<()> {
     if !json {
         println!(
-            "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8}",
+            "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8}",
             "mesh",
             "T",
             "material",
@@ -94,6 +108,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
             "bounces",
             "view",
             "wall",
+            "cpu",
             "B med",
             "B p95",
             "view med",
@@ -115,7 +130,7 @@ fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
     }
     let t = &r.timings;
     println!(
-        "{:<12} {:>7} {:<9} {:<15} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>7.3}% {:>7.3}% {:>7.3}% {:>7.3}%",
+        "{:<12} {:>7} {:<9} {:<15} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>9.1} {:>7.3}% {:>7.3}% {:>7.3}% {:>7.3}%",
         r.mesh,
         r.triangles,
         r.material,
@@ -127,6 +142,7 @@ fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
         t.bounces_ms,
         t.single_scattering_ms,
         r.wall_ms,
+        r.cpu_ms,
         100.0 * r.b_err_median,
         100.0 * r.b_err_p95,
         100.0 * r.view_err_median,
@@ -179,8 +195,10 @@ fn measure(
     };
     let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
     s.solve();
-    for r in super::light_paths::rows(name, material, &mut s, eye)? {
-        super::light_paths::print(&r, json)?;
+    if wants("light-paths") {
+        for r in super::light_paths::rows(name, material, &mut s, eye)? {
+            super::light_paths::print(&r, json)?;
+        }
     }
     let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
     let mut rows = Vec::new();
@@ -199,7 +217,7 @@ fn measure(
                 material,
                 scale_m,
                 action,
-                reps: REPS,
+                reps: times.len(),
                 timings: Timings::median(&t),
                 wall_ms: wall[wall.len() / 2],
                 cpu_ms: cpu[cpu.len() / 2],
@@ -207,21 +225,27 @@ fn measure(
                 b_err_p95: b.1,
                 view_err_median: view.0,
                 view_err_p95: view.1,
+                load: load_average(),
                 threads: rayon::current_num_threads(),
             });
         };
     // The light.
-    let times = repeat(&mut s, |s| {
-        lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
-        s.set_lights(lights.clone());
-    });
-    state.lights = lights.clone();
-    row("light", &mut s, &state, times);
+    if wants("light") {
+        let times = repeat(&mut s, |s| {
+            lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
+            s.set_lights(lights.clone());
+        });
+        state.lights = lights.clone();
+        row("light", &mut s, &state, times);
+    }
     if std::env::var_os("LUCENT_BENCH_LIGHT_ONLY").is_some() {
         return Ok(rows);
     }
     // The camera, split and per eye.
     for (action, terms) in [("camera", ViewTerms::Split), ("camera-per-eye", ViewTerms::PerEye)] {
+        if !wants(action) {
+            continue;
+        }
         s.set_view_terms(terms);
         let times = repeat(&mut s, |s| {
             eye = turn(eye);
@@ -231,6 +255,9 @@ fn measure(
         row(action, &mut s, &state, times);
     }
     s.set_view_terms(ViewTerms::Split);
+    if !wants("material") && !wants("bump") && !wants("twist") {
+        return Ok(rows);
+    }
     // The material: the scale grows by 5% each time.
     let mut step = 0;
     let times = repeat(&mut s, |s| {
@@ -268,12 +295,12 @@ fn turn_light(l: &SceneLight, turn: &impl Fn(Vec3) -> Vec3) -> SceneLight {
     SceneLight { light, ..*l }
 }
 
-/// One warm-up and [`REPS`] timed repetitions of `act` then a solve: `(stages, (wall ms, CPU
+/// One warm-up and [`reps`] timed repetitions of `act` then a solve: `(stages, (wall ms, CPU
 /// ms))`.
 fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(Timings, (f64, f64))> {
     act(s);
     s.solve();
-    (0..REPS)
+    (0..reps())
         .map(|_| {
             act(s);
             let (t, cpu) = (Instant::now(), super::light_paths::cpu_ms());
@@ -300,6 +327,14 @@ fn errors(rest: &Mesh, s: &mut FrameSession, state: &State) -> ((f64, f64), (f64
     };
     let view = relative(drawn(&got).into_iter(), drawn(&want).into_iter());
     (b, view)
+}
+
+/// The load average over the last minute (`/proc/loadavg`; 0 where there is none).
+fn load_average() -> f64 {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0.0)
 }
 
 /// Median and 95th percentile of `|a - b| / b` where `b > 0`.
