@@ -29,7 +29,9 @@
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
 //! for `bench solver --real`. `LUCENT_BENCH_ACTIONS` (comma-separated names, `light-paths`
 //! among them; default all) picks the rows, `LUCENT_BENCH_REPS` the repetitions (default
-//! [`REPS`]).
+//! [`REPS`]). The `camera` row also gives `exp_err_max`: the largest relative change of the
+//! drawn radiance per vertex that the split's fast exponentials make, against the C
+//! library's (`--ablate view-exp`) from the same eye.
 
 use super::solver_real::{bump, each_case, lights};
 use anyhow::Context;
@@ -50,7 +52,11 @@ const REPS: usize = 3;
 
 /// The repetitions: `LUCENT_BENCH_REPS`, else [`REPS`].
 fn reps() -> usize {
-    std::env::var("LUCENT_BENCH_REPS").ok().and_then(|r| r.trim().parse().ok()).filter(|r| *r > 0).unwrap_or(REPS)
+    std::env::var("LUCENT_BENCH_REPS")
+        .ok()
+        .and_then(|r| r.trim().parse().ok())
+        .filter(|r| *r > 0)
+        .unwrap_or(REPS)
 }
 
 /// Whether `LUCENT_BENCH_ACTIONS` (comma-separated; unset: all) asks for the rows `action`.
@@ -80,6 +86,10 @@ struct Row {
     /// The drawn radiance per vertex against a fresh solve with per-eye view terms.
     view_err_median: f64,
     view_err_p95: f64,
+    /// `camera` only: the largest relative change of the drawn radiance per vertex, the
+    /// split's fast exponentials against the C library's, from the last eye.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    exp_err_max: Option<f64>,
     /// The load average over the last minute when the row was measured (`/proc/loadavg`).
     load: f64,
     threads: usize,
@@ -225,6 +235,7 @@ fn measure(
                 b_err_p95: b.1,
                 view_err_median: view.0,
                 view_err_p95: view.1,
+                exp_err_max: (action == "camera").then(|| exp_change(s)),
                 load: load_average(),
                 threads: rayon::current_num_threads(),
             });
@@ -255,35 +266,45 @@ fn measure(
         row(action, &mut s, &state, times);
     }
     s.set_view_terms(ViewTerms::Split);
-    if !wants("material") && !wants("bump") && !wants("twist") {
-        return Ok(rows);
+    if wants("material") || wants("bump") || wants("twist") {
+        changes(&mut s, &mut state, (rest, light_at, scale_m), &mut row);
     }
+    Ok(rows)
+}
+
+/// The material, bump and twist rows (after the light and camera ones) of `s` as `measure`
+/// made it, `row` taking each action's times.
+fn changes(
+    s: &mut FrameSession,
+    state: &mut State,
+    (rest, light_at, scale_m): (&Mesh, Vec3, f64),
+    row: &mut impl FnMut(&'static str, &mut FrameSession, &State, Vec<(Timings, (f64, f64))>),
+) {
     // The material: the scale grows by 5% each time.
-    let mut step = 0;
-    let times = repeat(&mut s, |s| {
+    let (transport, mut step) = (s.transport().clone(), 0);
+    let times = repeat(s, |s| {
         step += 1;
         s.set_transport(Transport { scale_m: scale_m * (1.0 + 0.05 * step as f64), ..transport.clone() });
     });
     state.transport = s.transport().clone();
-    row("material", &mut s, &state, times);
+    row("material", s, state, times);
     // A local bump growing on the lit side, then a global twist, frame by frame.
     let (mut step, top) = (0, 0.01 * rest.extent());
-    let times = repeat(&mut s, |s| {
+    let times = repeat(s, |s| {
         step += 1;
-        let h = top * step as f32 / (REPS + 1) as f32;
+        let h = top * step as f32 / (reps() + 1) as f32;
         s.set_positions(&bump(rest, light_at, 0.1 * rest.extent(), h));
     });
     state.positions = s.mesh().positions.clone();
-    row("bump", &mut s, &state, times);
+    row("bump", s, state, times);
     let (twist, mut frame, mut out) = (Deformation::Twist { degrees: 30.0 }, 0, Vec::new());
-    let times = repeat(&mut s, |s| {
+    let times = repeat(s, |s| {
         frame += 1;
         twist.apply(rest, frame as f32 / 8.0, &mut out);
         s.set_positions(&out);
     });
     state.positions = s.mesh().positions.clone();
-    row("twist", &mut s, &state, times);
-    Ok(rows)
+    row("twist", s, state, times);
 }
 
 /// `light` turned by `turn` (positions about the centre, directions about the vertical).
@@ -327,6 +348,30 @@ fn errors(rest: &Mesh, s: &mut FrameSession, state: &State) -> ((f64, f64), (f64
     };
     let view = relative(drawn(&got).into_iter(), drawn(&want).into_iter());
     (b, view)
+}
+
+/// The largest relative change of the drawn radiance per vertex (channel sums, vertices with
+/// any) of `s`'s last image when the split takes the C library's exponentials instead of the
+/// fast ones (`--ablate view-exp`, a view-only setting: the same eye seen again); `s` is left
+/// as it was.
+fn exp_change(s: &mut FrameSession) -> f64 {
+    let drawn = |x: &Solved| -> Vec<f64> {
+        let single = |i: usize| x.vertex_single.get(i).copied().unwrap_or(Rgb::ZERO);
+        x.vertex_radiance
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.x + r.y + r.z + single(i).element_sum()) as f64)
+            .collect()
+    };
+    let fast = drawn(s.solve());
+    let settings = *s.settings();
+    let mut exact = settings;
+    exact.ablate.view_exp = true;
+    s.set_settings(exact);
+    let libm = drawn(s.solve());
+    s.set_settings(settings);
+    s.solve();
+    fast.iter().zip(&libm).filter(|(_, b)| **b > 0.0).map(|(a, b)| (a - b).abs() / b).fold(0.0, f64::max)
 }
 
 /// The load average over the last minute (`/proc/loadavg`; 0 where there is none).
