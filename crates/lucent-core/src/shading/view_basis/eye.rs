@@ -379,38 +379,47 @@ isa_blocks!(avx512, "avx512f,avx512vl,avx2,fma,f16c");
 mod tests {
     use super::*;
 
-    /// Faces in every orientation about the origin with finite chords, and their terms, from
-    /// a fixed pseudo-random sequence.
+    /// A fixed pseudo-random sequence (xorshift) in `[0, 1]`.
+    struct Sequence(u32);
+
+    impl Sequence {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            self.0 as f32 / u32::MAX as f32
+        }
+
+        fn unit(&mut self) -> Vec3 {
+            Vec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5).normalize_or(Vec3::Y)
+        }
+    }
+
+    /// Faces in every orientation about the origin with finite chords, and their terms.
     fn faces(count: usize) -> (Vec<FaceFrame>, Vec<FaceTerms>, Vec<[Rgb; ENV_MU]>) {
-        let mut state = 0x2545_f491_u32;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state as f32 / u32::MAX as f32
-        };
-        let mut unit = || Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vec3::Y);
+        let mut r = Sequence(0x2545_f491);
         let frames: Vec<FaceFrame> = (0..count)
             .map(|_| {
-                let n = unit();
+                let n = r.unit();
                 let (t1, t2) = n.any_orthonormal_pair();
-                let facing = (n + 0.2 * unit()).normalize();
-                let chords = std::array::from_fn(|k| 0.05 + k as f32 * 0.3 * next().powi(3));
-                FaceFrame { centroid: n, facing, n, t1, t2, area: 0.01 + next(), chords }
+                let facing = (n + 0.2 * r.unit()).normalize();
+                let chords = std::array::from_fn(|k| 0.05 + k as f32 * 0.3 * r.next().powi(3));
+                FaceFrame { centroid: n, facing, n, t1, t2, area: 0.01 + r.next(), chords }
             })
             .collect();
         let terms: Vec<FaceTerms> = (0..count)
             .map(|_| {
-                let lit = next() > 0.2;
+                let lit = r.next() > 0.2;
                 FaceTerms {
-                    a: if lit { Rgb::new(next(), next(), next()) } else { Rgb::ZERO },
-                    g: std::array::from_fn(|_| unit() * 40.0 * next()),
-                    cap: Rgb::splat(2.0 + next()),
-                    env_body: Rgb::splat(0.1 * next()),
+                    a: if lit { Rgb::new(r.next(), r.next(), r.next()) } else { Rgb::ZERO },
+                    g: std::array::from_fn(|_| r.unit() * 40.0 * r.next()),
+                    cap: Rgb::splat(2.0 + r.next()),
+                    env_body: Rgb::splat(0.1 * r.next()),
                 }
             })
             .collect();
-        let env = (0..count).map(|_| std::array::from_fn(|k| Rgb::splat(0.05 * k as f32 + next()))).collect();
+        let env =
+            (0..count).map(|_| std::array::from_fn(|k| Rgb::splat(0.05 * k as f32 + r.next()))).collect();
         (frames, terms, env)
     }
 
@@ -443,7 +452,7 @@ mod tests {
                 let away = fr.facing.dot(k.eye - fr.centroid) <= 0.0;
                 assert_eq!(away, flat[f].entries() == [0.0; 8], "face {f}");
             }
-            assert!(flat.iter().any(|s| s.entries()[4] > 0.0) == !source.is_empty());
+            assert_eq!(flat.iter().any(|s| s.entries()[4] > 0.0), !source.is_empty());
             for isa in Isa::available() {
                 let got = run(isa);
                 for (a, b) in got.as_flattened().iter().zip(flat) {
