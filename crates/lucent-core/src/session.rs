@@ -367,9 +367,13 @@ impl FrameSession {
         self.changes.method |= s.method != settings.method || s.mode != settings.mode;
         self.changes.light |=
             s.environment_shadows != settings.environment_shadows || s.bounces != settings.bounces;
-        let view_only = Ablations { light_paths: settings.ablate.light_paths, ..s.ablate } == settings.ablate;
+        let view_only = Ablations {
+            light_paths: settings.ablate.light_paths,
+            view_exp: settings.ablate.view_exp,
+            ..s.ablate
+        } == settings.ablate;
         if s.ablate != settings.ablate && view_only {
-            // Only how the view terms trace their light paths.
+            // Only how the view terms trace their light paths or take their exponentials.
             self.changes.view = true;
         } else if s.ablate != settings.ablate {
             // The entry term is the profile's, and the gain's terms the body's.
@@ -482,7 +486,7 @@ impl FrameSession {
         self.view.keep_solve(f, &face_b, sent, local_change.as_deref());
         timings.push_ms += ms_since(t) - timings.bounces_ms - local_ms;
         let t = Instant::now();
-        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, &self.body, false);
+        let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, &self.body, None);
         timings.single_scattering_ms = ms_since(t);
         let exit_lobe = if f.settings.ablate.exit_lobe {
             crate::bssrdf::ExitLobe::flat()
@@ -524,7 +528,10 @@ impl FrameSession {
     /// leaves none, but leaving HTSM is a method change, which solves).
     fn see_again(&mut self, mut timings: Timings) {
         let t = Instant::now();
-        let seen = self.view.seen(&self.frame, &self.irradiance, &self.body, true);
+        // The last image's buffers, which the split's camera move overwrites.
+        let last = &mut self.last;
+        let buffers = (std::mem::take(&mut last.vertex_radiance), std::mem::take(&mut last.vertex_single));
+        let seen = self.view.seen(&self.frame, &self.irradiance, &self.body, Some(buffers));
         (self.last.vertex_radiance, self.last.vertex_single) = seen;
         timings.single_scattering_ms = ms_since(t);
         self.last.timings = timings;

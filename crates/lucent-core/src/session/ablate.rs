@@ -46,11 +46,15 @@ pub struct Ablations {
     /// (`shading::single_scattering::light_paths`, a shortcut rather than a correction): with this every path is
     /// traced, the reference the shortcut is measured against.
     pub light_paths: bool,
+    /// The split view terms' fast exponentials (`shading::view_basis`, a shortcut of a camera
+    /// move rather than a correction): with this the C library's, as before issue 51's
+    /// camera-move work, the reference the fast ones are measured against.
+    pub view_exp: bool,
 }
 
 impl Ablations {
     /// The names `--ablate` takes, each with what it switches off.
-    pub const NAMES: [(&'static str, &'static str); 12] = [
+    pub const NAMES: [(&'static str, &'static str); 13] = [
         ("gain", "the finite-body gain (every face's gain 1)"),
         ("slab-share", "the gain's division by the profile's share through a slab-like part"),
         ("reach", "the gain's per-channel reach factor"),
@@ -63,6 +67,7 @@ impl Ablations {
         ("single-blend", "the geometric blend of view-ray single scattering: linear"),
         ("unbounced-single", "the direct light's single scattering left out of the bounces: bounced"),
         ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
+        ("view-exp", "the split view terms' fast exponentials: the C library's"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -84,6 +89,7 @@ impl Ablations {
             "single-blend" => &mut self.single_blend,
             "unbounced-single" => &mut self.direct_single_unbounced,
             "light-paths" => &mut self.light_paths,
+            "view-exp" => &mut self.view_exp,
             _ => return None,
         })
     }

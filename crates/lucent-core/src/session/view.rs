@@ -17,7 +17,7 @@ use crate::shading::single_scattering::{
     ViewRay, ViewRayScene, face_view_rays, view_ray_radiance_along, view_rays,
 };
 use crate::shading::transmitted_exit;
-use crate::shading::view_basis::{ViewBasis, ViewTerms};
+use crate::shading::view_basis::{DrawTerms, ViewBasis, ViewTerms};
 use glam::Vec3;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
@@ -115,14 +115,16 @@ impl View {
     /// the body), and view-ray single scattering where the transport asks for it (else empty).
     /// Without an eye: `B / (c π)` as solved, and no single scattering. With the split view
     /// terms a solve is still seen per eye (its image is the reference's); the split's
-    /// eye-independent part is made on the first `eye_only` change after it and serves until
+    /// eye-independent part is made on the first eye-only change after it and serves until
     /// the next solve (it has no view rays, so the transmitted share takes the chord's lobe).
+    /// `eye_only`: an eye-only change, with the last image's two buffers, which the split
+    /// overwrites (`None`: a solve's).
     pub(super) fn seen(
         &mut self,
         f: &Frame,
         irradiance: &Irradiance,
         body: &Body,
-        eye_only: bool,
+        eye_only: Option<(Vec<Rgb>, Vec<Rgb>)>,
     ) -> (Vec<Rgb>, Vec<Rgb>) {
         let (Some(eye), Some(caster)) = (self.eye, irradiance.caster()) else {
             return (self.diffuse.clone(), Vec::new());
@@ -132,8 +134,8 @@ impl View {
         if exit_chord.is_none() && !single {
             return (self.diffuse.clone(), Vec::new());
         }
-        if self.terms == ViewTerms::Split && (eye_only || self.basis.is_some()) {
-            return self.seen_split(f, irradiance, exit_chord, eye, single);
+        if self.terms == ViewTerms::Split && (eye_only.is_some() || self.basis.is_some()) {
+            return self.seen_split(f, irradiance, exit_chord, (eye, single), eye_only.unwrap_or_default());
         }
         let normals = f.mesh.vertex_normals();
         let scene = view_ray_scene(f, irradiance, caster, &normals);
@@ -172,11 +174,11 @@ impl View {
         f: &Frame,
         irradiance: &Irradiance,
         exit_chord: Option<&(ExitChord, Vec<Rgb>)>,
-        eye: Vec3,
-        single: bool,
+        (eye, single): (Vec3, bool),
+        (mut radiance, mut single_out): (Vec<Rgb>, Vec<Rgb>),
     ) -> (Vec<Rgb>, Vec<Rgb>) {
         let caster = irradiance.caster().expect("checked by seen");
-        let basis = match self.basis.take() {
+        let mut basis = match self.basis.take() {
             Some(b) => b,
             None => {
                 let normals = f.mesh.vertex_normals();
@@ -184,13 +186,14 @@ impl View {
                 ViewBasis::new(&scene, single, self.stale.take())
             }
         };
-        let (factors, radiance) = basis.seen(&f.mesh, eye, exit_chord.map(|(c, n)| (c, n.as_slice())));
-        self.basis = Some(basis);
-        let diffuse = match factors {
-            Some(c) => self.diffuse.iter().zip(c).map(|(d, c)| *d * c).collect(),
-            None => self.diffuse.clone(),
+        let terms = DrawTerms {
+            diffuse: Some(&self.diffuse),
+            chord_means: exit_chord.map(|(_, n)| n.as_slice()),
+            exact_exp: f.settings.ablate.view_exp,
         };
-        (diffuse, radiance)
+        basis.draw(&f.mesh, eye, terms, &mut radiance, &mut single_out);
+        self.basis = Some(basis);
+        (radiance, single_out)
     }
 }
 

@@ -27,7 +27,11 @@
 //!
 //! `LUCENT_BENCH_MAX_TRIANGLES` (default 60,000: the bunny, the 11K and the 48K dragons, a few
 //! minutes on two cores), `LUCENT_BENCH_MIN_TRIANGLES` and `LUCENT_BENCH_MATERIAL` choose, as
-//! for `bench solver --real`.
+//! for `bench solver --real`. `LUCENT_BENCH_ACTIONS` (comma-separated names, `light-paths`
+//! among them; default all) picks the rows, `LUCENT_BENCH_REPS` the repetitions (default
+//! [`REPS`]). The `camera` row also gives `exp_err_max`: the largest relative change of the
+//! drawn radiance per vertex that the split's fast exponentials make, against the C
+//! library's (`--ablate view-exp`) from the same eye.
 
 use super::solver_real::{bump, each_case, lights};
 use anyhow::Context;
@@ -43,8 +47,22 @@ use lucent_core::session::{
 use serde::Serialize;
 use std::time::Instant;
 
-/// Timed repetitions of each action (after one warm-up).
+/// Timed repetitions of each action (after one warm-up), unless `LUCENT_BENCH_REPS` says.
 const REPS: usize = 3;
+
+/// The repetitions: `LUCENT_BENCH_REPS`, else [`REPS`].
+fn reps() -> usize {
+    std::env::var("LUCENT_BENCH_REPS")
+        .ok()
+        .and_then(|r| r.trim().parse().ok())
+        .filter(|r| *r > 0)
+        .unwrap_or(REPS)
+}
+
+/// Whether `LUCENT_BENCH_ACTIONS` (comma-separated; unset: all) asks for the rows `action`.
+fn wants(action: &str) -> bool {
+    std::env::var("LUCENT_BENCH_ACTIONS").map_or(true, |a| a.split(',').any(|n| n.trim() == action))
+}
 
 #[derive(Serialize)]
 struct Row {
@@ -68,6 +86,12 @@ struct Row {
     /// The drawn radiance per vertex against a fresh solve with per-eye view terms.
     view_err_median: f64,
     view_err_p95: f64,
+    /// `camera` only: the largest relative change of the drawn radiance per vertex, the
+    /// split's fast exponentials against the C library's, from the last eye.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    exp_err_max: Option<f64>,
+    /// The load average over the last minute when the row was measured (`/proc/loadavg`).
+    load: f64,
     threads: usize,
 }
 
@@ -82,7 +106,7 @@ struct State {
 pub fn run(json: bool) -> anyhow::Result<()> {
     if !json {
         println!(
-            "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8}",
+            "{:<12} {:>7} {:<9} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8}",
             "mesh",
             "T",
             "material",
@@ -94,6 +118,7 @@ pub fn run(json: bool) -> anyhow::Result<()> {
             "bounces",
             "view",
             "wall",
+            "cpu",
             "B med",
             "B p95",
             "view med",
@@ -115,7 +140,7 @@ fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
     }
     let t = &r.timings;
     println!(
-        "{:<12} {:>7} {:<9} {:<15} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>7.3}% {:>7.3}% {:>7.3}% {:>7.3}%",
+        "{:<12} {:>7} {:<9} {:<15} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>9.1} {:>7.3}% {:>7.3}% {:>7.3}% {:>7.3}%",
         r.mesh,
         r.triangles,
         r.material,
@@ -127,6 +152,7 @@ fn print_row(r: &Row, json: bool) -> anyhow::Result<()> {
         t.bounces_ms,
         t.single_scattering_ms,
         r.wall_ms,
+        r.cpu_ms,
         100.0 * r.b_err_median,
         100.0 * r.b_err_p95,
         100.0 * r.view_err_median,
@@ -179,8 +205,10 @@ fn measure(
     };
     let mut s = session(rest, transport.clone(), lights.clone(), eye, ViewTerms::Split);
     s.solve();
-    for r in super::light_paths::rows(name, material, &mut s, eye)? {
-        super::light_paths::print(&r, json)?;
+    if wants("light-paths") {
+        for r in super::light_paths::rows(name, material, &mut s, eye)? {
+            super::light_paths::print(&r, json)?;
+        }
     }
     let turn = |p: Vec3| centre + Quat::from_rotation_y(10f32.to_radians()) * (p - centre);
     let mut rows = Vec::new();
@@ -199,7 +227,7 @@ fn measure(
                 material,
                 scale_m,
                 action,
-                reps: REPS,
+                reps: times.len(),
                 timings: Timings::median(&t),
                 wall_ms: wall[wall.len() / 2],
                 cpu_ms: cpu[cpu.len() / 2],
@@ -207,21 +235,28 @@ fn measure(
                 b_err_p95: b.1,
                 view_err_median: view.0,
                 view_err_p95: view.1,
+                exp_err_max: (action == "camera").then(|| exp_change(s)),
+                load: load_average(),
                 threads: rayon::current_num_threads(),
             });
         };
     // The light.
-    let times = repeat(&mut s, |s| {
-        lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
-        s.set_lights(lights.clone());
-    });
-    state.lights = lights.clone();
-    row("light", &mut s, &state, times);
+    if wants("light") {
+        let times = repeat(&mut s, |s| {
+            lights = lights.iter().map(|l| turn_light(l, &turn)).collect();
+            s.set_lights(lights.clone());
+        });
+        state.lights = lights.clone();
+        row("light", &mut s, &state, times);
+    }
     if std::env::var_os("LUCENT_BENCH_LIGHT_ONLY").is_some() {
         return Ok(rows);
     }
     // The camera, split and per eye.
     for (action, terms) in [("camera", ViewTerms::Split), ("camera-per-eye", ViewTerms::PerEye)] {
+        if !wants(action) {
+            continue;
+        }
         s.set_view_terms(terms);
         let times = repeat(&mut s, |s| {
             eye = turn(eye);
@@ -231,32 +266,45 @@ fn measure(
         row(action, &mut s, &state, times);
     }
     s.set_view_terms(ViewTerms::Split);
+    if wants("material") || wants("bump") || wants("twist") {
+        changes(&mut s, &mut state, (rest, light_at, scale_m), &mut row);
+    }
+    Ok(rows)
+}
+
+/// The material, bump and twist rows (after the light and camera ones) of `s` as `measure`
+/// made it, `row` taking each action's times.
+fn changes(
+    s: &mut FrameSession,
+    state: &mut State,
+    (rest, light_at, scale_m): (&Mesh, Vec3, f64),
+    row: &mut impl FnMut(&'static str, &mut FrameSession, &State, Vec<(Timings, (f64, f64))>),
+) {
     // The material: the scale grows by 5% each time.
-    let mut step = 0;
-    let times = repeat(&mut s, |s| {
+    let (transport, mut step) = (s.transport().clone(), 0);
+    let times = repeat(s, |s| {
         step += 1;
         s.set_transport(Transport { scale_m: scale_m * (1.0 + 0.05 * step as f64), ..transport.clone() });
     });
     state.transport = s.transport().clone();
-    row("material", &mut s, &state, times);
+    row("material", s, state, times);
     // A local bump growing on the lit side, then a global twist, frame by frame.
     let (mut step, top) = (0, 0.01 * rest.extent());
-    let times = repeat(&mut s, |s| {
+    let times = repeat(s, |s| {
         step += 1;
-        let h = top * step as f32 / (REPS + 1) as f32;
+        let h = top * step as f32 / (reps() + 1) as f32;
         s.set_positions(&bump(rest, light_at, 0.1 * rest.extent(), h));
     });
     state.positions = s.mesh().positions.clone();
-    row("bump", &mut s, &state, times);
+    row("bump", s, state, times);
     let (twist, mut frame, mut out) = (Deformation::Twist { degrees: 30.0 }, 0, Vec::new());
-    let times = repeat(&mut s, |s| {
+    let times = repeat(s, |s| {
         frame += 1;
         twist.apply(rest, frame as f32 / 8.0, &mut out);
         s.set_positions(&out);
     });
     state.positions = s.mesh().positions.clone();
-    row("twist", &mut s, &state, times);
-    Ok(rows)
+    row("twist", s, state, times);
 }
 
 /// `light` turned by `turn` (positions about the centre, directions about the vertical).
@@ -268,12 +316,12 @@ fn turn_light(l: &SceneLight, turn: &impl Fn(Vec3) -> Vec3) -> SceneLight {
     SceneLight { light, ..*l }
 }
 
-/// One warm-up and [`REPS`] timed repetitions of `act` then a solve: `(stages, (wall ms, CPU
+/// One warm-up and [`reps`] timed repetitions of `act` then a solve: `(stages, (wall ms, CPU
 /// ms))`.
 fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(Timings, (f64, f64))> {
     act(s);
     s.solve();
-    (0..REPS)
+    (0..reps())
         .map(|_| {
             act(s);
             let (t, cpu) = (Instant::now(), super::light_paths::cpu_ms());
@@ -300,6 +348,38 @@ fn errors(rest: &Mesh, s: &mut FrameSession, state: &State) -> ((f64, f64), (f64
     };
     let view = relative(drawn(&got).into_iter(), drawn(&want).into_iter());
     (b, view)
+}
+
+/// The largest relative change of the drawn radiance per vertex (channel sums, vertices with
+/// any) of `s`'s last image when the split takes the C library's exponentials instead of the
+/// fast ones (`--ablate view-exp`, a view-only setting: the same eye seen again); `s` is left
+/// as it was.
+fn exp_change(s: &mut FrameSession) -> f64 {
+    let drawn = |x: &Solved| -> Vec<f64> {
+        let single = |i: usize| x.vertex_single.get(i).copied().unwrap_or(Rgb::ZERO);
+        x.vertex_radiance
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.x + r.y + r.z + single(i).element_sum()) as f64)
+            .collect()
+    };
+    let fast = drawn(s.solve());
+    let settings = *s.settings();
+    let mut exact = settings;
+    exact.ablate.view_exp = true;
+    s.set_settings(exact);
+    let libm = drawn(s.solve());
+    s.set_settings(settings);
+    s.solve();
+    fast.iter().zip(&libm).filter(|(_, b)| **b > 0.0).map(|(a, b)| (a - b).abs() / b).fold(0.0, f64::max)
+}
+
+/// The load average over the last minute (`/proc/loadavg`; 0 where there is none).
+fn load_average() -> f64 {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0.0)
 }
 
 /// Median and 95th percentile of `|a - b| / b` where `b > 0`.

@@ -45,6 +45,9 @@
 //! it, so that light moves and deformations cost what they did and a still camera shows the
 //! reference's image; `docs/speed.md` gives the difference on the validation scenes.
 
+mod eye;
+mod vertices;
+
 use crate::Rgb;
 use crate::irradiance::SceneLight;
 use crate::mesh::Mesh;
@@ -52,11 +55,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-use super::exit_chord::{ExitChord, MAX_FACTOR};
+use super::exit_chord::ExitChord;
 use super::single_scattering::{
-    ENV_MU_SAMPLES, EnvironmentKernel, NEIGHBOUR_FLOOR, ViewRay, ViewRayScene, environment_through_body,
-    light_flux_rgb, refract_inward,
+    ENV_MU_SAMPLES, EnvironmentKernel, ViewRay, ViewRayScene, environment_through_body, light_flux_rgb,
+    refract_inward,
 };
+use eye::{FaceSeen, GeoBlock, LANES, SourceBlock};
 
 /// The tilted chord directions' angle from the inward normal, as a share of the refracted
 /// cone's half-angle (the critical angle): view rays lie inside the cone, most of them within
@@ -116,6 +120,21 @@ pub struct ViewBasis {
     /// Each vertex's faces (compressed rows): `vertex_faces[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<u32>,
     vertex_faces: Vec<u32>,
+    /// Each vertex's distinct neighbours (compressed rows, as `offsets` and `vertex_faces`).
+    neighbours: (Vec<u32>, Vec<u32>),
+    /// What an eye reads of `frames` and `terms`, in blocks of `eye::LANES` faces taken in
+    /// `order` (`eye::normal_order`; `source` empty without single scattering), and the
+    /// positions in `order` of the faces with an infinite chord.
+    geo: Vec<GeoBlock>,
+    source: Vec<SourceBlock>,
+    open: Vec<u32>,
+    /// The face at each position of the blocks, `vertex_faces` as positions, and `env_table`
+    /// in that order.
+    order: Vec<u32>,
+    slots: Vec<u32>,
+    env_blocked: Vec<[Rgb; ENV_MU]>,
+    /// Buffers kept from eye to eye.
+    scratch: Scratch,
     eta: f32,
     sigma_t: [f32; 3],
     albedo: [f32; 3],
@@ -132,11 +151,13 @@ impl ViewBasis {
         let eta = d.eta as f32;
         let sin_tilt = (TILT * (1.0 / eta).min(1.0).asin()).sin();
         let reuse = previous.filter(|p| p.sin_tilt == sin_tilt && p.positions == scene.mesh.positions);
-        let (positions, frames, offsets, vertex_faces) = match reuse {
-            Some(p) => (p.positions, p.frames, p.offsets, p.vertex_faces),
+        let (positions, frames, offsets, vertex_faces, neighbours, scratch) = match reuse {
+            Some(p) => (p.positions, p.frames, p.offsets, p.vertex_faces, p.neighbours, p.scratch),
             None => {
                 let (offsets, vertex_faces) = scene.mesh.vertex_faces();
-                (scene.mesh.positions.clone(), face_frames(scene, sin_tilt), offsets, vertex_faces)
+                let neighbours = vertices::neighbours(scene.mesh, &offsets, &vertex_faces);
+                let frames = face_frames(scene, sin_tilt);
+                (scene.mesh.positions.clone(), frames, offsets, vertex_faces, neighbours, Scratch::default())
             }
         };
         let sigma_t = d.sigma_t.map(|s| s as f32);
@@ -147,6 +168,14 @@ impl ViewBasis {
             env_table: Vec::new(),
             offsets,
             vertex_faces,
+            neighbours,
+            geo: Vec::new(),
+            source: Vec::new(),
+            open: Vec::new(),
+            order: Vec::new(),
+            slots: Vec::new(),
+            env_blocked: Vec::new(),
+            scratch,
             eta,
             sigma_t,
             albedo: d.alpha_prime.map(|a| a as f32),
@@ -162,6 +191,16 @@ impl ViewBasis {
                     .map(|fr| std::array::from_fn(|k| kernel.radiance_at(env, fr.n, k) * env.intensity))
                     .collect();
             }
+        }
+        basis.order = eye::normal_order(&basis.frames);
+        (basis.geo, basis.source, basis.open) = eye::blocks(&basis.frames, &basis.terms, &basis.order);
+        let mut position = vec![0u32; basis.order.len()];
+        for (p, &f) in basis.order.iter().enumerate() {
+            position[f as usize] = p as u32;
+        }
+        basis.slots = basis.vertex_faces.iter().map(|&f| position[f as usize]).collect();
+        if !basis.env_table.is_empty() {
+            basis.env_blocked = basis.order.iter().map(|&f| basis.env_table[f as usize]).collect();
         }
         basis
     }
@@ -229,77 +268,112 @@ impl ViewBasis {
     /// evaluation gives them: the factor by which `B / (c π)` is multiplied (`None` without
     /// `chord`, the exit lobe's weights and each vertex's mean chord factor `N`), and the
     /// single-scattered radiance before the exit Fresnel factor (empty unless the basis was
-    /// made with it).
+    /// made with it). [`ViewBasis::draw`] without the diffuse radiance, into fresh buffers.
     pub fn seen(
         &self,
         mesh: &Mesh,
         eye: Vec3,
         chord: Option<(&ExitChord, &[Rgb])>,
     ) -> (Option<Vec<Rgb>>, Vec<Rgb>) {
-        let single = !self.terms.is_empty();
-        // Per face: 0 where it does not face the eye, else its area; the chord's kept share
-        // and the single scattering.
-        let per_face: Vec<(f32, Rgb, Rgb)> = self
-            .frames
-            .par_iter()
-            .enumerate()
-            .map(|(f, fr)| self.face_seen(f, fr, eye, chord.is_some(), single))
-            .collect();
-        let vertices = self.offsets.len() - 1;
-        let means: Vec<(Rgb, Rgb)> = (0..vertices)
-            .into_par_iter()
-            .map(|v| {
-                let faces = &self.vertex_faces[self.offsets[v] as usize..self.offsets[v + 1] as usize];
-                let (mut w, mut kept, mut l) = (0.0, Rgb::ZERO, Rgb::ZERO);
-                for &f in faces {
-                    let (a, k, s) = per_face[f as usize];
-                    w += a;
-                    kept += k * a;
-                    l += s * a;
-                }
-                if w > 0.0 { (kept / w, l / w) } else { (Rgb::ZERO, Rgb::ZERO) }
-            })
-            .collect();
-        let factors = chord.map(|(_, n)| {
-            means
-                .par_iter()
-                .zip(n)
-                .map(|((kept, _), n)| {
-                    // A vertex no facing face holds is not seen: factor 1, as per eye.
-                    if *kept == Rgb::ZERO { Rgb::ONE } else { (*kept / *n).min(Rgb::splat(MAX_FACTOR)) }
-                })
-                .collect()
-        });
-        let radiance = if single {
-            let r: Vec<Rgb> = means.into_iter().map(|(_, l)| l).collect();
-            self.floor_at_neighbours(mesh, &r)
-        } else {
-            Vec::new()
-        };
-        (factors, radiance)
+        debug_assert_eq!(mesh.positions.len(), self.offsets.len() - 1, "the basis's mesh");
+        let (mut factors, mut single) = (Vec::new(), Vec::new());
+        let terms = DrawTerms { diffuse: None, chord_means: chord.map(|(_, n)| n), exact_exp: false };
+        self.evaluate(eye, terms, &mut Scratch::default(), (&mut factors, &mut single));
+        (chord.map(|_| factors), single)
     }
 
-    /// Each vertex of `r` raised to [`NEIGHBOUR_FLOOR`] times the brightest vertex it shares a
-    /// face with (as `single_scattering` does, in parallel over the vertices).
-    fn floor_at_neighbours(&self, mesh: &Mesh, r: &[Rgb]) -> Vec<Rgb> {
-        (0..r.len())
-            .into_par_iter()
-            .map(|v| {
-                let faces = &self.vertex_faces[self.offsets[v] as usize..self.offsets[v + 1] as usize];
-                let mut floor = Rgb::ZERO;
-                for &f in faces {
-                    for &u in &mesh.triangles[f as usize] {
-                        if u as usize != v {
-                            floor = floor.max(r[u as usize]);
-                        }
-                    }
-                }
-                r[v].max(floor * NEIGHBOUR_FLOOR)
-            })
-            .collect()
+    /// What the mesh pass draws per vertex seen from `eye` (mesh units): `radiance`, the
+    /// diffuse radiance times the chord factor (see [`DrawTerms`]), and `single`, the
+    /// single-scattered radiance before the exit Fresnel factor (emptied unless the basis was
+    /// made with it). The buffers are overwritten, their memory reused, as are the basis's
+    /// own: a camera move allocates nothing once the sizes are reached.
+    pub fn draw(
+        &mut self,
+        mesh: &Mesh,
+        eye: Vec3,
+        terms: DrawTerms,
+        radiance: &mut Vec<Rgb>,
+        single: &mut Vec<Rgb>,
+    ) {
+        debug_assert_eq!(mesh.positions.len(), self.offsets.len() - 1, "the basis's mesh");
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.evaluate(eye, terms, &mut scratch, (radiance, single));
+        self.scratch = scratch;
+    }
+
+    /// [`ViewBasis::draw`] with the buffers `scratch`.
+    fn evaluate(
+        &self,
+        eye: Vec3,
+        terms: DrawTerms,
+        scratch: &mut Scratch,
+        (radiance, single): (&mut Vec<Rgb>, &mut Vec<Rgb>),
+    ) {
+        let with_single = !self.terms.is_empty();
+        let with_chord = terms.chord_means.is_some();
+        let per_face = &mut scratch.per_face;
+        per_face.resize(self.geo.len(), [FaceSeen::default(); LANES]);
+        if terms.exact_exp {
+            per_face.as_flattened_mut()[..self.frames.len()].par_iter_mut().zip(&self.order).for_each(
+                |(out, &f)| {
+                    *out = self.face_seen_weighted(f as usize, eye, with_chord, with_single);
+                },
+            );
+        } else {
+            self.faces_seen_fast(eye, with_chord, per_face);
+            let flat = per_face.as_flattened_mut();
+            for &p in &self.open {
+                let f = self.order[p as usize] as usize;
+                flat[p as usize] = self.face_seen_weighted(f, eye, with_chord, with_single);
+            }
+        }
+        let vertices = self.offsets.len() - 1;
+        radiance.resize(vertices, Rgb::ZERO);
+        scratch.unfloored.resize(vertices, glam::Vec4::ZERO);
+        let means = vertices::Means { diffuse: terms.diffuse, chord_means: terms.chord_means };
+        let rows = (self.offsets.as_slice(), self.slots.as_slice());
+        vertices::means(per_face.as_flattened(), rows, means, radiance, &mut scratch.unfloored);
+        if with_single {
+            single.resize(vertices, Rgb::ZERO);
+            let rows = (self.neighbours.0.as_slice(), self.neighbours.1.as_slice());
+            vertices::floor_at_neighbours(&scratch.unfloored, rows, single);
+        } else {
+            single.clear();
+        }
+    }
+
+    /// Every block of faces seen from `eye` by the vectorised closed forms (`eye.rs`), in
+    /// parallel tasks of [`BLOCKS_PER_TASK`] blocks; the faces with an infinite chord are left.
+    fn faces_seen_fast(&self, eye: Vec3, chord: bool, per_face: &mut [[FaceSeen; LANES]]) {
+        let k = eye::EyeConsts {
+            eye,
+            eta: self.eta,
+            sin_tilt: self.sin_tilt,
+            sigma_t: self.sigma_t,
+            albedo_4pi: self.albedo.map(|a| a / (4.0 * PI)),
+            chord,
+        };
+        let isa = crate::simd::Isa::best();
+        per_face.par_chunks_mut(BLOCKS_PER_TASK).enumerate().for_each(|(task, out)| {
+            let blocks = task * BLOCKS_PER_TASK..task * BLOCKS_PER_TASK + out.len();
+            let source = self.source.get(blocks.clone()).unwrap_or(&[]);
+            let faces = blocks.start * LANES..(blocks.end * LANES).min(self.env_blocked.len());
+            let env = self.env_blocked.get(faces).unwrap_or(&[]);
+            eye::faces_seen(isa, &k, &self.geo[blocks], source, env, out);
+        });
+    }
+
+    /// [`ViewBasis::face_seen`] as the vertex means take it: `(weight, kept, single)` with
+    /// the last two times the weight.
+    fn face_seen_weighted(&self, f: usize, eye: Vec3, chord: bool, single: bool) -> FaceSeen {
+        let (a, k, s) = self.face_seen(f, &self.frames[f], eye, chord, single);
+        let (k, s) = (k * a, s * a);
+        FaceSeen([glam::Vec4::new(a, k.x, k.y, k.z), glam::Vec4::new(s.x, s.y, s.z, 0.0)])
     }
 
     /// One face seen from `eye`: `(weight, kept, single)`; weight 0 where it does not face it.
+    /// The reference of `eye.rs`'s blocks (the C library's exponentials), and what they leave
+    /// to it: the faces with an infinite chord.
     fn face_seen(&self, f: usize, fr: &FaceFrame, eye: Vec3, chord: bool, single: bool) -> (f32, Rgb, Rgb) {
         let to_eye = eye - fr.centroid;
         if fr.facing.dot(to_eye) <= 0.0 || fr.n == Vec3::ZERO {
@@ -368,6 +442,34 @@ impl ViewBasis {
         }
         (l / (self.eta * self.eta)).max(Rgb::ZERO)
     }
+}
+
+/// Blocks of faces per parallel task of a camera move (2,048 faces: a task costs about 20 µs
+/// to hand to the other core, its faces about 100 µs).
+const BLOCKS_PER_TASK: usize = 128;
+
+/// The buffers a camera move writes besides its outputs, kept in the basis.
+#[derive(Default)]
+struct Scratch {
+    /// Per face, what the vertex means take (`eye::FaceSeen`), in blocks.
+    per_face: Vec<[FaceSeen; LANES]>,
+    /// Per vertex, the single scattering before the neighbour floor (fourth lane 0).
+    unfloored: Vec<glam::Vec4>,
+}
+
+/// What [`ViewBasis::draw`] needs besides the basis and the eye.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawTerms<'a> {
+    /// The diffuse radiance `B / (c π)` per vertex, multiplied by the chord factor (`None`:
+    /// the chord factor itself is written, 1 without `chord_means`).
+    pub diffuse: Option<&'a [Rgb]>,
+    /// Each vertex's mean chord factor `N` (`ExitChord`'s, area-weighted over its faces);
+    /// `None`: no chord factor.
+    pub chord_means: Option<&'a [Rgb]>,
+    /// The C library's exponentials, as before the camera move was vectorised: the reference
+    /// the fast ones (`fastexp::exp_m1_with`, within 6e-7 relative) are measured against
+    /// (`Ablations::view_exp`).
+    pub exact_exp: bool,
 }
 
 /// Every face's frame and chords (five rays per face).
