@@ -6,8 +6,8 @@
 //! change that moves lucent away from the path tracer fails here.
 //!
 //! The `test` cases (lights and cameras the fit cases do not have, issue 50) are held to
-//! `bounds.json`'s `test_guard`: their figures when they were added, plus the same margins
-//! (`compare --split test --write-bounds test`). That is a regression guard, not the issue's
+//! `bounds.json`'s `test_guard`: their figures when last recorded (2026-12-06, with the slab
+//! and curved terms), plus the same margins (`compare --split test --write-bounds test`). That is a regression guard, not the issue's
 //! targets (many test cases are 20-60% off there); a test case without a guard entry is not run.
 
 mod common;
