@@ -3,16 +3,22 @@
 //! when other jobs hold the cores, where the wall time does.
 
 /// Nanoseconds of CPU time used by all of this process's threads so far (Linux: the sum of
-/// `/proc/self/task/*/schedstat`'s first field); `None` where that is not readable. Threads
-/// that ended before the call are not counted, so compare two calls around work whose threads
-/// outlive it (a driver's thread pool).
+/// `/proc/self/task/*/schedstat`'s first field); `None` where `/proc/self/task` is not readable.
+/// Threads that ended before the call, or while it read, are not counted, so compare two calls
+/// around work whose threads outlive it (a driver's or rayon's thread pool).
 pub fn process_cpu_ns() -> Option<u64> {
-    let mut total = 0u64;
-    for task in std::fs::read_dir("/proc/self/task").ok()? {
-        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
-        total += stat.split_whitespace().next()?.parse::<u64>().ok()?;
-    }
-    Some(total)
+    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
+    Some(
+        tasks
+            .filter_map(|task| std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok())
+            .filter_map(|stat| stat.split_whitespace().next()?.parse::<u64>().ok())
+            .sum(),
+    )
+}
+
+/// [`process_cpu_ns`] in milliseconds, 0 where it is not readable.
+pub fn process_cpu_ms() -> f64 {
+    process_cpu_ns().map_or(0.0, |ns| ns as f64 * 1e-6)
 }
 
 #[cfg(test)]

@@ -324,9 +324,9 @@ fn repeat(s: &mut FrameSession, mut act: impl FnMut(&mut FrameSession)) -> Vec<(
     (0..reps())
         .map(|_| {
             act(s);
-            let (t, cpu) = (Instant::now(), super::light_paths::cpu_ms());
+            let (t, cpu) = (Instant::now(), super::cpu_time::process_cpu_ms());
             let timings = s.solve().timings;
-            (timings, (lucent_core::clock::ms_since(t), super::light_paths::cpu_ms() - cpu))
+            (timings, (lucent_core::clock::ms_since(t), super::cpu_time::process_cpu_ms() - cpu))
         })
         .collect()
 }

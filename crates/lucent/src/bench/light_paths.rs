@@ -9,6 +9,7 @@
 //! the mesh pass draws per vertex (`radiance + single`, channel sums; vertices with light),
 //! median, 99th percentile and largest, and in the single scattering alone.
 
+use super::cpu_time::process_cpu_ms;
 use glam::Vec3;
 use lucent_core::Rgb;
 use lucent_core::irradiance::{Light, SceneLight};
@@ -77,9 +78,9 @@ pub(super) fn rows(
                 set.ablate.light_paths = false;
                 s.set_settings(set);
             }
-            let cpu = cpu_ms();
+            let cpu = process_cpu_ms();
             let solved = s.solve();
-            let ms = (solved.timings.single_scattering_ms, cpu_ms() - cpu);
+            let ms = (solved.timings.single_scattering_ms, process_cpu_ms() - cpu);
             if all {
                 traced.push(ms);
                 want.get_or_insert_with(|| drawn(solved));
@@ -161,14 +162,4 @@ pub(super) fn print(r: &Row, json: bool) -> anyhow::Result<()> {
         100.0 * r.single_err[2]
     );
     Ok(())
-}
-
-/// CPU milliseconds this process's threads have run (Linux `schedstat`; 0 elsewhere).
-pub(super) fn cpu_ms() -> f64 {
-    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else { return 0.0 };
-    tasks
-        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
-        .filter_map(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .sum::<f64>()
-        / 1e6
 }
