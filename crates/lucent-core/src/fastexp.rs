@@ -18,23 +18,32 @@ pub fn exp_neg(x: f32) -> f32 {
 /// instruction set ([`crate::simd`]).
 #[inline(always)]
 pub fn exp_neg_with<M: Madd>(x: f32) -> f32 {
+    let (p, k) = reduced::<M>(x.clamp(-87.0, 0.0));
+    // 2^k has exponent field `k + 127`.
+    p * f32::from_bits(k.wrapping_add(127) << 23)
+}
+
+/// `e^y = 2^k e^r` for `y` within `f32`'s exponent range: `(e^r, k)`, `k = round(y / ln 2)`
+/// (as the bits of a two's-complement integer), `r = y - k ln 2` in two parts and `e^r` by a
+/// degree-6 Taylor polynomial. Shared by [`exp_neg_with`] and [`exp_m1_with`], which scale
+/// by `2^k` each within its own range.
+#[inline(always)]
+fn reduced<M: Madd>(y: f32) -> (f32, u32) {
     const LOG2E: f32 = std::f32::consts::LOG2_E;
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
     // Adding and subtracting 1.5 · 2^23 rounds to the nearest integer in f32.
     const ROUND: f32 = 12_582_912.0;
-    let x = x.clamp(-87.0, 0.0);
-    let shifted = M::madd(x, LOG2E, ROUND);
+    let shifted = M::madd(y, LOG2E, ROUND);
     let k = shifted - ROUND;
-    let r = M::madd(-k, LN2_LO, M::madd(-k, LN2_HI, x));
+    let r = M::madd(-k, LN2_LO, M::madd(-k, LN2_HI, y));
     let mut p = 1.0 / 720.0;
     for c in [1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0] {
         p = M::madd(p, r, c);
     }
     // `k` as an integer from the bits of `shifted` (an `as i32` cast saturates, which does
-    // not vectorise): 2^k has exponent field `k + 127`.
-    let k_int = shifted.to_bits().wrapping_sub(ROUND.to_bits());
-    p * f32::from_bits(k_int.wrapping_add(127) << 23)
+    // not vectorise).
+    (p, shifted.to_bits().wrapping_sub(ROUND.to_bits()))
 }
 
 /// `e^x - 1` for any `x` to about 5e-7 relative (`+∞` above `ln f32::MAX`, as the C library's;
@@ -44,25 +53,13 @@ pub fn exp_neg_with<M: Madd>(x: f32) -> f32 {
 /// extended to positive `x`, minus one. Branch free, so that it vectorises.
 #[inline(always)]
 pub fn exp_m1_with<M: Madd>(x: f32) -> f32 {
-    const LOG2E: f32 = std::f32::consts::LOG2_E;
-    const LN2_HI: f32 = 0.693_145_75;
-    const LN2_LO: f32 = 1.428_606_8e-6;
-    const ROUND: f32 = 12_582_912.0;
     // `ln f32::MAX`: beyond it `e^x` overflows.
     const OVERFLOW: f32 = 88.722_83;
     let big = {
-        let y = x.clamp(-86.0, OVERFLOW);
-        let shifted = M::madd(y, LOG2E, ROUND);
-        let k = shifted - ROUND;
-        let r = M::madd(-k, LN2_LO, M::madd(-k, LN2_HI, y));
-        let mut p = 1.0 / 720.0;
-        for c in [1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0] {
-            p = M::madd(p, r, c);
-        }
-        // 2^k from the bits of `shifted`, as in `exp_neg_with`, as 2^(k-1) times 2: k reaches
-        // 128 near the overflow, whose 2^k has no `f32` (k ≥ -124 here, so 2^(k-1) is normal).
-        let k_int = shifted.to_bits().wrapping_sub(ROUND.to_bits());
-        let e = p * f32::from_bits(k_int.wrapping_add(126) << 23) * 2.0;
+        let (p, k) = reduced::<M>(x.clamp(-86.0, OVERFLOW));
+        // 2^k as 2^(k-1) times 2: k reaches 128 near the overflow, whose 2^k has no `f32`
+        // (k ≥ -124 here, so 2^(k-1) is normal).
+        let e = p * f32::from_bits(k.wrapping_add(126) << 23) * 2.0;
         if x > OVERFLOW { f32::INFINITY } else { e - 1.0 }
     };
     // x (1 + x/2! + ... + x^8/9!): the next term is below 1.4e-8 of the value at |x| = 1/2.
