@@ -50,11 +50,14 @@ pub struct Ablations {
     /// move rather than a correction): with this the C library's, as before issue 51's
     /// camera-move work, the reference the fast ones are measured against.
     pub view_exp: bool,
+    /// The bounces' geometric tail (`session/bounces.rs`): with this the series of bounces
+    /// stops at the set number, leaving out the light of every further one.
+    pub bounce_tail: bool,
 }
 
 impl Ablations {
     /// The names `--ablate` takes, each with what it switches off.
-    pub const NAMES: [(&'static str, &'static str); 13] = [
+    pub const NAMES: [(&'static str, &'static str); 14] = [
         ("gain", "the finite-body gain (every face's gain 1)"),
         ("slab-share", "the gain's division by the profile's share through a slab-like part"),
         ("reach", "the gain's per-channel reach factor"),
@@ -68,6 +71,7 @@ impl Ablations {
         ("unbounced-single", "the direct light's single scattering left out of the bounces: bounced"),
         ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
         ("view-exp", "the split view terms' fast exponentials: the C library's"),
+        ("bounce-tail", "the bounces' geometric tail: the series cut after the set number"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -90,6 +94,7 @@ impl Ablations {
             "unbounced-single" => &mut self.direct_single_unbounced,
             "light-paths" => &mut self.light_paths,
             "view-exp" => &mut self.view_exp,
+            "bounce-tail" => &mut self.bounce_tail,
             _ => return None,
         })
     }
