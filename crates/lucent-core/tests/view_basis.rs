@@ -55,6 +55,7 @@ fn a_half_space_is_exact_for_every_eye_from_one_basis() {
                 profile: &d,
                 lights: &lights,
                 environment: None,
+                lit: None,
             };
             let basis = ViewBasis::new(&scene, true, None);
             for mu_o in [1.0f32, 0.8, 0.15] {
@@ -195,6 +196,7 @@ fn the_fast_camera_move_draws_what_the_exact_exponentials_draw() {
         profile: &d,
         lights: &lights,
         environment: Some(&sky),
+        lit: None,
     };
     let mut basis = ViewBasis::new(&scene, true, None);
     let diffuse: Vec<Rgb> =

@@ -42,7 +42,7 @@ pub fn corner_changes(
             let n = mesh.face_normal(f);
             let at = |p| {
                 let mut e = Entering::default();
-                add_lights(&mut e, p, n, lights, entry, caster);
+                add_lights(&mut e, p, n, lights, entry, caster, &mut []);
                 e
             };
             let centre = at(mesh.face_centroid(f));

@@ -200,26 +200,87 @@ pub fn face_entering(
     entry: &Entry,
     caster: Option<&ShadowCaster>,
 ) -> Vec<Entering> {
-    (0..mesh.triangles.len())
-        .into_par_iter()
-        .map(|f| {
-            let p = mesh.face_centroid(f);
-            let n = mesh.face_normal(f);
-            let mut e = environment.map_or(Entering::default(), |env| {
-                let open = env.transmitted(n, entry);
-                match caster {
-                    Some(c) => open - occlusion::blocked_environment(env, entry, c, p, n, f),
-                    None => open,
-                }
-            });
-            add_lights(&mut e, p, n, lights, entry, caster);
-            e
-        })
-        .collect()
+    face_entering_lit(mesh, lights, environment, entry, caster).0
+}
+
+/// [`face_entering`], and which faces each light reached ([`FaceLit`]).
+pub fn face_entering_lit(
+    mesh: &Mesh,
+    lights: &[SceneLight],
+    environment: Option<&Environment>,
+    entry: &Entry,
+    caster: Option<&ShadowCaster>,
+) -> (Vec<Entering>, FaceLit) {
+    let faces = mesh.triangles.len();
+    let mut lit = vec![false; faces * lights.len()];
+    let entering = if lights.is_empty() {
+        (0..faces)
+            .into_par_iter()
+            .map(|f| face_entering_at(mesh, f, lights, environment, entry, caster, &mut []))
+            .collect()
+    } else {
+        lit.par_chunks_mut(lights.len())
+            .enumerate()
+            .map(|(f, lit)| face_entering_at(mesh, f, lights, environment, entry, caster, lit))
+            .collect()
+    };
+    (entering, FaceLit { lights: lights.len(), lit })
+}
+
+/// Face `f`'s transmitted irradiance (centroid), with `lit[i]` set where light `i` reached it.
+fn face_entering_at(
+    mesh: &Mesh,
+    f: usize,
+    lights: &[SceneLight],
+    environment: Option<&Environment>,
+    entry: &Entry,
+    caster: Option<&ShadowCaster>,
+    lit: &mut [bool],
+) -> Entering {
+    let p = mesh.face_centroid(f);
+    let n = mesh.face_normal(f);
+    let mut e = environment.map_or(Entering::default(), |env| {
+        let open = env.transmitted(n, entry);
+        match caster {
+            Some(c) => open - occlusion::blocked_environment(env, entry, c, p, n, f),
+            None => open,
+        }
+    });
+    add_lights(&mut e, p, n, lights, entry, caster, lit);
+    e
+}
+
+/// Per light and face, whether the face faces the light and the light reaches its centroid
+/// (through the shadow test where the light casts shadows and a caster was given): what
+/// [`face_entering_lit`] found, for the later stages that ask the same of the same rays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FaceLit {
+    /// The number of lights.
+    lights: usize,
+    /// Face by face, a flag per light: `lit[f * lights + i]`.
+    lit: Vec<bool>,
+}
+
+impl FaceLit {
+    /// `lit[f * lights + i]`: whether light `i` reaches face `f`.
+    pub(crate) fn new(lights: usize, lit: Vec<bool>) -> Self {
+        FaceLit { lights, lit }
+    }
+
+    /// Whether light `i` reaches face `f` (`false` for a light or face it was not made for).
+    pub fn get(&self, i: usize, f: usize) -> bool {
+        i < self.lights && self.lit.get(f * self.lights + i).copied().unwrap_or(false)
+    }
+
+    /// Whether it was made for `lights` lights over `faces` faces.
+    pub fn fits(&self, lights: usize, faces: usize) -> bool {
+        self.lights == lights && self.lit.len() == lights * faces
+    }
 }
 
 /// Adds to `e` the light of `lights` at point `p` of a surface with unit normal `n`, through
-/// the `entry` term, each light shadowed where it says so and a `caster` is given.
+/// the `entry` term, each light shadowed where it says so and a `caster` is given; sets
+/// `lit[i]` where light `i` arrives (`lit` may be shorter than `lights`: those are not told).
 pub(crate) fn add_lights(
     e: &mut Entering,
     p: Vec3,
@@ -227,8 +288,9 @@ pub(crate) fn add_lights(
     lights: &[SceneLight],
     entry: &Entry,
     caster: Option<&ShadowCaster>,
+    lit: &mut [bool],
 ) {
-    for sl in lights {
+    for (i, sl) in lights.iter().enumerate() {
         let Some(inc) = sl.light.incident(p) else {
             continue;
         };
@@ -238,6 +300,9 @@ pub(crate) fn add_lights(
         }
         if sl.shadows && caster.is_some_and(|c| !c.visible(p, n, &inc)) {
             continue;
+        }
+        if let Some(l) = lit.get_mut(i) {
+            *l = true;
         }
         e.add(inc.irradiance * cos, entry, cos);
     }

@@ -5,7 +5,9 @@
 
 use super::{Changes, Frame};
 use crate::Rgb;
-use crate::irradiance::{Entering, Environment, SceneLight, ShadowCaster, face_entering};
+use crate::irradiance::{
+    Entering, Environment, FaceLit, SceneLight, ShadowCaster, face_entering, face_entering_lit,
+};
 
 /// Lights, environment and entry factors, the shadow BVH, and the irradiance they last gave.
 #[derive(Default)]
@@ -21,6 +23,8 @@ pub(super) struct Irradiance {
     caster: Option<ShadowCaster>,
     /// Irradiance at the faces as last computed (reused when only the solver changed).
     faces: Vec<Entering>,
+    /// Which faces each light reached when `faces` was computed (the view stage asks again).
+    lit: FaceLit,
 }
 
 impl Irradiance {
@@ -42,6 +46,11 @@ impl Irradiance {
     /// Irradiance at the faces as last computed.
     pub(super) fn faces(&self) -> &[Entering] {
         &self.faces
+    }
+
+    /// Which faces each light reached, as [`Irradiance::faces`] found.
+    pub(super) fn lit(&self) -> &FaceLit {
+        &self.lit
     }
 
     /// Replaces the lights; whether they changed.
@@ -77,13 +86,13 @@ impl Irradiance {
     /// moved.
     pub(super) fn update(&mut self, f: &Frame, changes: &Changes) {
         if changes.geometry || changes.light || changes.transport || self.faces.is_empty() {
-            self.faces = self.face_irradiance(f, changes.geometry);
+            (self.faces, self.lit) = self.face_irradiance(f, changes.geometry);
         }
     }
 
-    /// Fresnel-transmitted irradiance at the faces (§5.3), refitting the shadow BVH first when
-    /// the mesh `moved`.
-    fn face_irradiance(&mut self, f: &Frame, moved: bool) -> Vec<Entering> {
+    /// Fresnel-transmitted irradiance at the faces (§5.3) and which faces each light reached,
+    /// refitting the shadow BVH first when the mesh `moved`.
+    fn face_irradiance(&mut self, f: &Frame, moved: bool) -> (Vec<Entering>, FaceLit) {
         let settings = &f.settings;
         let shadows = self.lights.iter().any(|l| l.shadows)
             || (self.environment.is_some() && settings.environment_shadows);
@@ -102,7 +111,7 @@ impl Irradiance {
         // Lights shadow per their own flag; the environment only when asked.
         let caster = self.caster.as_ref().filter(|_| shadows);
         let env = self.environment.filter(|_| caster.is_none() || settings.environment_shadows);
-        let mut e = face_entering(&f.mesh, &self.lights, env.as_ref(), &f.profile.entry, caster);
+        let (mut e, lit) = face_entering_lit(&f.mesh, &self.lights, env.as_ref(), &f.profile.entry, caster);
         if caster.is_some()
             && !settings.environment_shadows
             && let Some(env) = &self.environment
@@ -111,7 +120,7 @@ impl Irradiance {
             let open = face_entering(&f.mesh, &[], Some(env), &f.profile.entry, None);
             e.iter_mut().zip(open).for_each(|(e, o)| *e += o);
         }
-        e
+        (e, lit)
     }
 
     /// The texture's entry factor of face `face` (1 without a texture).

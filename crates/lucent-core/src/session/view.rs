@@ -213,5 +213,6 @@ fn view_ray_scene<'a>(
         profile: &f.profile,
         lights: irradiance.lights(),
         environment: irradiance.environment(),
+        lit: Some(irradiance.lit()),
     }
 }

@@ -46,7 +46,7 @@ pub mod light_paths;
 use crate::Rgb;
 use crate::bssrdf::{Profile, fresnel_transmittance, zonal_band_weights};
 use crate::irradiance::sh::BandWeights;
-use crate::irradiance::{Environment, Incident, SceneLight};
+use crate::irradiance::{Environment, FaceLit, Incident, SceneLight};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use glam::Vec3;
@@ -133,6 +133,9 @@ pub struct ViewRayScene<'a> {
     pub lights: &'a [SceneLight],
     /// The environment, if any.
     pub environment: Option<&'a Environment>,
+    /// Which faces each of `lights` reaches at its centroid, where the irradiance stage found
+    /// it with the same rays (`crate::irradiance::face_entering_lit`); `None`: traced here.
+    pub lit: Option<&'a FaceLit>,
 }
 
 /// Per-vertex single-scattered radiance towards `eye` (mesh units), before the exit Fresnel

@@ -35,5 +35,6 @@ pub fn with_scene<R>(
         profile: d,
         lights,
         environment: env,
+        lit: None,
     })
 }

@@ -38,9 +38,10 @@
 use super::{ViewRayScene, facing, refracted_flux};
 use crate::Rgb;
 use crate::bssrdf::fresnel_transmittance;
-use crate::irradiance::SceneLight;
+use crate::irradiance::{FaceLit, SceneLight};
 use glam::Vec3;
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::f32::consts::PI;
 
 /// The share of a vertex's drawn radiance a light's single scattering may fall below and be
@@ -60,9 +61,9 @@ pub const SHARED_RATIO: f32 = 3.5;
 
 /// What [`LightPaths::fluxes`] reads besides the scene: per light, which faces it reaches;
 /// each vertex's faces; per face, the single scattering a light may leave out.
-pub(crate) struct LightPaths {
+pub(crate) struct LightPaths<'a> {
     /// Per light, per face: whether it faces the light and the light reaches its centroid.
-    lit: Vec<Vec<bool>>,
+    lit: Cow<'a, FaceLit>,
     /// Each vertex's faces (compressed rows): `vertex_faces[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<u32>,
     vertex_faces: Vec<u32>,
@@ -71,19 +72,23 @@ pub(crate) struct LightPaths {
     diffuse: Vec<Rgb>,
 }
 
-impl LightPaths {
+impl<'a> LightPaths<'a> {
     /// The shadow tests at the vertices of `scene` and the rows above, for the drawn diffuse
     /// radiance `diffuse` per vertex (`B / (c π)`, before the exit Fresnel factor, which the
     /// single scattering shares).
-    pub(crate) fn new(scene: &ViewRayScene, diffuse: &[Rgb]) -> Self {
+    pub(crate) fn new(scene: &ViewRayScene<'a>, diffuse: &[Rgb]) -> Self {
         let mesh = scene.mesh;
-        let lit = scene
-            .lights
-            .iter()
-            .map(|light| {
-                (0..mesh.triangles.len()).into_par_iter().map(|f| face_lit(scene, light, f)).collect()
-            })
-            .collect();
+        let lit = match scene.lit.filter(|l| l.fits(scene.lights.len(), mesh.triangles.len())) {
+            Some(lit) => Cow::Borrowed(lit),
+            None => {
+                let n = scene.lights.len();
+                let lit = (0..mesh.triangles.len() * n)
+                    .into_par_iter()
+                    .map(|k| face_lit(scene, &scene.lights[k % n], k / n))
+                    .collect();
+                Cow::Owned(FaceLit::new(n, lit))
+            }
+        };
         let (offsets, vertex_faces) = mesh.vertex_faces();
         let share = 1.0 / scene.lights.len().max(1) as f32;
         let diffuse = if diffuse.len() == mesh.positions.len() {
@@ -156,7 +161,7 @@ impl LightPaths {
     fn half_space(&self, scene: &ViewRayScene, f: usize, i: usize, points: &[Vec3; 4]) -> Option<[Rgb; 4]> {
         let mesh = scene.mesh;
         let light = &scene.lights[i];
-        if !self.lit[i][f] {
+        if !self.lit.get(i, f) {
             return None;
         }
         let (n, centroid) = (mesh.face_normal(f), mesh.face_centroid(f));
@@ -175,7 +180,7 @@ impl LightPaths {
             let v = v as usize;
             for &k in &self.vertex_faces[self.offsets[v] as usize..self.offsets[v + 1] as usize] {
                 let k = k as usize;
-                if !self.lit[i][k] {
+                if !self.lit.get(i, k) {
                     return None;
                 }
                 let n_k = mesh.face_normal(k);
