@@ -39,6 +39,7 @@ ABLATIONS = [
     ("entry-ratio", "the entry term's albedo ratio A(mu_t)/A(1): Fresnel alone", ["--ablate", "entry-ratio"]),
     ("entry-local", "the entry term's local part: all carried by the profile", ["--ablate", "entry-local"]),
     ("bounces", "bounces between parts (--bounces 0)", ["--bounces", "0"]),
+    ("bounce-tail", "the bounces' geometric tail: the series cut after three", ["--ablate", "bounce-tail"]),
     ("unbounced-single", "leaving the direct light's single scattering out of the bounces (fitted): bounced",
      ["--ablate", "unbounced-single"]),
     ("refine", "splitting faces to 6 mean free paths (--refine 0)", ["--refine", "0"]),
