@@ -23,8 +23,8 @@ use crate::solver::Oracle;
 const BOUNCE_ORACLE_SLACK: f32 = 4.0;
 
 /// The largest ratio of one bounce to the one before that [`tail_ratio`] takes: light
-/// between parts loses most of itself at each bounce (the 48K Stanford dragon in marble keeps
-/// 0.34-0.45 of it), and a ratio near 1 would make the tail's `r / (1 - r)` blow up where
+/// between parts loses most of itself at each bounce (the Stanford dragons in marble keep
+/// 0.3-0.6 of it, lit from the front or behind), and a ratio near 1 would make the tail's `r / (1 - r)` blow up where
 /// the estimate is poor.
 const TAIL_RATIO_MAX: f32 = 0.8;
 
