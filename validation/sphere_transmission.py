@@ -18,6 +18,14 @@ incident irradiance, with its standard error.
 
 Output: one line per angular bin (degrees from the antipode): T per albedo and its standard
 error (JSON with --json).
+
+    python3 validation/sphere_transmission.py --radius 5 --albedo 0.999 --directions
+
+With --directions, where the transmitted light goes as it leaves, per bin: its mean cosine with
+the normal (2/3 for a Lambertian exit), its mean cosine with the tangent pointing away from the
+lit pole (0 for a Lambertian exit; positive: the light flows on, away from the lit side), and
+the flux leaving tilted back toward the lit side over the flux tilted on (tangent cosine below
+-0.5 against above 0.5; 1 for a Lambertian exit).
 """
 import argparse
 import json
@@ -32,8 +40,9 @@ MATERIALS = {
 }
 
 
-def walk(radius, photons, rng, max_steps=10**7):
-    """Exit cosine with +z (the exit point's z / R) and scatterings n of each photon."""
+def walk(radius, photons, rng, max_steps=10**7, directions=False):
+    """Exit cosine with +z (the exit point's z / R) and scatterings n of each photon; with
+    `directions`, also each photon's exit point and direction."""
     # Entry: uniform over the disk, on the lit hemisphere.
     r = radius * np.sqrt(rng.random(photons))
     a = 2 * np.pi * rng.random(photons)
@@ -43,6 +52,7 @@ def walk(radius, photons, rng, max_steps=10**7):
     d = np.tile([0.0, 0.0, 1.0], (photons, 1))
     n = np.zeros(photons, dtype=np.int64)
     exit_z = np.zeros(photons)
+    exit_p, exit_d = np.zeros((photons, 3)), np.zeros((photons, 3))
     idx = np.arange(photons)
     for _ in range(max_steps):
         if idx.size == 0:
@@ -55,6 +65,7 @@ def walk(radius, photons, rng, max_steps=10**7):
         if out.any():
             p_out = pos[out] + d[out] * to_exit[out, None]
             exit_z[idx[out]] = p_out[:, 2] / radius
+            exit_p[idx[out]], exit_d[idx[out]] = p_out, d[out]
         keep = ~out
         idx, pos, d, s = idx[keep], pos[keep], d[keep], s[keep]
         pos = pos + d * s[:, None]
@@ -63,7 +74,28 @@ def walk(radius, photons, rng, max_steps=10**7):
         phi = 2 * np.pi * rng.random(idx.size)
         st = np.sqrt(np.maximum(0.0, 1 - u * u))
         d = np.stack([st * np.cos(phi), st * np.sin(phi), u], axis=1)
-    return exit_z, n
+    return (exit_z, n, exit_p, exit_d) if directions else (exit_z, n)
+
+
+def exit_directions(radius, albedo, photons, seed, edges_deg):
+    """Per bin of theta: (lo, hi, mean normal cosine, mean tangent cosine, back / on flux) of
+    the multiply scattered light leaving there (module docs)."""
+    exit_z, n, p, d = walk(radius, photons, np.random.default_rng(seed), directions=True)
+    theta = np.degrees(np.arccos(np.clip(exit_z, -1, 1)))
+    w = np.where(n >= 2, np.power(float(albedo), n.astype(float)), 0.0)
+    normal = p / radius
+    away = np.array([0.0, 0.0, 1.0]) - normal[:, 2:3] * normal
+    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-12)
+    mu_n, mu_t = np.einsum("ij,ij->i", d, normal), np.einsum("ij,ij->i", d, away)
+    rows = []
+    for lo, hi in zip(edges_deg[:-1], edges_deg[1:]):
+        m = (theta >= lo) & (theta < hi) & (w > 0)
+        if w[m].sum() == 0:
+            continue
+        back, on = w[m & (mu_t < -0.5)].sum(), w[m & (mu_t > 0.5)].sum()
+        rows.append((lo, hi, float(np.average(mu_n[m], weights=w[m])),
+                     float(np.average(mu_t[m], weights=w[m])), float(back / on) if on > 0 else float("nan")))
+    return rows
 
 
 def transmitted(radius, albedos, photons, seed, edges_deg):
@@ -94,7 +126,13 @@ def main():
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--edges", type=float, nargs="*", default=[0, 10, 20, 30, 45, 60, 90, 120, 180])
     p.add_argument("--json", action="store_true")
+    p.add_argument("--directions", action="store_true", help="where the light goes as it leaves (--radius, one --albedo)")
     a = p.parse_args()
+    if a.directions:
+        for lo, hi, mu_n, mu_t, ratio in exit_directions(a.radius, a.albedo[0], a.photons, a.seed, a.edges):
+            print(f"  theta {lo:5.1f}-{hi:5.1f} deg: mean cos to normal {mu_n:.3f}, to the tangent away "
+                  f"from the lit pole {mu_t:+.3f}, back / on flux {ratio:.2f}")
+        return
     out = []
     if a.material:
         sp, sa = MATERIALS[a.material]
