@@ -114,9 +114,6 @@ pub struct ViewBasis {
     frames: Vec<FaceFrame>,
     /// Per face, the light and environment terms (empty without single scattering).
     terms: Vec<FaceTerms>,
-    /// Per face, the environment's half-space single scattering at [`ENV_MU`] exit cosines
-    /// (empty without an environment).
-    env_table: Vec<[Rgb; ENV_MU]>,
     /// Each vertex's faces (compressed rows): `vertex_faces[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<u32>,
     vertex_faces: Vec<u32>,
@@ -128,10 +125,13 @@ pub struct ViewBasis {
     geo: Vec<GeoBlock>,
     source: Vec<SourceBlock>,
     open: Vec<u32>,
-    /// The face at each position of the blocks, `vertex_faces` as positions, and `env_table`
-    /// in that order.
+    /// The face at each position of the blocks, each face's position, and `vertex_faces` as
+    /// positions.
     order: Vec<u32>,
+    position: Vec<u32>,
     slots: Vec<u32>,
+    /// Per position, the environment's half-space single scattering at [`ENV_MU`] exit
+    /// cosines (empty without an environment).
     env_blocked: Vec<[Rgb; ENV_MU]>,
     /// Buffers kept from eye to eye.
     scratch: Scratch,
@@ -165,7 +165,6 @@ impl ViewBasis {
             positions,
             frames,
             terms: Vec::new(),
-            env_table: Vec::new(),
             offsets,
             vertex_faces,
             neighbours,
@@ -173,6 +172,7 @@ impl ViewBasis {
             source: Vec::new(),
             open: Vec::new(),
             order: Vec::new(),
+            position: Vec::new(),
             slots: Vec::new(),
             env_blocked: Vec::new(),
             scratch,
@@ -183,24 +183,24 @@ impl ViewBasis {
         };
         if single {
             basis.terms = scene.bvh.map_faces(|f| basis.face_terms(scene, f));
-            if let Some(env) = scene.environment {
-                let kernel = EnvironmentKernel::new(d);
-                basis.env_table = basis
-                    .frames
-                    .par_iter()
-                    .map(|fr| std::array::from_fn(|k| kernel.radiance_at(env, fr.n, k) * env.intensity))
-                    .collect();
-            }
         }
         basis.order = eye::normal_order(&basis.frames);
         (basis.geo, basis.source, basis.open) = eye::blocks(&basis.frames, &basis.terms, &basis.order);
-        let mut position = vec![0u32; basis.order.len()];
+        basis.position = vec![0u32; basis.order.len()];
         for (p, &f) in basis.order.iter().enumerate() {
-            position[f as usize] = p as u32;
+            basis.position[f as usize] = p as u32;
         }
-        basis.slots = basis.vertex_faces.iter().map(|&f| position[f as usize]).collect();
-        if !basis.env_table.is_empty() {
-            basis.env_blocked = basis.order.iter().map(|&f| basis.env_table[f as usize]).collect();
+        basis.slots = basis.vertex_faces.iter().map(|&f| basis.position[f as usize]).collect();
+        if let Some(env) = scene.environment.filter(|_| single) {
+            let kernel = EnvironmentKernel::new(d);
+            basis.env_blocked = basis
+                .order
+                .par_iter()
+                .map(|&f| {
+                    let n = basis.frames[f as usize].n;
+                    std::array::from_fn(|k| kernel.radiance_at(env, n, k) * env.intensity)
+                })
+                .collect();
         }
         basis
     }
@@ -434,7 +434,7 @@ impl ViewBasis {
             let value = (s * terms.a[c] * integral).min(terms.cap[c] * kept);
             l[c] = self.albedo[c] / (4.0 * PI) * value;
         }
-        if let Some(table) = self.env_table.get(f) {
+        if let Some(table) = self.env_blocked.get(self.position[f] as usize) {
             let x = mu_o * (ENV_MU - 1) as f32;
             let k = (x as usize).min(ENV_MU - 2);
             let w = x - k as f32;
