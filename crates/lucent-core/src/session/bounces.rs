@@ -77,16 +77,19 @@ impl Bounces {
         // The bounce before the last, and what the last added to `sent`: the tail's ratio.
         let mut before_last: Option<Vec<Rgb>> = None;
         let mut sent_last = Vec::new();
-        for _ in 0..f.settings.bounces {
+        for bounce in 1..=f.settings.bounces {
             let (Some(rays), Some((_, weights))) = (&self.rays, &self.weights) else { break };
             let e = bounced_irradiance_with(rays, weights, &last, &f.profile);
             let carried = irradiance.carried(&e);
             let mut next =
                 subsurface.solve(f, body, &carried, &Changes::default(), oracle, &mut Timings::default()).0;
-            let sent_before = sent.clone();
+            // Only the last bounce's share of `sent` is wanted.
+            let sent_before = (bounce == f.settings.bounces).then(|| sent.clone());
             body.add_transmission(&mut next, sent, &carried, &e);
-            let zeros = std::iter::repeat(&Rgb::ZERO);
-            sent_last = sent.iter().zip(sent_before.iter().chain(zeros)).map(|(a, b)| *a - *b).collect();
+            if let Some(before) = sent_before {
+                let zeros = std::iter::repeat(&Rgb::ZERO);
+                sent_last = sent.iter().zip(before.iter().chain(zeros)).map(|(a, b)| *a - *b).collect();
+            }
             irradiance.add_local(f, &mut next, &e);
             // No view ray follows the bounced light: its single scattering joins `B`.
             irradiance.add_single(f, &mut next, &e);
