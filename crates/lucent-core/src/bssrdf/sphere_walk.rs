@@ -149,14 +149,18 @@ fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], 
     }
 }
 
-/// A sphere's multiple-scattering transmittance at the antipode of the lit pole, `T(0)`, over
-/// radius for one albedo (`η = 1`): what [`crate::solver::transmission`] reads for curved parts.
+/// Cosines of the exit angle `θ` from the antipode at which a [`SphereTable`] holds `T(θ)`:
+/// head-on to near the terminator, where `T` rises fastest.
+pub const EXIT_COS: [f64; 8] = [1.0, 0.9, 0.75, 0.6, 0.45, 0.3, 0.15, 0.05];
+
+/// A sphere's multiple-scattering transmittance `T(θ)` over radius for one albedo (`η = 1`),
+/// at the exit angles [`EXIT_COS`]: what [`crate::solver::sphere_term`] reads for curved parts.
 #[derive(Debug)]
 pub struct SphereTable {
     /// Radii (mean free paths), log-spaced from [`TABLE_MIN_R`] to [`WALK_R`].
     radius: Vec<f64>,
-    /// `T(0)` at each (unitless, per unit incident irradiance).
-    at: Vec<f64>,
+    /// `T(θ)` at each radius and each of [`EXIT_COS`] (unitless, per unit incident irradiance).
+    at: Vec<[f64; EXIT_COS.len()]>,
     /// The slab's slowest mode's decay rate per mean free path ([`super::slab::asymptotic_decay`]).
     kappa: f64,
 }
@@ -174,51 +178,69 @@ impl SphereTable {
         let radius: Vec<f64> = (0..TABLE_STEPS)
             .map(|k| TABLE_MIN_R * (WALK_R / TABLE_MIN_R).powf(k as f64 / (TABLE_STEPS - 1) as f64))
             .collect();
-        let walked: Vec<f64> = radius
+        let thetas = EXIT_COS.map(f64::acos);
+        let walked: Vec<Vec<f64>> = radius
             .par_iter()
             .enumerate()
             .map(|(k, &r)| {
                 let paths = ((TABLE_PATHS as f64 * (r / 4.0).max(1.0)) as usize).min(TABLE_MAX_PATHS);
-                transmitted(r, rho, &[0.0], paths, 0x5eed + k as u64).0[0]
+                transmitted(r, rho, &thetas, paths, 0x5eed + k as u64).0
             })
             .collect();
         // Beyond 4 mean free paths each radius's noise is independent of its neighbours':
         // the mean of three neighbours in ln T (the table's steps are 26% in R, over which
         // ln T bends by a few thousandths) takes it down by √3.
-        let at = (0..walked.len())
-            .map(|k| {
-                if radius[k] <= 4.0
-                    || k == 0
-                    || k + 1 == walked.len()
-                    || walked[k - 1..=k + 1].iter().any(|&v| v <= 0.0)
-                {
-                    return walked[k];
-                }
-                ((walked[k - 1].ln() + walked[k].ln() + walked[k + 1].ln()) / 3.0).exp()
-            })
-            .collect();
+        let smooth = |k: usize, j: usize| {
+            let near = |i: usize| walked[i][j];
+            if radius[k] <= 4.0 || k == 0 || k + 1 == walked.len() || (k - 1..=k + 1).any(|i| near(i) <= 0.0)
+            {
+                return near(k);
+            }
+            ((near(k - 1).ln() + near(k).ln() + near(k + 1).ln()) / 3.0).exp()
+        };
+        let at = (0..walked.len()).map(|k| std::array::from_fn(|j| smooth(k, j))).collect();
         SphereTable { radius, at, kappa: super::slab::asymptotic_decay(rho) }
     }
 
-    /// `T(0)` of a sphere `radius` mean free paths in radius: linear in `ln R` between the
-    /// table's radii, as `R³` below them, and beyond them falling as the slab's slowest mode
-    /// over the diameter (module docs).
+    /// `T(0)` of a sphere `radius` mean free paths in radius (see [`SphereTable::at_cos`]).
     pub fn at(&self, radius: f64) -> f64 {
+        self.at_cos(radius, 1.0)
+    }
+
+    /// `T(θ)` of a sphere `radius` mean free paths in radius at `cos θ = mu`: linear in `ln R`
+    /// between the table's radii, as `R³` below them, and beyond them falling as the slab's
+    /// slowest mode over the diameter (module docs); linear in `mu` between [`EXIT_COS`],
+    /// clamped to their range.
+    pub fn at_cos(&self, radius: f64, mu: f64) -> f64 {
         let n = self.radius.len();
         if radius.is_nan() || radius <= 0.0 {
             return 0.0;
         }
+        let column = |k: usize| cos_interpolate(&self.at[k], mu);
         if radius <= self.radius[0] {
-            return self.at[0] * (radius / self.radius[0]).powi(3);
+            return column(0) * (radius / self.radius[0]).powi(3);
         }
         if radius >= self.radius[n - 1] {
             let mode = |r: f64| (-self.kappa * 2.0 * r).exp();
-            return self.at[n - 1] * mode(radius) / mode(self.radius[n - 1]);
+            return column(n - 1) * mode(radius) / mode(self.radius[n - 1]);
         }
         let k = self.radius.partition_point(|&v| v <= radius) - 1;
         let f = (radius / self.radius[k]).ln() / (self.radius[k + 1] / self.radius[k]).ln();
-        self.at[k] + (self.at[k + 1] - self.at[k]) * f
+        column(k) + (column(k + 1) - column(k)) * f
     }
+}
+
+/// `values` (one per [`EXIT_COS`]) at cosine `mu`, linear between them, clamped to their range.
+pub fn cos_interpolate<T>(values: &[T; EXIT_COS.len()], mu: f64) -> T
+where
+    T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
+{
+    let mu = if mu.is_nan() { 1.0 } else { mu.clamp(EXIT_COS[EXIT_COS.len() - 1], 1.0) };
+    // EXIT_COS falls: the first node at or below mu.
+    let j = EXIT_COS.iter().position(|&c| c <= mu).unwrap_or(EXIT_COS.len() - 1).max(1);
+    let (hi, lo) = (EXIT_COS[j - 1], EXIT_COS[j]);
+    let f = ((mu - lo) / (hi - lo)).clamp(0.0, 1.0);
+    values[j] * (1.0 - f) + values[j - 1] * f
 }
 
 #[cfg(test)]
