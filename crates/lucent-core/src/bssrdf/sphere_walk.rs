@@ -21,13 +21,10 @@
 //! `validation/sphere_transmission.py` walks the same quantity forward (photons from the beam,
 //! scored where they leave), independently.
 
-use super::tables::{TableCache, cached_table};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::sync::{Arc, OnceLock};
 
 /// Photons below this weight play Russian roulette (survivors double).
 const ROULETTE: f64 = 0.05;
@@ -35,21 +32,9 @@ const ROULETTE: f64 = 0.05;
 const MAX_STEPS: usize = 1 << 20;
 /// Most slices of the importance splitting ([`walk`]).
 const LEVELS: i32 = 6;
-/// Radii of a [`SphereTable`], log-spaced.
-const TABLE_STEPS: usize = 24;
-/// Smallest radius of a [`SphereTable`] (mean free paths); below it `T` is taken in proportion
-/// to `R³` (the first two collisions' chance in a small sphere).
-const TABLE_MIN_R: f64 = 0.25;
-/// Largest radius walked (mean free paths); beyond it `T` falls as the slab's slowest mode
-/// over the diameter, scaled to meet the last walked point.
+/// Largest radius walked for [`super::sphere_table`] (mean free paths); beyond it `T` falls as
+/// the slab's slowest mode over the diameter, scaled to meet the last walked point.
 pub const WALK_R: f64 = 48.0;
-/// Photons per radius of a [`SphereTable`] up to 4 mean free paths, in proportion to the
-/// radius beyond (up to [`TABLE_MAX_PATHS`]): standard errors of 1-2% up to 4, about 8% at 22
-/// (marble's red at 2 cm), before the smoothing of [`SphereTable::new`].
-const TABLE_PATHS: usize = 4_096;
-/// Most photons per radius of a [`SphereTable`].
-const TABLE_MAX_PATHS: usize = 16_384;
-
 /// `T(θ)` of a sphere of `radius` mean free paths and albedo `rho` (0..=1) at each angle of
 /// `thetas` (radians from the antipode of the lit pole, 0..π/2), per unit incident irradiance,
 /// from `paths` photons seeded by `seed` (the same arguments give the same values anywhere),
@@ -149,100 +134,6 @@ fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], 
     }
 }
 
-/// Cosines of the exit angle `θ` from the antipode at which a [`SphereTable`] holds `T(θ)`:
-/// head-on to near the terminator, where `T` rises fastest.
-pub const EXIT_COS: [f64; 8] = [1.0, 0.9, 0.75, 0.6, 0.45, 0.3, 0.15, 0.05];
-
-/// A sphere's multiple-scattering transmittance `T(θ)` over radius for one albedo (`η = 1`),
-/// at the exit angles [`EXIT_COS`]: what [`crate::solver::sphere_term`] reads for curved parts.
-#[derive(Debug)]
-pub struct SphereTable {
-    /// Radii (mean free paths), log-spaced from [`TABLE_MIN_R`] to [`WALK_R`].
-    radius: Vec<f64>,
-    /// `T(θ)` at each radius and each of [`EXIT_COS`] (unitless, per unit incident irradiance).
-    at: Vec<[f64; EXIT_COS.len()]>,
-    /// The slab's slowest mode's decay rate per mean free path ([`super::slab::asymptotic_decay`]).
-    kappa: f64,
-}
-
-impl SphereTable {
-    /// The table for albedo `rho` (0..=1), made once per process for each (a few hundred
-    /// milliseconds on two cores for albedos near 1).
-    pub fn cached(rho: f64) -> Arc<Self> {
-        static CACHE: TableCache<SphereTable> = OnceLock::new();
-        cached_table(&CACHE, rho, 1.0, || Self::new(rho))
-    }
-
-    fn new(rho: f64) -> Self {
-        let rho = rho.clamp(0.0, 1.0);
-        let radius: Vec<f64> = (0..TABLE_STEPS)
-            .map(|k| TABLE_MIN_R * (WALK_R / TABLE_MIN_R).powf(k as f64 / (TABLE_STEPS - 1) as f64))
-            .collect();
-        let thetas = EXIT_COS.map(f64::acos);
-        let walked: Vec<Vec<f64>> = radius
-            .par_iter()
-            .enumerate()
-            .map(|(k, &r)| {
-                let paths = ((TABLE_PATHS as f64 * (r / 4.0).max(1.0)) as usize).min(TABLE_MAX_PATHS);
-                transmitted(r, rho, &thetas, paths, 0x5eed + k as u64).0
-            })
-            .collect();
-        // Beyond 4 mean free paths each radius's noise is independent of its neighbours':
-        // the mean of three neighbours in ln T (the table's steps are 26% in R, over which
-        // ln T bends by a few thousandths) takes it down by √3.
-        let smooth = |k: usize, j: usize| {
-            let near = |i: usize| walked[i][j];
-            if radius[k] <= 4.0 || k == 0 || k + 1 == walked.len() || (k - 1..=k + 1).any(|i| near(i) <= 0.0)
-            {
-                return near(k);
-            }
-            ((near(k - 1).ln() + near(k).ln() + near(k + 1).ln()) / 3.0).exp()
-        };
-        let at = (0..walked.len()).map(|k| std::array::from_fn(|j| smooth(k, j))).collect();
-        SphereTable { radius, at, kappa: super::slab::asymptotic_decay(rho) }
-    }
-
-    /// `T(0)` of a sphere `radius` mean free paths in radius (see [`SphereTable::at_cos`]).
-    pub fn at(&self, radius: f64) -> f64 {
-        self.at_cos(radius, 1.0)
-    }
-
-    /// `T(θ)` of a sphere `radius` mean free paths in radius at `cos θ = mu`: linear in `ln R`
-    /// between the table's radii, as `R³` below them, and beyond them falling as the slab's
-    /// slowest mode over the diameter (module docs); linear in `mu` between [`EXIT_COS`],
-    /// clamped to their range.
-    pub fn at_cos(&self, radius: f64, mu: f64) -> f64 {
-        let n = self.radius.len();
-        if radius.is_nan() || radius <= 0.0 {
-            return 0.0;
-        }
-        let column = |k: usize| cos_interpolate(&self.at[k], mu);
-        if radius <= self.radius[0] {
-            return column(0) * (radius / self.radius[0]).powi(3);
-        }
-        if radius >= self.radius[n - 1] {
-            let mode = |r: f64| (-self.kappa * 2.0 * r).exp();
-            return column(n - 1) * mode(radius) / mode(self.radius[n - 1]);
-        }
-        let k = self.radius.partition_point(|&v| v <= radius) - 1;
-        let f = (radius / self.radius[k]).ln() / (self.radius[k + 1] / self.radius[k]).ln();
-        column(k) + (column(k + 1) - column(k)) * f
-    }
-}
-
-/// `values` (one per [`EXIT_COS`]) at cosine `mu`, linear between them, clamped to their range.
-pub fn cos_interpolate<T>(values: &[T; EXIT_COS.len()], mu: f64) -> T
-where
-    T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
-{
-    let mu = if mu.is_nan() { 1.0 } else { mu.clamp(EXIT_COS[EXIT_COS.len() - 1], 1.0) };
-    // EXIT_COS falls: the first node at or below mu.
-    let j = EXIT_COS.iter().position(|&c| c <= mu).unwrap_or(EXIT_COS.len() - 1).max(1);
-    let (hi, lo) = (EXIT_COS[j - 1], EXIT_COS[j]);
-    let f = ((mu - lo) / (hi - lo)).clamp(0.0, 1.0);
-    values[j] * (1.0 - f) + values[j - 1] * f
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -280,23 +171,6 @@ mod tests {
             assert!(
                 (got - want).abs() < tol,
                 "R {r} rho {rho} {lo}-{hi}: {got} +- {se} vs {want} +- {want_se}"
-            );
-        }
-    }
-
-    /// The table (smoothed, fewer photons) against a longer independent walk of the same
-    /// estimator at radii between its own, within 3 standard errors plus the smoothing's bias.
-    #[test]
-    fn the_table_meets_a_long_walk() {
-        for (rho, r) in [(0.999, 1.3), (0.999, 7.7), (0.99, 3.1), (0.9995, 20.0)] {
-            let table = SphereTable::cached(rho);
-            let (t, se) = transmitted(r, rho, &[0.0], 40_000, 99);
-            let got = table.at(r);
-            assert!(
-                (got - t[0]).abs() < 3.0 * se[0] * 2.0 + 0.02 * t[0],
-                "rho {rho} R {r}: {got} vs {} +- {}",
-                t[0],
-                se[0]
             );
         }
     }

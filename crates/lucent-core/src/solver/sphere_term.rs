@@ -36,11 +36,11 @@
 //! the gain put the most, give it. The sphere's total then moves toward the walk's (red, per
 //! unit beam power: marble 2 cm 0.3765 slab, 0.3784 now, walk 0.3792; ketchup 2 cm 0.0977,
 //! 0.1058, walk 0.1010). Uniform light (head-on or at 2/3) is left alone: the term adds
-//! nothing there. Cosines are clamped to [`EXIT_COS`]'s range (below 0.05 the term reads less
-//! light than `E_0`). At `η = 1` only (the walk's boundary); no constant was chosen on any case.
+//! nothing there. Cosines are clamped to the table's angles (beyond 87 degrees the term reads
+//! less light than `E_0`). At `η = 1` only (the walk's boundary); no constant was chosen on any case.
 
 use crate::Rgb;
-use crate::bssrdf::sphere_walk::{EXIT_COS, SphereTable, cos_interpolate};
+use crate::bssrdf::sphere_table::{SphereTable, THETA_DEG};
 use crate::bssrdf::{Entry, Profile};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -49,8 +49,8 @@ use std::sync::Arc;
 /// Thicknesses of a [`SphereTerm`]'s tables, log-spaced over the profile's range.
 const STEPS: usize = 96;
 
-/// Exit angles of the tables.
-const ANGLES: usize = EXIT_COS.len();
+/// Exit angles of the tables: the committed walk's ([`THETA_DEG`], 0 to 87 degrees).
+const ANGLES: usize = THETA_DEG.len();
 
 /// The light-weighted mean incidence cosine over a sphere's lit hemisphere under one beam
 /// (`∫ μ μ dμ / ∫ μ dμ`), which is also diffuse light's: the lowest cosine at which a lit face
@@ -64,10 +64,12 @@ pub(crate) struct SphereTerm {
     /// `ln` of the first thickness (mesh units) and of the ratio between neighbours.
     ln_t0: f64,
     ln_step: f64,
-    /// `T_sph` per channel at each thickness and each of [`EXIT_COS`] (unitless).
+    /// `T_sph` per channel at each thickness and each exit angle (unitless).
     exact: Vec<[[f64; 3]; ANGLES]>,
     /// `X_sph` ([`sphere_carried`]) likewise (unitless).
     x: Vec<[[f64; 3]; ANGLES]>,
+    /// The cosines of the exit angles, falling from 1.
+    exit_cos: [f64; ANGLES],
     /// The entry term (`c(μ)`) and its value head-on, per channel.
     entry: Arc<Entry>,
     head_on: [f64; 3],
@@ -89,8 +91,9 @@ impl SphereTerm {
         if profile.eta != 1.0 {
             return None;
         }
-        let tables: [Arc<SphereTable>; 3] =
-            std::array::from_fn(|c| SphereTable::cached(profile.alpha_prime[c]));
+        let tables: [SphereTable; 3] =
+            std::array::from_fn(|c| SphereTable::for_albedo(profile.alpha_prime[c]));
+        let exit_cos = THETA_DEG.map(|d| d.to_radians().cos());
         let lo = 0.01 / profile.sigma_t.iter().copied().fold(0.0, f64::max).max(1e-12);
         let hi = (30.0 / profile.sigma_tr.iter().copied().fold(f64::MAX, f64::min).max(1e-12)).max(2.0 * lo);
         let ln_step = (hi / lo).ln() / (STEPS - 1) as f64;
@@ -100,9 +103,10 @@ impl SphereTerm {
             .into_par_iter()
             .map(|k| {
                 let t = lo * (ln_step * k as f64).exp();
-                let exact = EXIT_COS
-                    .map(|mu| std::array::from_fn(|c| tables[c].at_cos(0.5 * profile.sigma_t[c] * t, mu)));
-                let x = EXIT_COS.map(|mu| sphere_carried(profile, 0.5 * t, mu.acos(), carried));
+                let exact = THETA_DEG.map(|d| {
+                    std::array::from_fn(|c| tables[c].at_angle(0.5 * profile.sigma_t[c] * t, d.to_radians()))
+                });
+                let x = THETA_DEG.map(|d| sphere_carried(profile, 0.5 * t, d.to_radians(), carried));
                 (exact, x)
             })
             .collect();
@@ -111,6 +115,7 @@ impl SphereTerm {
             ln_step,
             exact: rows.iter().map(|r| r.0).collect(),
             x: rows.iter().map(|r| r.1).collect(),
+            exit_cos,
             entry: entry.clone(),
             head_on: carried(1.0),
         })
@@ -131,7 +136,7 @@ impl SphereTerm {
         let (k, f) = (row.k as usize, row.f as f64);
         let mu = mu.to_array();
         let blend = |table: &[[[f64; 3]; ANGLES]], c: usize| {
-            let col = |i: usize| cos_interpolate(&table[i].map(|v| v[c]), mu[c] as f64);
+            let col = |i: usize| cos_interpolate(&self.exit_cos, &table[i].map(|v| v[c]), mu[c] as f64);
             col(k) * (1.0 - f) + col(k + 1) * f
         };
         (std::array::from_fn(|c| blend(&self.exact, c)), std::array::from_fn(|c| blend(&self.x, c)))
@@ -150,7 +155,7 @@ impl SphereTerm {
         if round <= 0.0 {
             return Rgb::ZERO;
         }
-        let mu = mu.clamp(Rgb::splat(EXIT_COS[ANGLES - 1] as f32), Rgb::ONE);
+        let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
         let (exact, x) = self.at(row, mu);
         let c_mu = if mu.x == mu.y && mu.y == mu.z {
             self.entry.at(mu.x)
@@ -163,6 +168,17 @@ impl SphereTerm {
             (round as f64 * (exact[c] - g[c] as f64 * x[c]) * norm) as f32
         }))
     }
+}
+
+/// `values` (one per exit cosine of `nodes`, falling from 1) at cosine `mu`, linear between
+/// them, clamped to their range.
+fn cos_interpolate(nodes: &[f64; ANGLES], values: &[f64; ANGLES], mu: f64) -> f64 {
+    let mu = if mu.is_nan() { 1.0 } else { mu.clamp(nodes[ANGLES - 1], 1.0) };
+    // The first node at or below mu.
+    let j = nodes.iter().position(|&c| c <= mu).unwrap_or(ANGLES - 1).max(1);
+    let (hi, lo) = (nodes[j - 1], nodes[j]);
+    let f = ((mu - lo) / (hi - lo)).clamp(0.0, 1.0);
+    values[j] * (1.0 - f) + values[j - 1] * f
 }
 
 /// What the profile gathers at a point of a sphere of `radius` mesh units, `theta` radians
