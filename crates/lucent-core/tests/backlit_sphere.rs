@@ -40,26 +40,72 @@ fn backlit_sphere(
         .collect()
 }
 
-/// The antipode of a sphere lit head-on from behind (faces within 20 degrees of it) against
-/// the forward walk of `validation/sphere_transmission.py --material NAME --mm RADIUS --photons
-/// 300000 --seed 7 --edges 0 20 45 70 90` (multiple scattering; standard errors 5-9%): with
-/// the sphere's share (`curved`) every channel within 20%, where the slab term alone (`slab`,
-/// which weights itself away on a sphere) is 20-70% short.
+/// The far side of a sphere lit head-on from behind, in four bands of the angle from the
+/// antipode (faces within them), against the forward walk of `validation/sphere_transmission.py
+/// --material NAME --mm RADIUS --photons 300000 --seed 7 --edges 0 20 45 70 90` (multiple
+/// scattering; standard errors 1-9%).
+const WALKED: [(&str, f64, [[f32; 3]; 4]); 3] = [
+    (
+        "marble",
+        0.02,
+        [
+            [0.00377, 0.00187, 0.00100],
+            [0.00467, 0.00268, 0.00122],
+            [0.00803, 0.00475, 0.00260],
+            [0.02322, 0.01643, 0.01172],
+        ],
+    ),
+    (
+        "marble",
+        0.01,
+        [
+            [0.01030, 0.00795, 0.00504],
+            [0.01255, 0.00857, 0.00661],
+            [0.01968, 0.01533, 0.01138],
+            [0.05471, 0.04316, 0.03454],
+        ],
+    ),
+    (
+        "skimmilk",
+        0.02,
+        [
+            [0.01799, 0.00795, 0.00109],
+            [0.02161, 0.00978, 0.00147],
+            [0.03482, 0.01569, 0.00334],
+            [0.08127, 0.04594, 0.01715],
+        ],
+    ),
+];
+
+/// The bands of [`WALKED`], degrees from the antipode.
+const BANDS: [(f32, f32); 4] = [(0.0, 20.0), (20.0, 45.0), (45.0, 70.0), (70.0, 90.0)];
+
+/// With the sphere's share (`curved`) every channel of the three antipodal bands within 20% of
+/// the walk, where the slab term alone (`slab`, which weights itself away on a sphere) is 20-70%
+/// short; the band at the terminator, where the faces' irradiance comes from the lit rim next
+/// to them, within 25%.
 #[test]
 fn a_backlit_sphere_transmits_what_the_sphere_walk_does() {
-    let cases = [
-        ("marble", 0.02, [0.00377, 0.00187, 0.00100]),
-        ("marble", 0.01, [0.01030, 0.00795, 0.00504]),
-        ("skimmilk", 0.02, [0.01799, 0.00795, 0.00109]),
-    ];
-    for (m, d, want) in cases {
-        let curved = backlit_sphere(m, d, Transmission::Curved, &[(0.0, 20.0)])[0];
-        let slab = backlit_sphere(m, d, Transmission::Slab, &[(0.0, 20.0)])[0];
-        println!("{m} {d}: curved {curved:?}, slab {slab:?}, walk {want:?}");
-        for c in 0..3 {
-            let (got, before) = (curved[c] / want[c] - 1.0, slab[c] / want[c] - 1.0);
-            assert!(got.abs() < 0.2, "{m} {d} channel {c}: curved {curved:?} vs {want:?}");
-            assert!(got.abs() < before.abs(), "{m} {d} channel {c}: curved {got} slab {before}");
+    for (m, d, want) in WALKED {
+        let curved = backlit_sphere(m, d, Transmission::Curved, &BANDS);
+        let slab = backlit_sphere(m, d, Transmission::Slab, &BANDS);
+        for (i, band) in BANDS.iter().enumerate() {
+            println!("{m} {d} {band:?}: curved {:?}, slab {:?}, walk {:?}", curved[i], slab[i], want[i]);
+        }
+        for (i, band) in BANDS.iter().enumerate() {
+            let tolerance = if i < 3 { 0.2 } else { 0.25 };
+            for c in 0..3 {
+                let (got, before) = (curved[i][c] / want[i][c] - 1.0, slab[i][c] / want[i][c] - 1.0);
+                assert!(
+                    got.abs() < tolerance,
+                    "{m} {d} {band:?} channel {c}: curved {:?} vs {:?}",
+                    curved[i],
+                    want[i]
+                );
+                if i == 0 {
+                    assert!(got.abs() < before.abs(), "{m} {d} channel {c}: curved {got} slab {before}");
+                }
+            }
         }
     }
 }

@@ -42,10 +42,10 @@
 //!
 //! With [`Transmission::Curved`] the share `1 - s` does the same for a sphere whose diameter is
 //! the face's thickness ([`super::sphere_term`]): the sphere's random walk
-//! ([`crate::bssrdf::sphere_walk`]) in place of what the profile and gain gather at its
-//! antipode, `(1 - s) (T_sph - G X_sph) (E_k - E_f)` with `E_k` at the point across alone (the
-//! sphere was walked lit head-on, as the slab was), less the same times the face's own `E_f`, so
-//! that under uniform light, where the walked gain is exact, it adds nothing; at `η = 1` only.
+//! ([`crate::bssrdf::sphere_walk`]) in place of what the profile and gain gather on its far
+//! side, at the exit angle the point across's incidence cosine gives, for `E_k` at the point
+//! across alone, less the same for the face's own `E_f`, so that under uniform light, where the
+//! walked gain is exact, it adds nothing; at `η = 1` only.
 //!
 //! Left out: the slant at `η ≠ 1` (the term stays head-on), the energy bound's factor on the
 //! replaced share (1 on a slab), and the light that leaves through a part's sides.
@@ -59,7 +59,7 @@ use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
-use crate::solver::sphere_term::SphereTerm;
+use crate::solver::sphere_term::{Row, SphereTerm};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -125,10 +125,10 @@ pub struct CrossBody {
     /// Per face: the slab's share of `coef`, `s T` per channel (unitless, >= 0), which the
     /// oblique factor scales.
     slab: Vec<Rgb>,
-    /// Per face: the sphere's share, `(1 - s) (T_sph - G X_sph)` per channel (unitless; 0 but
-    /// for [`Transmission::Curved`]), times the irradiance at the point across alone (as the
-    /// sphere's walk was lit) less the face's own (`super::sphere_term`).
-    round: Vec<Rgb>,
+    /// The sphere's share (`super::sphere_term`; `None` but for [`Transmission::Curved`] at
+    /// `η = 1`), and per face where it reads its tables, `1 - s` (0: no share) and the gain.
+    sphere: Option<Arc<SphereTerm>>,
+    round: Vec<(Row, f32, Rgb)>,
     /// Per face: what of the far side's irradiance it sends out after the term, the
     /// transmitted light, `s T + (1 - s) G X` per channel (unitless, >= 0).
     transmitted: Vec<Rgb>,
@@ -163,12 +163,12 @@ impl CrossBody {
         mode: Transmission,
     ) -> Self {
         let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
-        let sphere =
-            (mode == Transmission::Curved).then(|| sphere_term(profile, mesh, rays, offset)).flatten();
-        let rows: Vec<(u32, Rgb, Rgb, f32, Rgb, Rgb)> = (0..mesh.triangles.len())
+        let sphere = if mode == Transmission::Curved { fb.sphere_term(profile) } else { None };
+        type Face = (u32, Rgb, Rgb, f32, Rgb, (Row, f32, Rgb));
+        let rows: Vec<Face> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, Rgb::ZERO);
+                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, (Row::default(), 0.0, Rgb::ZERO));
                 let (Some((t, s)), Some(k)) = (rays.body(mesh, f, offset), rays.inward_face(f)) else {
                     return none;
                 };
@@ -180,19 +180,14 @@ impl CrossBody {
                 let g = gains[f].to_array();
                 let exact: [f64; 3] =
                     std::array::from_fn(|c| tables[c].at(profile.sigma_t[c] * t as f64).transmitted);
-                // The sphere's share (`super::sphere_term`): what the profile and gain carry to
-                // the antipode of a sphere of this diameter, replaced by the sphere's walk.
-                let round: [f64; 3] = match &sphere {
-                    Some(sp) => {
-                        let (x, e) = (sp.carried(t), sp.exact(t));
-                        std::array::from_fn(|c| (1.0 - s) * (e[c] - g[c] as f64 * x[c]))
-                    }
-                    None => [0.0; 3],
+                // The sphere's share (`super::sphere_term`), read per light in `add`.
+                let round = match &sphere {
+                    Some(sp) => (sp.row(t), (1.0 - s) as f32, gains[f]),
+                    None => none.5,
                 };
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
                 let sent =
                     std::array::from_fn(|c| (s * exact[c] + (1.0 - s) * g[c] as f64 * carried[c]) as f32);
-                let round = Rgb::from_array(round.map(|v| v as f32));
                 let slab = std::array::from_fn(|c| (s * exact[c]) as f32);
                 (k as u32, Rgb::from_array(coef), Rgb::from_array(sent), t, Rgb::from_array(slab), round)
             })
@@ -206,6 +201,7 @@ impl CrossBody {
             thickness: rows.iter().map(|r| r.3).collect(),
             slab: rows.iter().map(|r| r.4).collect(),
             round: rows.iter().map(|r| r.5).collect(),
+            sphere,
             sigma_t: profile.sigma_t,
             tables,
             oblique,
@@ -253,11 +249,26 @@ impl CrossBody {
                 let extra = self.slab[f] * (slant - Rgb::ONE) * e;
                 // The sphere's share moves light from the face's own side to the far side's:
                 // under uniform light it adds nothing (the walked gain is exact there).
-                let across = self.round[f] * carried[k];
-                *b = (*b + self.coef[f] * e + extra + across - self.round[f] * carried[f]).max(Rgb::ZERO);
+                let (across, own) = self.round_shares(f, k, carried, cos);
+                *b = (*b + self.coef[f] * e + extra + across - own).max(Rgb::ZERO);
                 *sent += (self.transmitted[f] * e + extra + across).max(Rgb::ZERO).min(*b);
             }
         });
+    }
+
+    /// The sphere's share of face `f` (`super::sphere_term`): what it receives from the light
+    /// carried at `k`, the face across, and what it gives up of its own, each at its mean
+    /// incidence cosine (head-on without `cos`).
+    fn round_shares(&self, f: usize, k: usize, carried: &[Rgb], cos: Option<&[Rgb]>) -> (Rgb, Rgb) {
+        let (Some(sphere), (row, round, gain)) = (&self.sphere, self.round[f]) else {
+            return (Rgb::ZERO, Rgb::ZERO);
+        };
+        if round <= 0.0 {
+            return (Rgb::ZERO, Rgb::ZERO);
+        }
+        let mu = |j: usize| cos.map_or(Rgb::ONE, |c| c[j]);
+        let own = sphere.own_share(row, round, gain, mu(f));
+        (sphere.share(row, round, gain, mu(k)) * carried[k], own * carried[f])
     }
 
     /// The oblique factor of face `f` per channel for far-side light `e` arriving at the mean
@@ -311,16 +322,6 @@ impl CrossBody {
     pub fn is_empty(&self) -> bool {
         self.far.iter().all(|&k| k == u32::MAX)
     }
-}
-
-/// The sphere's share of the term for the thicknesses under `mesh`'s faces (`None` where it is
-/// not modelled, [`SphereTerm::new`]).
-fn sphere_term(profile: &Profile, mesh: &Mesh, rays: &ThicknessRays, offset: f32) -> Option<SphereTerm> {
-    let (lo, hi) = (0..mesh.triangles.len())
-        .filter_map(|f| rays.body(mesh, f, offset).map(|b| b.0))
-        .filter(|t| t.is_finite() && *t > 0.0)
-        .fold((f32::INFINITY, 0.0f32), |(lo, hi), t| (lo.min(t), hi.max(t)));
-    SphereTerm::new(profile, lo, hi)
 }
 
 #[cfg(test)]

@@ -51,6 +51,7 @@ use crate::bssrdf::walk;
 use crate::bssrdf::{Profile, boundary_a};
 use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
+use crate::solver::sphere_term::SphereTerm;
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
 
@@ -84,6 +85,19 @@ pub struct FiniteBody {
     /// Whether the gain is divided by the profile's slab share and times the reach factor
     /// (both on by default; [`FiniteBody::with_terms`]).
     terms: GainTerms,
+    /// The sphere's share of the cross-body term, made on first use (it depends on the profile
+    /// alone, so it outlives the poses).
+    sphere: SphereCache,
+}
+
+/// A [`SphereTerm`] made once per [`FiniteBody`]; derived data, so it takes no part in equality.
+#[derive(Clone, Debug, Default)]
+struct SphereCache(OnceLock<Option<Arc<SphereTerm>>>);
+
+impl PartialEq for SphereCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Which terms of the finite-body gain [`FiniteBody::face_gain`] applies beside the sphere's
@@ -132,7 +146,14 @@ impl FiniteBody {
             slab_reach,
             rd: profile.total_diffuse_reflectance(),
             terms: GainTerms::ALL,
+            sphere: SphereCache::default(),
         }
+    }
+
+    /// The sphere's share of the cross-body term for `profile`, the profile this was made for
+    /// (`None` where it is not modelled; [`SphereTerm::new`]), made on first use.
+    pub(crate) fn sphere_term(&self, profile: &Profile) -> Option<Arc<SphereTerm>> {
+        self.sphere.0.get_or_init(|| SphereTerm::new(profile).map(Arc::new)).clone()
     }
 
     /// The same table applying only `terms` beside the sphere's gain.
