@@ -11,12 +11,12 @@
 //! directions, and prints the committed table's error there against the walk's standard error.
 
 use lucent_core::bssrdf::sphere_table::{self as st, SphereTable, Walked};
-use lucent_core::bssrdf::sphere_walk::transmitted;
+use lucent_core::bssrdf::sphere_walk::{transmitted, walk_exits};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// One point's walk: (albedo, radius) indices, photons, `T` and its standard error per angle.
-type Walk = ((usize, usize), usize, Vec<f64>, Vec<f64>);
+/// One point's walk: (albedo, radius) indices, photons, and what it measured per angle.
+type Walk = ((usize, usize), usize, lucent_core::bssrdf::sphere_walk::Exits);
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -40,12 +40,12 @@ fn main() {
         .par_iter()
         .map(|&(a, r)| {
             let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);
-            let (t, se) =
-                transmitted(radius[r], albedo[a], &thetas, paths, st::SEED + 64 * a as u64 + r as u64);
+            let exits =
+                walk_exits(radius[r], albedo[a], &thetas, paths, st::SEED + 64 * a as u64 + r as u64);
             if r == 0 {
                 eprintln!("albedo {:.6}: {:.0} s", albedo[a], start.elapsed().as_secs_f64());
             }
-            ((a, r), paths, t, se)
+            ((a, r), paths, exits)
         })
         .collect();
     let cells = albedo.len() * radius.len();
@@ -56,14 +56,17 @@ fn main() {
         paths: vec![0; cells],
         ln_t: vec![0.0; cells * thetas.len()],
         rel_se: vec![0.0; cells * thetas.len()],
+        tilt: vec![0.0; cells * thetas.len()],
     };
-    for ((a, r), paths, t, se) in walked {
+    for ((a, r), paths, exits) in walked {
+        let (t, se) = (&exits.t, &exits.se);
         table.paths[a * radius.len() + r] = paths as u32;
         for k in 0..thetas.len() {
             assert!(t[k] > 0.0, "albedo {} radius {} angle {}: nothing scored", albedo[a], radius[r], k);
             let i = table.index(a, r, k);
             table.ln_t[i] = t[k].ln() as f32;
             table.rel_se[i] = (se[k] / t[k]) as f32;
+            table.tilt[i] = exits.tilt[k] as f32;
         }
     }
     let worst = table.rel_se.iter().cloned().fold(0.0f32, f32::max);

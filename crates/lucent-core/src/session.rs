@@ -475,6 +475,7 @@ impl FrameSession {
         // Light that crossed the body, and what of `B` it is (the transmitted exit lobe's share).
         let mut sent = Vec::new();
         body.add_transmission(&mut face_b, &mut sent, &carried, e);
+        let tilts = if sent.is_empty() { Vec::new() } else { body.tilts(f, &carried, e) };
         irradiance.add_local(f, &mut face_b, e);
         let t_bounces = Instant::now();
         self.bounces.add(f, &changes, irradiance, &mut self.subsurface, body, (&mut face_b, &mut sent));
@@ -483,7 +484,7 @@ impl FrameSession {
         let local_change = local_limit::vertex_change(f, irradiance, self.subsurface.solver());
         let local_ms = ms_since(t_local);
         timings.irradiance_ms += local_ms;
-        self.view.keep_solve(f, &face_b, sent, local_change.as_deref());
+        self.view.keep_solve(f, &face_b, sent, tilts, local_change.as_deref());
         timings.push_ms += ms_since(t) - timings.bounces_ms - local_ms;
         let t = Instant::now();
         let (vertex_radiance, vertex_single) = self.view.seen(f, irradiance, &self.body, None);

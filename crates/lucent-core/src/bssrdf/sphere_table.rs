@@ -55,8 +55,8 @@ pub const PATHS: usize = 32_768;
 pub const MAX_PATHS: usize = 131_072;
 /// Seed of the first walk of the table; point `(a, r)` uses `SEED + 64 a + r`.
 pub const SEED: u64 = 0x7ab1_e000;
-/// First bytes of the file (format version 1).
-const MAGIC: &[u8; 8] = b"LSPHT001";
+/// First bytes of the file (format version 2: with the exit's tilt).
+const MAGIC: &[u8; 8] = b"LSPHT002";
 
 /// The committed table, as the generator wrote it.
 static COMMITTED: &[u8] = include_bytes!("sphere_table.bin");
@@ -112,6 +112,9 @@ pub struct Walked {
     pub ln_t: Vec<f32>,
     /// The standard error of `T` over `T` at each (unitless).
     pub rel_se: Vec<f32>,
+    /// The exit's tilt at each: the flux-weighted mean of `ω_o · t`, `t` the tangent away from
+    /// the lit pole ([`super::sphere_walk::Exits::tilt`]; unitless).
+    pub tilt: Vec<f32>,
 }
 
 impl Walked {
@@ -120,8 +123,9 @@ impl Walked {
         (a * self.radius.len() + r) * self.theta_deg.len() + t
     }
 
-    /// The little-endian bytes of the file: `LSPHT001`, the three counts (u32), the albedos,
-    /// radii and angles (f64), the photon counts (u32), `ln T` and the relative errors (f32).
+    /// The little-endian bytes of the file: `LSPHT002`, the three counts (u32), the albedos,
+    /// radii and angles (f64), the photon counts (u32), `ln T`, the relative errors and the
+    /// tilts (f32).
     pub fn encode(&self) -> Vec<u8> {
         let mut out = MAGIC.to_vec();
         for n in [self.albedo.len(), self.radius.len(), self.theta_deg.len()] {
@@ -131,7 +135,7 @@ impl Walked {
             out.extend(v.to_le_bytes());
         }
         self.paths.iter().for_each(|p| out.extend(p.to_le_bytes()));
-        self.ln_t.iter().chain(&self.rel_se).for_each(|v| out.extend(v.to_le_bytes()));
+        self.ln_t.iter().chain(&self.rel_se).chain(&self.tilt).for_each(|v| out.extend(v.to_le_bytes()));
         out
     }
 
@@ -158,6 +162,7 @@ impl Walked {
             take(4 * na * nr)?.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect();
         let ln_t = f32s(take(4 * na * nr * nt)?);
         let rel_se = f32s(take(4 * na * nr * nt)?);
+        let tilt = f32s(take(4 * na * nr * nt)?);
         (at.is_empty() && na >= 2 && nr >= 2 && nt >= 1).then_some(Walked {
             albedo,
             radius,
@@ -165,6 +170,7 @@ impl Walked {
             paths,
             ln_t,
             rel_se,
+            tilt,
         })
     }
 
@@ -187,6 +193,8 @@ pub struct SphereTable {
     g: Vec<f64>,
     /// The relative standard error of the walk behind each `g` (the larger of the two albedos').
     rel_se: Vec<f64>,
+    /// The exit's tilt per (radius, angle), radius-major ([`Walked::tilt`]).
+    tilt: Vec<f64>,
     /// The albedo (0..=1).
     rho: f64,
     /// The slab's slowest mode's decay rate per mean free path ([`asymptotic_decay`]).
@@ -215,16 +223,19 @@ impl SphereTable {
         let (nr, nt) = (walked.radius.len(), walked.theta_deg.len());
         let mut g = Vec::with_capacity(nr * nt);
         let mut rel_se = Vec::with_capacity(nr * nt);
+        let mut tilt = Vec::with_capacity(nr * nt);
         for (r, &radius) in walked.radius.iter().enumerate() {
             for t in 0..nt {
                 let q = |a: usize| walked.ln_t[walked.index(a, r, t)] as f64 - 2.0 * walked.albedo[a].ln();
                 g.push((1.0 - w) * q(a) + w * q(a + 1) + 2.0 * kappa * radius);
                 let se = |a: usize| walked.rel_se[walked.index(a, r, t)] as f64;
                 rel_se.push(se(a).max(se(a + 1)));
+                let m = |a: usize| walked.tilt[walked.index(a, r, t)] as f64;
+                tilt.push((1.0 - w) * m(a) + w * m(a + 1));
             }
         }
         let theta = walked.theta_deg.iter().map(|d| d.to_radians()).collect();
-        SphereTable { radius: walked.radius.clone(), theta, g, rel_se, rho, kappa }
+        SphereTable { radius: walked.radius.clone(), theta, g, rel_se, tilt, rho, kappa }
     }
 
     /// `T(0)` of a sphere `radius` mean free paths in radius, at the antipode of the lit pole
@@ -246,6 +257,17 @@ impl SphereTable {
         let ln_t = self.lerp(&self.g, r, theta) - 2.0 * self.kappa * r + 2.0 * self.rho.ln();
         let beyond = if radius < r { 3.0 * (radius / r).ln() } else { -2.0 * self.kappa * (radius - r) };
         (ln_t + beyond).exp()
+    }
+
+    /// The exit's tilt at `theta` radians from the antipode of a sphere `radius` mean free paths
+    /// in radius ([`Walked::tilt`]): bilinear as [`SphereTable::at_angle`], the nearest radius
+    /// beyond the table's.
+    pub fn tilt_at(&self, radius: f64, theta: f64) -> f64 {
+        if radius.is_nan() || radius <= 0.0 || self.rho <= 0.0 {
+            return 0.0;
+        }
+        let n = self.radius.len();
+        self.lerp(&self.tilt, radius.clamp(self.radius[0], self.radius[n - 1]), theta)
     }
 
     /// The relative standard error of the walk behind [`SphereTable::at_angle`] (unitless; its

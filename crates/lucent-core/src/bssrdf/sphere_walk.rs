@@ -40,10 +40,35 @@ pub const WALK_R: f64 = 48.0;
 /// from `paths` photons seeded by `seed` (the same arguments give the same values anywhere),
 /// and the standard error of each.
 pub fn transmitted(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    // The point x is the pole (0, 0, R); the light lies toward -z rotated by θ about y.
+    let m = walk_exits(radius, rho, thetas, paths, seed);
+    (m.t, m.se)
+}
+
+/// What [`walk_exits`] measures at each exit angle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exits {
+    /// `T(θ)` per unit incident irradiance (unitless).
+    pub t: Vec<f64>,
+    /// Its standard error.
+    pub se: Vec<f64>,
+    /// The flux-weighted mean of `ω_o · t` over the light leaving there, `t` the unit tangent
+    /// pointing away from the lit pole (unitless, -1..=1; 0 for a Lambertian exit, and at
+    /// `θ = 0` by symmetry): how far the light that crossed the body leaves tilted on, in the
+    /// direction it was flowing (`shading::transmitted_exit`).
+    pub tilt: Vec<f64>,
+}
+
+/// [`transmitted`] with the exit's first moment along the tangent ([`Exits::tilt`]): by
+/// reciprocity a photon started along `-ω_o` scores the light leaving along `ω_o`, so the
+/// scores weighted by `ω_o · t` give the moment from the same walk (the same `T` as
+/// [`transmitted`] for the same arguments).
+pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64) -> Exits {
+    // The point x is the pole (0, 0, R); the light lies toward -z rotated by θ about y, so the
+    // lit pole is toward -x from x and the tangent away from it is +x.
     let toward: Vec<DVec3> = thetas.iter().map(|&t| DVec3::new(-t.sin(), 0.0, -t.cos())).collect();
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let (mut sum, mut sq) = (vec![0.0; thetas.len()], vec![0.0; thetas.len()]);
+    let mut along = vec![0.0; thetas.len()];
     let mut score = vec![0.0; thetas.len()];
     for k in 0..paths {
         // Lambertian inward direction (stratified cosine).
@@ -56,12 +81,20 @@ pub fn transmitted(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u6
         for i in 0..thetas.len() {
             sum[i] += score[i];
             sq[i] += score[i] * score[i];
+            // The light leaves along -dir.
+            along[i] += score[i] * -dir.x;
         }
     }
     let n = paths as f64;
-    let mean: Vec<f64> = sum.iter().map(|s| s / n).collect();
-    let se = sq.iter().zip(&mean).map(|(q, m)| ((q / n - m * m).max(0.0) / n).sqrt()).collect();
-    (mean, se)
+    let t: Vec<f64> = sum.iter().map(|s| s / n).collect();
+    let se = sq.iter().zip(&t).map(|(q, m)| ((q / n - m * m).max(0.0) / n).sqrt()).collect();
+    let tilt = along
+        .iter()
+        .zip(&sum)
+        .zip(thetas)
+        .map(|((a, s), &th)| if *s > 0.0 && th > 0.0 { a / s } else { 0.0 })
+        .collect();
+    Exits { t, se, tilt }
 }
 
 /// Distance from `pos` (inside or on a sphere of `radius` about the origin) to its boundary

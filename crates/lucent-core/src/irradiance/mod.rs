@@ -83,6 +83,7 @@ impl Environment {
             local: part(&|c| entry.local_band_weights(c)),
             single: part(&|c| entry.single_band_weights(c)),
             carried_cos: carried * (2.0 / 3.0),
+            flow: Vec3::ZERO,
         }
     }
 }
@@ -106,6 +107,11 @@ pub struct Entering {
     /// flux-weighted mean cosine of diffuse light): over `carried`, the mean incidence cosine
     /// the slab transmission reads (`solver::transmission`; unitless, 0..=1).
     pub carried_cos: Rgb,
+    /// The direction the lights' carried light travels, each light's weighted by what it
+    /// carries (summed over the channels; the environment's and bounced light, arriving from
+    /// every side, add none): over `carried`'s channel sum, how much of it came as one beam, and
+    /// from where (`shading::transmitted_exit`; irradiance units).
+    pub flow: Vec3,
 }
 
 impl Entering {
@@ -116,6 +122,18 @@ impl Entering {
         self.local += e * entry.local_at(cos);
         self.single += e * entry.single_at(cos);
         self.carried_cos += e * entry.at(cos) * cos;
+    }
+
+    /// [`Entering::add`] for light travelling along the unit `travel`, which [`Entering::flow`]
+    /// records.
+    #[inline]
+    pub fn add_beam(&mut self, e: Rgb, entry: &Entry, cos: f32, travel: Vec3) {
+        let carried = e * entry.at(cos);
+        self.carried += carried;
+        self.local += e * entry.local_at(cos);
+        self.single += e * entry.single_at(cos);
+        self.carried_cos += carried * cos;
+        self.flow += travel * carried.element_sum();
     }
 
     /// The mean incidence cosine of `carried`, per channel (1 where nothing is carried).
@@ -139,6 +157,7 @@ impl std::ops::Sub for Entering {
             local: (self.local - o.local).max(Rgb::ZERO),
             single: (self.single - o.single).max(Rgb::ZERO),
             carried_cos: (self.carried_cos - o.carried_cos).max(Rgb::ZERO),
+            flow: self.flow - o.flow,
         }
     }
 }
@@ -151,6 +170,7 @@ impl std::ops::Mul<f32> for Entering {
             local: self.local * k,
             single: self.single * k,
             carried_cos: self.carried_cos * k,
+            flow: self.flow * k,
         }
     }
 }
@@ -161,6 +181,7 @@ impl std::ops::AddAssign for Entering {
         self.local += o.local;
         self.single += o.single;
         self.carried_cos += o.carried_cos;
+        self.flow += o.flow;
     }
 }
 
@@ -304,6 +325,6 @@ pub(crate) fn add_lights(
         if let Some(l) = lit.get_mut(i) {
             *l = true;
         }
-        e.add(inc.irradiance * cos, entry, cos);
+        e.add_beam(inc.irradiance * cos, entry, cos, -inc.to_light);
     }
 }

@@ -53,11 +53,14 @@ pub struct Ablations {
     /// The bounces' geometric tail (`session/bounces.rs`): with this the series of bounces
     /// stops at the set number, leaving out the light of every further one.
     pub bounce_tail: bool,
+    /// The tilt of the sphere's transmitted light as it leaves (`shading::transmitted_exit`):
+    /// with this it leaves by the transmitted lobe alone, centred on the normal.
+    pub exit_tilt: bool,
 }
 
 impl Ablations {
     /// The names `--ablate` takes, each with what it switches off.
-    pub const NAMES: [(&'static str, &'static str); 14] = [
+    pub const NAMES: [(&'static str, &'static str); 15] = [
         ("gain", "the finite-body gain (every face's gain 1)"),
         ("slab-share", "the gain's division by the profile's share through a slab-like part"),
         ("reach", "the gain's per-channel reach factor"),
@@ -72,6 +75,7 @@ impl Ablations {
         ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
         ("view-exp", "the split view terms' fast exponentials: the C library's"),
         ("bounce-tail", "the bounces' geometric tail: the series cut after the set number"),
+        ("exit-tilt", "the tilt of light that crossed a round part as it leaves: normal-centred"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -95,6 +99,7 @@ impl Ablations {
             "light-paths" => &mut self.light_paths,
             "view-exp" => &mut self.view_exp,
             "bounce-tail" => &mut self.bounce_tail,
+            "exit-tilt" => &mut self.exit_tilt,
             _ => return None,
         })
     }

@@ -9,7 +9,7 @@ use crate::Rgb;
 use crate::irradiance::{Entering, ShadowCaster};
 use crate::shading::exit_chord::ExitChord;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
-use crate::solver::transmission::{CrossBody, Transmission};
+use crate::solver::transmission::{CrossBody, Tilt, Transmission};
 use std::sync::Arc;
 
 /// The thickness rays and what they measure, remade when the mesh moves or the transport
@@ -68,6 +68,15 @@ impl Body {
             }
             let cos: Vec<Rgb> = e.iter().map(Entering::mean_cos).collect();
             cross.add(b, sent, carried, Some(&cos));
+        }
+    }
+
+    /// Per face, how the sphere's transmitted light leaves ([`CrossBody::tilts`]; empty where
+    /// not modelled or ablated) for the carried irradiance `carried` made of the light `e`.
+    pub(super) fn tilts(&self, f: &Frame, carried: &[Rgb], e: &[Entering]) -> Vec<Tilt> {
+        match self.cross_body.as_ref() {
+            Some(cross) if !f.settings.ablate.exit_tilt => cross.tilts(&f.mesh, carried, e),
+            _ => Vec::new(),
         }
     }
 

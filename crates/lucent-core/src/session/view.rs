@@ -16,7 +16,8 @@ use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{
     ViewRay, ViewRayScene, face_view_rays, view_ray_radiance_along, view_rays,
 };
-use crate::shading::transmitted_exit;
+use crate::shading::transmitted_exit::{self, Transmitted};
+use crate::solver::transmission::Tilt;
 use crate::shading::view_basis::{DrawTerms, ViewBasis, ViewTerms};
 use glam::Vec3;
 
@@ -36,7 +37,7 @@ pub(super) struct View {
     /// The last solve's `B` per face and the transmitted light it holds
     /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
     /// crossed the body.
-    transmitted: (Vec<Rgb>, Vec<Rgb>),
+    transmitted: Transmitted,
     /// The view rays of the last eye, pose and refractive index, which a light move keeps.
     rays: RayCache,
 }
@@ -90,13 +91,15 @@ impl View {
 
     /// Keeps the diffuse radiance `B / (c π)` per vertex of the solve's `face_b` (plus
     /// `vertex_change`, the local limit's change at the vertices, `super::local_limit`), and
-    /// the transmitted light `sent` per face that `face_b` holds (empty: none); the split's
+    /// the transmitted light `sent` per face that `face_b` holds (empty: none) and how the
+    /// sphere's share of it leaves (`tilts`, `Body::tilts`; empty: normal-centred); the split's
     /// eye-independent part is made again on the next eye.
     pub(super) fn keep_solve(
         &mut self,
         f: &Frame,
         face_b: &[Rgb],
         sent: Vec<Rgb>,
+        tilts: Vec<Tilt>,
         vertex_change: Option<&[Rgb]>,
     ) {
         let mut b = f.mesh.face_to_vertex(face_b);
@@ -105,7 +108,11 @@ impl View {
         }
         self.diffuse = diffuse_radiance(&b, &f.profile);
         self.stale = self.basis.take().or(self.stale.take());
-        self.transmitted = if sent.is_empty() { Default::default() } else { (face_b.to_vec(), sent) };
+        self.transmitted = if sent.is_empty() {
+            Default::default()
+        } else {
+            Transmitted { face_b: face_b.to_vec(), sent, tilts }
+        };
     }
 
     /// `(radiance, single)` per vertex as seen from the eye (the shadow BVH of `irradiance` is
@@ -144,11 +151,10 @@ impl View {
             Some((chord, means)) => {
                 let rays = &*self.rays.vertex.get_or_insert_with(|| view_rays(&scene, eye));
                 let mut factors = chord.vertex_factors(rays, means);
-                let (face_b, sent) = &self.transmitted;
-                if let Some(cross) = body.cross_body().filter(|c| c.len() == sent.len()) {
+                let transmitted = &self.transmitted;
+                if let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) {
                     let lobe = &f.profile.exit_lobe;
-                    factors =
-                        transmitted_exit::exit_factors(cross, &f.mesh, face_b, sent, rays, lobe, &factors);
+                    factors = transmitted_exit::exit_factors(cross, &f.mesh, transmitted, rays, lobe, &factors);
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

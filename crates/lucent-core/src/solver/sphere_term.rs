@@ -68,6 +68,8 @@ pub(crate) struct SphereTerm {
     exact: Vec<[[f64; 3]; ANGLES]>,
     /// `X_sph` ([`sphere_carried`]) likewise (unitless).
     x: Vec<[[f64; 3]; ANGLES]>,
+    /// The exit's tilt ([`SphereTable::tilt_at`]) likewise (unitless).
+    tilt: Vec<[[f64; 3]; ANGLES]>,
     /// The cosines of the exit angles, falling from 1.
     exit_cos: [f64; ANGLES],
     /// The entry term (`c(μ)`) and its value head-on, per channel.
@@ -107,7 +109,10 @@ impl SphereTerm {
                     std::array::from_fn(|c| tables[c].at_angle(0.5 * profile.sigma_t[c] * t, d.to_radians()))
                 });
                 let x = THETA_DEG.map(|d| sphere_carried(profile, 0.5 * t, d.to_radians(), carried));
-                (exact, x)
+                let tilt = THETA_DEG.map(|d| {
+                    std::array::from_fn(|c| tables[c].tilt_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
+                });
+                (exact, x, tilt)
             })
             .collect();
         Some(SphereTerm {
@@ -115,6 +120,7 @@ impl SphereTerm {
             ln_step,
             exact: rows.iter().map(|r| r.0).collect(),
             x: rows.iter().map(|r| r.1).collect(),
+            tilt: rows.iter().map(|r| r.2).collect(),
             exit_cos,
             entry: entry.clone(),
             head_on: carried(1.0),
@@ -133,13 +139,48 @@ impl SphereTerm {
 
     /// `(T_sph, X_sph)` per channel at `row`, channel `c`'s exit cosine `mu[c]`.
     pub(crate) fn at(&self, row: Row, mu: Rgb) -> ([f64; 3], [f64; 3]) {
+        (self.read(&self.exact, row, mu), self.read(&self.x, row, mu))
+    }
+
+    /// One of the tables per channel at `row`, channel `c`'s exit cosine `mu[c]`.
+    fn read(&self, table: &[[[f64; 3]; ANGLES]], row: Row, mu: Rgb) -> [f64; 3] {
         let (k, f) = (row.k as usize, row.f as f64);
         let mu = mu.to_array();
-        let blend = |table: &[[[f64; 3]; ANGLES]], c: usize| {
+        let blend = |c: usize| {
             let col = |i: usize| cos_interpolate(&self.exit_cos, &table[i].map(|v| v[c]), mu[c] as f64);
             col(k) * (1.0 - f) + col(k + 1) * f
         };
-        (std::array::from_fn(|c| blend(&self.exact, c)), std::array::from_fn(|c| blend(&self.x, c)))
+        std::array::from_fn(blend)
+    }
+
+    /// The sphere's whole multiple scattering at a face, `(1 - s) T_sph c(1) / (c(μ) μ)` per unit
+    /// carried irradiance at the face across (the share's `ρ` without what the profile
+    /// gathers), and the exit's tilt there, per channel, for a face at `row` with the
+    /// slabness' complement `round`, the light across arriving at the mean cosine `mu`.
+    pub(crate) fn tilted(&self, row: Row, round: f32, mu: Rgb) -> (Rgb, Rgb) {
+        if round <= 0.0 {
+            return (Rgb::ZERO, Rgb::ZERO);
+        }
+        let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
+        let exact = self.read(&self.exact, row, mu);
+        let norm = self.norm(mu);
+        let whole = std::array::from_fn(|c| (round as f64 * exact[c] * norm[c]) as f32);
+        // The lobe `1 + 4 μ̄_t (ω_o · t)` stays non-negative up to a quarter (thick, dark spheres
+        // near the terminator walk more, where they transmit next to nothing).
+        let tilt = self.read(&self.tilt, row, mu).map(|v| (v as f32).clamp(-0.25, 0.25));
+        (Rgb::from_array(whole), Rgb::from_array(tilt))
+    }
+
+    /// `c(1) / (c(μ) μ)` per channel for `mu` within the exit angles' range: what turns the
+    /// carried irradiance across into the beam's (module docs).
+    fn norm(&self, mu: Rgb) -> [f64; 3] {
+        let c_mu = if mu.x == mu.y && mu.y == mu.z {
+            self.entry.at(mu.x)
+        } else {
+            Rgb::new(self.entry.at(mu.x).x, self.entry.at(mu.y).y, self.entry.at(mu.z).z)
+        };
+        let (c_mu, mu) = (c_mu.to_array(), mu.to_array());
+        std::array::from_fn(|c| if c_mu[c] > 0.0 { self.head_on[c] / (c_mu[c] as f64 * mu[c] as f64) } else { 0.0 })
     }
 
     /// What a face gives up of its own carried light, per unit of it: `ρ(μ) (1 - s)` as
@@ -157,16 +198,8 @@ impl SphereTerm {
         }
         let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
         let (exact, x) = self.at(row, mu);
-        let c_mu = if mu.x == mu.y && mu.y == mu.z {
-            self.entry.at(mu.x)
-        } else {
-            Rgb::new(self.entry.at(mu.x).x, self.entry.at(mu.y).y, self.entry.at(mu.z).z)
-        };
-        let (g, c_mu, mu) = (gain.to_array(), c_mu.to_array(), mu.to_array());
-        Rgb::from_array(std::array::from_fn(|c| {
-            let norm = if c_mu[c] > 0.0 { self.head_on[c] / (c_mu[c] as f64 * mu[c] as f64) } else { 0.0 };
-            (round as f64 * (exact[c] - g[c] as f64 * x[c]) * norm) as f32
-        }))
+        let (g, norm) = (gain.to_array(), self.norm(mu));
+        Rgb::from_array(std::array::from_fn(|c| (round as f64 * (exact[c] - g[c] as f64 * x[c]) * norm[c]) as f32))
     }
 }
 

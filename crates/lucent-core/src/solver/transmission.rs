@@ -52,10 +52,12 @@
 
 use crate::Rgb;
 use crate::bssrdf::Entry;
+use glam::Vec3;
 use crate::bssrdf::Profile;
 use crate::bssrdf::slab::SlabTable;
 use crate::bssrdf::slab_oblique::ObliqueTable;
 use crate::mesh::Mesh;
+use crate::irradiance::Entering;
 use crate::mesh::bvh::Bvh;
 use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
@@ -111,6 +113,21 @@ impl std::str::FromStr for Transmission {
             .find(|t| t.name().eq_ignore_ascii_case(s.trim()))
             .ok_or_else(|| UnknownTransmission(s.to_string()))
     }
+}
+
+/// How the sphere's transmitted light leaves a face ([`CrossBody::tilts`]): flowing on, away
+/// from where it entered, it leaves tilted that way (`shading::transmitted_exit`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Tilt {
+    /// The unit tangent of the face along which the light flows on (the beam's direction
+    /// across, projected), times the share of the light across that came as one beam (0..=1;
+    /// diffuse light flows nowhere in particular).
+    pub along: Vec3,
+    /// The sphere's whole multiple scattering at the face (`B` units, per channel, >= 0).
+    pub whole: Rgb,
+    /// Its exit's tilt, the flux-weighted mean of `ω_o · along` per channel
+    /// ([`crate::bssrdf::sphere_walk::Exits::tilt`]; unitless, about 0..0.15).
+    pub mean: Rgb,
 }
 
 /// Per face, the far face its thickness ray crossed to and the coefficient of its irradiance
@@ -269,6 +286,37 @@ impl CrossBody {
         let mu = |j: usize| cos.map_or(Rgb::ONE, |c| c[j]);
         let own = sphere.own_share(row, round, gain, mu(f));
         (sphere.share(row, round, gain, mu(k)) * carried[k], own * carried[f])
+    }
+
+    /// Per face, how the sphere's share of its transmitted light leaves (empty where the sphere
+    /// is not modelled), for the carried irradiance `carried` made of the light `e` per face:
+    /// the walk's tilt at the exit angle the light across gives (module docs of
+    /// `super::sphere_term`), along the beam's direction across projected on the face.
+    pub(crate) fn tilts(&self, mesh: &Mesh, carried: &[Rgb], e: &[Entering]) -> Vec<Tilt> {
+        let Some(sphere) = &self.sphere else { return Vec::new() };
+        if self.far.len() != mesh.triangles.len() || carried.len() != self.far.len() || e.len() != self.far.len() {
+            return Vec::new();
+        }
+        (0..self.far.len())
+            .into_par_iter()
+            .map(|f| {
+                let (k, (row, round, _)) = (self.far[f], self.round[f]);
+                if k == u32::MAX || round <= 0.0 {
+                    return Tilt::default();
+                }
+                let k = k as usize;
+                let total = carried[k].element_sum();
+                let flow = e[k].flow;
+                let n = mesh.face_normal(f);
+                let tangent = flow - n * n.dot(flow);
+                if total <= 0.0 || tangent.length_squared() <= 1e-12 * flow.length_squared().max(1e-30) {
+                    return Tilt::default();
+                }
+                let beam = (flow.length() / total).min(1.0);
+                let (whole, mean) = sphere.tilted(row, round, e[k].mean_cos());
+                Tilt { along: tangent.normalize() * beam, whole: whole * carried[k], mean }
+            })
+            .collect()
     }
 
     /// The oblique factor of face `f` per channel for far-side light `e` arriving at the mean
