@@ -40,7 +40,7 @@
 //! less light than `E_0`). At `η = 1` only (the walk's boundary); no constant was chosen on any case.
 
 use crate::Rgb;
-use crate::bssrdf::sphere_table::{SphereTable, THETA_DEG};
+use crate::bssrdf::sphere_table::{SphereTable, THETA_DEG, WALK_R};
 use crate::bssrdf::{Entry, Profile};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -101,14 +101,30 @@ impl SphereTerm {
         let ln_step = (hi / lo).ln() / (STEPS - 1) as f64;
         let entry = &profile.entry;
         let carried = |mu: f64| entry.at(mu as f32).to_array().map(f64::from);
+        // Beyond the walked radii `T` keeps its ratio to what the profile gathers at the largest
+        // (per channel and angle): a large sphere is locally a half-space, whose light the
+        // profile carries, and toward the terminator the light comes the short way from the
+        // lit rim, not across the diameter as the slab's slowest mode (the table's own
+        // extrapolation, right at the antipode only) says.
+        let walked_x: [[f64; 3]; ANGLES] = THETA_DEG.map(|d| {
+            std::array::from_fn(|c| sphere_carried(profile, WALK_R / profile.sigma_t[c], d.to_radians(), carried)[c])
+        });
         let rows: Vec<_> = (0..STEPS)
             .into_par_iter()
             .map(|k| {
                 let t = lo * (ln_step * k as f64).exp();
-                let exact = THETA_DEG.map(|d| {
-                    std::array::from_fn(|c| tables[c].at_angle(0.5 * profile.sigma_t[c] * t, d.to_radians()))
-                });
                 let x = THETA_DEG.map(|d| sphere_carried(profile, 0.5 * t, d.to_radians(), carried));
+                let exact: [[f64; 3]; ANGLES] = std::array::from_fn(|j| {
+                    let theta = THETA_DEG[j].to_radians();
+                    std::array::from_fn(|c| {
+                        let radius = 0.5 * profile.sigma_t[c] * t;
+                        if radius <= WALK_R || walked_x[j][c] <= 0.0 {
+                            tables[c].at_angle(radius, theta)
+                        } else {
+                            tables[c].at_angle(WALK_R, theta) * x[j][c] / walked_x[j][c]
+                        }
+                    })
+                });
                 let tilt = THETA_DEG.map(|d| {
                     std::array::from_fn(|c| tables[c].tilt_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
                 });
@@ -162,13 +178,22 @@ impl SphereTerm {
             return (Rgb::ZERO, Rgb::ZERO);
         }
         let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
-        let exact = self.read(&self.exact, row, mu);
-        let norm = self.norm(mu);
-        let whole = std::array::from_fn(|c| (round as f64 * exact[c] * norm[c]) as f32);
         // The lobe `1 + 4 μ̄_t (ω_o · t)` stays non-negative up to a quarter (thick, dark spheres
         // near the terminator walk more, where they transmit next to nothing).
         let tilt = self.read(&self.tilt, row, mu).map(|v| (v as f32).clamp(-0.25, 0.25));
-        (Rgb::from_array(whole), Rgb::from_array(tilt))
+        (self.whole(row, round, mu), Rgb::from_array(tilt))
+    }
+
+    /// The first part of [`SphereTerm::tilted`]: the sphere's whole multiple scattering at a
+    /// face per unit carried irradiance across (unitless).
+    pub(crate) fn whole(&self, row: Row, round: f32, mu: Rgb) -> Rgb {
+        if round <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
+        let exact = self.read(&self.exact, row, mu);
+        let norm = self.norm(mu);
+        Rgb::from_array(std::array::from_fn(|c| (round as f64 * exact[c] * norm[c]) as f32))
     }
 
     /// `c(1) / (c(μ) μ)` per channel for `mu` within the exit angles' range: what turns the

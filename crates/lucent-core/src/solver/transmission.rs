@@ -143,9 +143,10 @@ pub struct CrossBody {
     /// oblique factor scales.
     slab: Vec<Rgb>,
     /// The sphere's share (`super::sphere_term`; `None` but for [`Transmission::Curved`] at
-    /// `η = 1`), and per face where it reads its tables, `1 - s` (0: no share) and the gain.
+    /// `η = 1`), and per face where it reads its tables, `1 - s` (0: no share), the gain and
+    /// how round the surface is there ([`roundness`]).
     sphere: Option<Arc<SphereTerm>>,
-    round: Vec<(Row, f32, Rgb)>,
+    round: Vec<(Row, f32, Rgb, f32)>,
     /// Per face: what of the far side's irradiance it sends out after the term, the
     /// transmitted light, `s T + (1 - s) G X` per channel (unitless, >= 0).
     transmitted: Vec<Rgb>,
@@ -181,11 +182,12 @@ impl CrossBody {
     ) -> Self {
         let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
         let sphere = if mode == Transmission::Curved { fb.sphere_term(profile) } else { None };
-        type Face = (u32, Rgb, Rgb, f32, Rgb, (Row, f32, Rgb));
+        let normals = if sphere.is_some() { mesh.vertex_normals() } else { Vec::new() };
+        type Face = (u32, Rgb, Rgb, f32, Rgb, (Row, f32, Rgb, f32));
         let rows: Vec<Face> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, (Row::default(), 0.0, Rgb::ZERO));
+                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, (Row::default(), 0.0, Rgb::ZERO, 0.0));
                 let (Some((t, s)), Some(k)) = (rays.body(mesh, f, offset), rays.inward_face(f)) else {
                     return none;
                 };
@@ -199,7 +201,7 @@ impl CrossBody {
                     std::array::from_fn(|c| tables[c].at(profile.sigma_t[c] * t as f64).transmitted);
                 // The sphere's share (`super::sphere_term`), read per light in `add`.
                 let round = match &sphere {
-                    Some(sp) => (sp.row(t), (1.0 - s) as f32, gains[f]),
+                    Some(sp) => (sp.row(t), (1.0 - s) as f32, gains[f], roundness(mesh, &normals, f, t)),
                     None => none.5,
                 };
                 let coef = std::array::from_fn(|c| (s * (exact[c] - g[c] as f64 * carried[c])) as f32);
@@ -266,26 +268,37 @@ impl CrossBody {
                 let extra = self.slab[f] * (slant - Rgb::ONE) * e;
                 // The sphere's share moves light from the face's own side to the far side's:
                 // under uniform light it adds nothing (the walked gain is exact there).
-                let (across, own) = self.round_shares(f, k, carried, cos);
+                let (across, own, whole) = self.round_shares(f, k, carried, cos);
                 *b = (*b + self.coef[f] * e + extra + across - own).max(Rgb::ZERO);
-                *sent += (self.transmitted[f] * e + extra + across).max(Rgb::ZERO).min(*b);
+                // Where the sphere's share is modelled, its light that crossed is its whole
+                // multiple scattering there, not the slab's far-side gather.
+                let sent_here = match whole {
+                    Some(whole) => self.slab[f] * e + extra + whole,
+                    None => self.transmitted[f] * e + extra,
+                };
+                *sent += sent_here.max(Rgb::ZERO).min(*b);
             }
         });
     }
 
     /// The sphere's share of face `f` (`super::sphere_term`): what it receives from the light
     /// carried at `k`, the face across, and what it gives up of its own, each at its mean
-    /// incidence cosine (head-on without `cos`).
-    fn round_shares(&self, f: usize, k: usize, carried: &[Rgb], cos: Option<&[Rgb]>) -> (Rgb, Rgb) {
-        let (Some(sphere), (row, round, gain)) = (&self.sphere, self.round[f]) else {
-            return (Rgb::ZERO, Rgb::ZERO);
+    /// incidence cosine (head-on without `cos`), and the sphere's whole multiple scattering of
+    /// the light across (`None`: no sphere's share; then the slab's far-side gather stands for
+    /// it).
+    fn round_shares(&self, f: usize, k: usize, carried: &[Rgb], cos: Option<&[Rgb]>) -> (Rgb, Rgb, Option<Rgb>) {
+        let (Some(sphere), (row, round, gain, q)) = (&self.sphere, self.round[f]) else {
+            return (Rgb::ZERO, Rgb::ZERO, None);
         };
         if round <= 0.0 {
-            return (Rgb::ZERO, Rgb::ZERO);
+            return (Rgb::ZERO, Rgb::ZERO, None);
         }
-        let mu = |j: usize| cos.map_or(Rgb::ONE, |c| c[j]);
+        // The exit angle the light's cosine stands for holds on a round surface; a flat one
+        // (`q` 0) lit at a slant is a slab's slant, not a sphere's rim: head-on there.
+        let mu = |j: usize| cos.map_or(Rgb::ONE, |c| Rgb::ONE - (Rgb::ONE - c[j]) * q);
         let own = sphere.own_share(row, round, gain, mu(f));
-        (sphere.share(row, round, gain, mu(k)) * carried[k], own * carried[f])
+        let whole = sphere.whole(row, round, mu(k)) * carried[k];
+        (sphere.share(row, round, gain, mu(k)) * carried[k], own * carried[f], Some(whole))
     }
 
     /// Per face, how the sphere's share of its transmitted light leaves (empty where the sphere
@@ -300,7 +313,7 @@ impl CrossBody {
         (0..self.far.len())
             .into_par_iter()
             .map(|f| {
-                let (k, (row, round, _)) = (self.far[f], self.round[f]);
+                let (k, (row, round, _, q)) = (self.far[f], self.round[f]);
                 if k == u32::MAX || round <= 0.0 {
                     return Tilt::default();
                 }
@@ -313,7 +326,7 @@ impl CrossBody {
                     return Tilt::default();
                 }
                 let beam = (flow.length() / total).min(1.0);
-                let (whole, mean) = sphere.tilted(row, round, e[k].mean_cos());
+                let (whole, mean) = sphere.tilted(row, round, Rgb::ONE - (Rgb::ONE - e[k].mean_cos()) * q);
                 Tilt { along: tangent.normalize() * beam, whole: whole * carried[k], mean }
             })
             .collect()
@@ -370,6 +383,25 @@ impl CrossBody {
     pub fn is_empty(&self) -> bool {
         self.far.iter().all(|&k| k == u32::MAX)
     }
+}
+
+/// How round the surface is at face `f` for a part `thickness` thick (0..=1): its largest
+/// convex curvature (the vertex normals' turn away from the face's over their distance from
+/// its centroid, `normals` per vertex, in the three directions of its vertices) times the
+/// radius `thickness / 2` of the sphere the term reads. 1 on a sphere (whose curvature is
+/// `2 / t`), at least 3/4 on a cylinder of diameter `t` (the three directions lie 120 degrees
+/// apart, so one is within 30 of the bend), 0 on a flat face.
+fn roundness(mesh: &Mesh, normals: &[Vec3], f: usize, thickness: f32) -> f32 {
+    let (n, c) = (mesh.face_normal(f), mesh.face_centroid(f));
+    let mut most = 0.0f32;
+    for &v in &mesh.triangles[f] {
+        let d = mesh.positions[v as usize] - c;
+        let (Some(nv), len2) = (normals.get(v as usize), d.length_squared()) else { return 0.0 };
+        if len2 > 0.0 {
+            most = most.max((*nv - n).dot(d) / len2);
+        }
+    }
+    (most * 0.5 * thickness).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
