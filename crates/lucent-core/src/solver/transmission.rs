@@ -408,6 +408,24 @@ fn roundness(mesh: &Mesh, normals: &[Vec3], f: usize, thickness: f32) -> f32 {
 mod tests {
     use super::*;
 
+    /// A sphere is round for the sphere of its own diameter, a cube's faces are flat away from
+    /// their edges.
+    #[test]
+    fn a_sphere_is_round_and_a_cube_s_face_is_flat() {
+        let sphere = crate::mesh::generate::icosphere(4);
+        let normals = sphere.vertex_normals();
+        let q: Vec<f32> = (0..sphere.triangles.len()).map(|f| roundness(&sphere, &normals, f, 2.0)).collect();
+        let mean = q.iter().sum::<f32>() / q.len() as f32;
+        assert!(mean > 0.9 && q.iter().all(|&v| v > 0.75), "sphere: mean {mean}");
+        let cube = crate::mesh::generate::cube(16);
+        let normals = cube.vertex_normals();
+        let flat = (0..cube.triangles.len())
+            .filter(|&f| roundness(&cube, &normals, f, 2.0) == 0.0)
+            .count();
+        // A 16 x 16 grid a side: the faces off the edges' ring (14 x 14 squares) are flat.
+        assert!(flat >= 6 * 14 * 14 * 2, "{flat} of {} faces flat", cube.triangles.len());
+    }
+
     #[test]
     fn names_round_trip() {
         for t in Transmission::ALL {
