@@ -285,9 +285,9 @@ fn light_that_crossed_a_sphere_leaves_tilted_on() {
     let (dimmer, brighter) =
         (rim_red(lit_side, true) / rim_red(lit_side, false), rim_red(beyond, true) / rim_red(beyond, false));
     println!("the rim's red with the tilt over without: from the lit side {dimmer:.3}, from beyond {brighter:.3}");
-    // Measured 0.64 and 1.52: the walk's tilt there is 0.13-0.14, so the lobe `1 + 4 μ̄ (ω·t)`
-    // spans 0.45-1.55 over these views (`ω·t` about -0.95 and +0.95), on most of the rim's light.
-    assert!(dimmer > 0.45 && dimmer < 0.85, "from the lit side: {dimmer}");
+    // Measured 0.63 and 1.34: the walk's tilt there is 0.13-0.14, and the lobe
+    // `1 + 7.5 μ̄ μ_o (ω·t)` spans about 0.4-1.6 over these views, on most of the rim's light.
+    assert!(dimmer > 0.4 && dimmer < 0.85, "from the lit side: {dimmer}");
     assert!(brighter > 1.15 && brighter < 1.6, "from beyond: {brighter}");
 }
 
