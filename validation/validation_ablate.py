@@ -40,6 +40,7 @@ ABLATIONS = [
     ("entry-local", "the entry term's local part: all carried by the profile", ["--ablate", "entry-local"]),
     ("bounces", "bounces between parts (--bounces 0)", ["--bounces", "0"]),
     ("bounce-tail", "the bounces' geometric tail: the series cut after three", ["--ablate", "bounce-tail"]),
+    ("exit-tilt", "the tilt of light that crossed a round part as it leaves: normal-centred", ["--ablate", "exit-tilt"]),
     ("unbounced-single", "leaving the direct light's single scattering out of the bounces (fitted): bounced",
      ["--ablate", "unbounced-single"]),
     ("refine", "splitting faces to 6 mean free paths (--refine 0)", ["--refine", "0"]),
