@@ -60,13 +60,17 @@ pub(crate) fn exit_factors(
     let t_v = mesh.face_to_vertex(&weighted);
     let sum_v = mesh.face_to_vertex(&sent.iter().map(|s| Rgb::splat(s.element_sum())).collect::<Vec<_>>());
     // Per vertex and channel, the tilted light's first moment `Σ share μ̄_t t` (B units), by axis.
-    let tilt_v: Option<[Vec<Rgb>; 3]> = (tilts.len() == sent.len()).then(|| {
+    // Per face, the sphere's share of the transmitted light (at most all of it).
+    let round: Vec<Rgb> = if tilts.len() == sent.len() {
+        tilts.iter().zip(sent).map(|(t, s)| t.whole.min(*s).max(Rgb::ZERO)).collect()
+    } else {
+        Vec::new()
+    };
+    let round_v = if round.is_empty() { Vec::new() } else { mesh.face_to_vertex(&round) };
+    // Per vertex and channel, its first moment `Σ share μ̄_t t` (B units), by axis.
+    let tilt_v: Option<[Vec<Rgb>; 3]> = (!round.is_empty()).then(|| {
         std::array::from_fn(|axis| {
-            let component: Vec<Rgb> = tilts
-                .iter()
-                .zip(sent)
-                .map(|(t, s)| t.whole.min(*s).max(Rgb::ZERO) * t.mean * t.along[axis])
-                .collect();
+            let component: Vec<Rgb> = tilts.iter().zip(&round).map(|(t, r)| *r * t.mean * t.along[axis]).collect();
             mesh.face_to_vertex(&component)
         })
     });
@@ -83,14 +87,23 @@ pub(crate) fn exit_factors(
             // The light leaves along -w_t (index 1, where the sphere's share is modelled).
             let w_o = -ray.w_t;
             let along = tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
+            let round = round_v.get(v).copied().unwrap_or(Rgb::ZERO);
             Rgb::from_array(std::array::from_fn(|k| {
                 let b = b_v[v][k];
-                let w = if b > 0.0 { (sent_v[v][k] / b).clamp(0.0, 1.0) } else { 0.0 };
-                let tilt = if b > 0.0 { 7.5 * ray.mu_o * along[k] / b } else { 0.0 };
+                if b <= 0.0 {
+                    return c[k];
+                }
+                // The slab's share leaves by the slab's lobe; the sphere's, which came the short
+                // way round rather than through the diameter, by the half-space's (the walk's
+                // exit there has a mean normal cosine of 0.67-0.75), tilted.
+                let w = (sent_v[v][k] / b).clamp(0.0, 1.0);
+                let w_round = (round[k] / b).clamp(0.0, w);
+                let tilt = c[k] * 7.5 * ray.mu_o * along[k] / b;
                 let p = cross.transmitted_lobe(k, t, ray.mu_o);
+                let w_slab = w - w_round;
                 match p {
-                    Some(p) if l[k] > 1e-6 => ((1.0 - w) * c[k] + (w + tilt) * p / l[k]).max(0.0),
-                    _ => (c[k] * (1.0 + tilt)).max(0.0),
+                    Some(p) if l[k] > 1e-6 => ((1.0 - w_slab) * c[k] + w_slab * p / l[k] + tilt).max(0.0),
+                    _ => (c[k] + tilt).max(0.0),
                 }
             }))
         })
