@@ -57,6 +57,7 @@ fn main() {
         ln_t: vec![0.0; cells * thetas.len()],
         rel_se: vec![0.0; cells * thetas.len()],
         tilt: vec![0.0; cells * thetas.len()],
+        normal: vec![0.0; cells * thetas.len()],
     };
     for ((a, r), paths, exits) in walked {
         let (t, se) = (&exits.t, &exits.se);
@@ -67,6 +68,7 @@ fn main() {
             table.ln_t[i] = t[k].ln() as f32;
             table.rel_se[i] = (se[k] / t[k]) as f32;
             table.tilt[i] = exits.tilt[k] as f32;
+            table.normal[i] = exits.normal[k] as f32;
         }
     }
     let worst = table.rel_se.iter().cloned().fold(0.0f32, f32::max);

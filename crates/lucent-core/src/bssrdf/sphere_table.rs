@@ -115,6 +115,8 @@ pub struct Walked {
     /// The exit's tilt at each: the flux-weighted mean of `ω_o · t`, `t` the tangent away from
     /// the lit pole ([`super::sphere_walk::Exits::tilt`]; unitless).
     pub tilt: Vec<f32>,
+    /// The exit's mean cosine with the normal at each ([`super::sphere_walk::Exits::normal`]).
+    pub normal: Vec<f32>,
 }
 
 impl Walked {
@@ -124,8 +126,8 @@ impl Walked {
     }
 
     /// The little-endian bytes of the file: `LSPHT002`, the three counts (u32), the albedos,
-    /// radii and angles (f64), the photon counts (u32), `ln T`, the relative errors and the
-    /// tilts (f32).
+    /// radii and angles (f64), the photon counts (u32), `ln T`, the relative errors, the
+    /// tilts and the normal cosines (f32).
     pub fn encode(&self) -> Vec<u8> {
         let mut out = MAGIC.to_vec();
         for n in [self.albedo.len(), self.radius.len(), self.theta_deg.len()] {
@@ -135,7 +137,7 @@ impl Walked {
             out.extend(v.to_le_bytes());
         }
         self.paths.iter().for_each(|p| out.extend(p.to_le_bytes()));
-        self.ln_t.iter().chain(&self.rel_se).chain(&self.tilt).for_each(|v| out.extend(v.to_le_bytes()));
+        self.ln_t.iter().chain(&self.rel_se).chain(&self.tilt).chain(&self.normal).for_each(|v| out.extend(v.to_le_bytes()));
         out
     }
 
@@ -163,6 +165,7 @@ impl Walked {
         let ln_t = f32s(take(4 * na * nr * nt)?);
         let rel_se = f32s(take(4 * na * nr * nt)?);
         let tilt = f32s(take(4 * na * nr * nt)?);
+        let normal = f32s(take(4 * na * nr * nt)?);
         (at.is_empty() && na >= 2 && nr >= 2 && nt >= 1).then_some(Walked {
             albedo,
             radius,
@@ -171,6 +174,7 @@ impl Walked {
             ln_t,
             rel_se,
             tilt,
+            normal,
         })
     }
 
@@ -195,6 +199,8 @@ pub struct SphereTable {
     rel_se: Vec<f64>,
     /// The exit's tilt per (radius, angle), radius-major ([`Walked::tilt`]).
     tilt: Vec<f64>,
+    /// The exit's mean normal cosine likewise ([`Walked::normal`]).
+    normal: Vec<f64>,
     /// The albedo (0..=1).
     rho: f64,
     /// The slab's slowest mode's decay rate per mean free path ([`asymptotic_decay`]).
@@ -224,6 +230,7 @@ impl SphereTable {
         let mut g = Vec::with_capacity(nr * nt);
         let mut rel_se = Vec::with_capacity(nr * nt);
         let mut tilt = Vec::with_capacity(nr * nt);
+        let mut normal = Vec::with_capacity(nr * nt);
         for (r, &radius) in walked.radius.iter().enumerate() {
             for t in 0..nt {
                 let q = |a: usize| walked.ln_t[walked.index(a, r, t)] as f64 - 2.0 * walked.albedo[a].ln();
@@ -232,10 +239,12 @@ impl SphereTable {
                 rel_se.push(se(a).max(se(a + 1)));
                 let m = |a: usize| walked.tilt[walked.index(a, r, t)] as f64;
                 tilt.push((1.0 - w) * m(a) + w * m(a + 1));
+                let m = |a: usize| walked.normal[walked.index(a, r, t)] as f64;
+                normal.push((1.0 - w) * m(a) + w * m(a + 1));
             }
         }
         let theta = walked.theta_deg.iter().map(|d| d.to_radians()).collect();
-        SphereTable { radius: walked.radius.clone(), theta, g, rel_se, tilt, rho, kappa }
+        SphereTable { radius: walked.radius.clone(), theta, g, rel_se, tilt, normal, rho, kappa }
     }
 
     /// `T(0)` of a sphere `radius` mean free paths in radius, at the antipode of the lit pole
@@ -268,6 +277,15 @@ impl SphereTable {
         }
         let n = self.radius.len();
         self.lerp(&self.tilt, radius.clamp(self.radius[0], self.radius[n - 1]), theta)
+    }
+
+    /// The exit's mean normal cosine at `theta` ([`Walked::normal`]), as [`SphereTable::tilt_at`].
+    pub fn normal_at(&self, radius: f64, theta: f64) -> f64 {
+        let n = self.radius.len();
+        if radius.is_nan() || radius <= 0.0 || self.rho <= 0.0 {
+            return 2.0 / 3.0;
+        }
+        self.lerp(&self.normal, radius.clamp(self.radius[0], self.radius[n - 1]), theta)
     }
 
     /// The relative standard error of the walk behind [`SphereTable::at_angle`] (unitless; its

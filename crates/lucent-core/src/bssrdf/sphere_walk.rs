@@ -56,6 +56,10 @@ pub struct Exits {
     /// `θ = 0` by symmetry): how far the light that crossed the body leaves tilted on, in the
     /// direction it was flowing (`shading::transmitted_exit`).
     pub tilt: Vec<f64>,
+    /// The flux-weighted mean of `ω_o · n`, the exit's cosine with the normal (unitless,
+    /// 0..=1; 2/3 for a Lambertian exit, about 0.71 for light diffusing out of a deep
+    /// half-space, Milne's problem).
+    pub normal: Vec<f64>,
 }
 
 /// [`transmitted`] with the exit's first moment along the tangent ([`Exits::tilt`]): by
@@ -69,6 +73,7 @@ pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let (mut sum, mut sq) = (vec![0.0; thetas.len()], vec![0.0; thetas.len()]);
     let mut along = vec![0.0; thetas.len()];
+    let mut normal = vec![0.0; thetas.len()];
     let mut score = vec![0.0; thetas.len()];
     for k in 0..paths {
         // Lambertian inward direction (stratified cosine).
@@ -83,6 +88,7 @@ pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64
             sq[i] += score[i] * score[i];
             // The light leaves along -dir.
             along[i] += score[i] * -dir.x;
+            normal[i] += score[i] * mu;
         }
     }
     let n = paths as f64;
@@ -94,7 +100,9 @@ pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64
         .zip(thetas)
         .map(|((a, s), &th)| if *s > 0.0 && th > 0.0 { a / s } else { 0.0 })
         .collect();
-    Exits { t, se, tilt }
+    let normal =
+        normal.iter().zip(&sum).map(|(a, s)| if *s > 0.0 { a / s } else { 2.0 / 3.0 }).collect();
+    Exits { t, se, tilt, normal }
 }
 
 /// Distance from `pos` (inside or on a sphere of `radius` about the origin) to its boundary

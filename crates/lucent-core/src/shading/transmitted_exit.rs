@@ -67,6 +67,12 @@ pub(crate) fn exit_factors(
         Vec::new()
     };
     let round_v = if round.is_empty() { Vec::new() } else { mesh.face_to_vertex(&round) };
+    // Per vertex, the share-weighted mean of its exit's normal cosine (times the share).
+    let normal_v = if round.is_empty() {
+        Vec::new()
+    } else {
+        mesh.face_to_vertex(&tilts.iter().zip(&round).map(|(t, r)| *r * t.normal).collect::<Vec<_>>())
+    };
     // Per vertex and channel, its first moment `Σ share μ̄_t t` (B units), by axis.
     let tilt_v: Option<[Vec<Rgb>; 3]> = (!round.is_empty()).then(|| {
         std::array::from_fn(|axis| {
@@ -88,24 +94,39 @@ pub(crate) fn exit_factors(
             let w_o = -ray.w_t;
             let along = tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
             let round = round_v.get(v).copied().unwrap_or(Rgb::ZERO);
+            let normal = normal_v.get(v).copied().unwrap_or(Rgb::ZERO);
             Rgb::from_array(std::array::from_fn(|k| {
                 let b = b_v[v][k];
                 if b <= 0.0 {
                     return c[k];
                 }
                 // The slab's share leaves by the slab's lobe; the sphere's, which came the short
-                // way round rather than through the diameter, by the half-space's (the walk's
-                // exit there has a mean normal cosine of 0.67-0.75), tilted.
+                // way round rather than through the diameter, by its own: the walk's two
+                // moments there, its mean normal cosine and its tilt.
                 let w = (sent_v[v][k] / b).clamp(0.0, 1.0);
                 let w_round = (round[k] / b).clamp(0.0, w);
-                let tilt = c[k] * 7.5 * ray.mu_o * along[k] / b;
-                let p = cross.transmitted_lobe(k, t, ray.mu_o);
                 let w_slab = w - w_round;
-                match p {
-                    Some(p) if l[k] > 1e-6 => ((1.0 - w_slab) * c[k] + w_slab * p / l[k] + tilt).max(0.0),
-                    _ => (c[k] + tilt).max(0.0),
+                if l[k] <= 1e-6 {
+                    return c[k];
                 }
+                let slab = match cross.transmitted_lobe(k, t, ray.mu_o) {
+                    Some(p) => w_slab * p / l[k],
+                    None => w_slab * c[k],
+                };
+                let mu_n = if round[k] > 0.0 { normal[k] / round[k] } else { 2.0 / 3.0 };
+                let sphere = (w_round * round_lobe(mu_n, ray.mu_o) + 7.5 * ray.mu_o * along[k] / b) / l[k];
+                ((1.0 - w) * c[k] + slab + sphere).max(0.0)
             }))
         })
         .collect()
+}
+
+/// The radiance of a sphere's transmitted light leaving at exit cosine `mu_o` over a Lambertian
+/// exit's, for an exit whose flux-weighted mean cosine is `mean_cos`: `1 + β (μ_o - 2/3)`, the
+/// lowest-order lobe with that mean and the same flux (`β = 18 (mean - 2/3)`; Milne's deep
+/// half-space, mean 0.711, gives 0.63 at `μ_o = 0.2` and 1.26 head-on, as its `H` function
+/// does). `β` is kept to ±1.5, where the lobe stays non-negative.
+fn round_lobe(mean_cos: f32, mu_o: f32) -> f32 {
+    let beta = (18.0 * (mean_cos - 2.0 / 3.0)).clamp(-1.5, 1.5);
+    1.0 + beta * (mu_o - 2.0 / 3.0)
 }

@@ -70,6 +70,8 @@ pub(crate) struct SphereTerm {
     x: Vec<[[f64; 3]; ANGLES]>,
     /// The exit's tilt ([`SphereTable::tilt_at`]) likewise (unitless).
     tilt: Vec<[[f64; 3]; ANGLES]>,
+    /// The exit's mean normal cosine ([`SphereTable::normal_at`]) likewise (unitless).
+    normal: Vec<[[f64; 3]; ANGLES]>,
     /// The cosines of the exit angles, falling from 1.
     exit_cos: [f64; ANGLES],
     /// The entry term (`c(μ)`) and its value head-on, per channel.
@@ -128,7 +130,10 @@ impl SphereTerm {
                 let tilt = THETA_DEG.map(|d| {
                     std::array::from_fn(|c| tables[c].tilt_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
                 });
-                (exact, x, tilt)
+                let normal = THETA_DEG.map(|d| {
+                    std::array::from_fn(|c| tables[c].normal_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
+                });
+                (exact, x, tilt, normal)
             })
             .collect();
         Some(SphereTerm {
@@ -137,6 +142,7 @@ impl SphereTerm {
             exact: rows.iter().map(|r| r.0).collect(),
             x: rows.iter().map(|r| r.1).collect(),
             tilt: rows.iter().map(|r| r.2).collect(),
+            normal: rows.iter().map(|r| r.3).collect(),
             exit_cos,
             entry: entry.clone(),
             head_on: carried(1.0),
@@ -171,17 +177,19 @@ impl SphereTerm {
 
     /// The sphere's whole multiple scattering at a face, `(1 - s) T_sph c(1) / (c(μ) μ)` per unit
     /// carried irradiance at the face across (the share's `ρ` without what the profile
-    /// gathers), and the exit's tilt there, per channel, for a face at `row` with the
-    /// slabness' complement `round`, the light across arriving at the mean cosine `mu`.
-    pub(crate) fn tilted(&self, row: Row, round: f32, mu: Rgb) -> (Rgb, Rgb) {
+    /// gathers), and the exit's tilt and mean normal cosine there, per channel, for a face at
+    /// `row` with the slabness' complement `round`, the light across arriving at the mean
+    /// cosine `mu`.
+    pub(crate) fn tilted(&self, row: Row, round: f32, mu: Rgb) -> (Rgb, Rgb, Rgb) {
         if round <= 0.0 {
-            return (Rgb::ZERO, Rgb::ZERO);
+            return (Rgb::ZERO, Rgb::ZERO, Rgb::splat(2.0 / 3.0));
         }
         let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
         // The lobe `1 + 4 μ̄_t (ω_o · t)` stays non-negative up to a quarter (thick, dark spheres
         // near the terminator walk more, where they transmit next to nothing).
         let tilt = self.read(&self.tilt, row, mu).map(|v| (v as f32).clamp(-0.25, 0.25));
-        (self.whole(row, round, mu), Rgb::from_array(tilt))
+        let normal = self.read(&self.normal, row, mu).map(|v| v as f32);
+        (self.whole(row, round, mu), Rgb::from_array(tilt), Rgb::from_array(normal))
     }
 
     /// The first part of [`SphereTerm::tilted`]: the sphere's whole multiple scattering at a

@@ -126,8 +126,11 @@ pub(crate) struct Tilt {
     /// The sphere's whole multiple scattering at the face (`B` units, per channel, >= 0).
     pub whole: Rgb,
     /// Its exit's tilt, the flux-weighted mean of `ω_o · along` per channel
-    /// ([`crate::bssrdf::sphere_walk::Exits::tilt`]; unitless, about 0..0.15).
+    /// ([`crate::bssrdf::sphere_walk::Exits::tilt`]; unitless, about 0..0.3).
     pub mean: Rgb,
+    /// Its exit's mean cosine with the normal per channel
+    /// ([`crate::bssrdf::sphere_walk::Exits::normal`]; unitless, about 0.65-0.76).
+    pub normal: Rgb,
 }
 
 /// Per face, the far face its thickness ray crossed to and the coefficient of its irradiance
@@ -318,16 +321,19 @@ impl CrossBody {
                     return Tilt::default();
                 }
                 let k = k as usize;
+                let (whole, mean, normal) =
+                    sphere.tilted(row, round, Rgb::ONE - (Rgb::ONE - e[k].mean_cos()) * q);
                 let total = carried[k].element_sum();
                 let flow = e[k].flow;
                 let n = mesh.face_normal(f);
                 let tangent = flow - n * n.dot(flow);
-                if total <= 0.0 || tangent.length_squared() <= 1e-12 * flow.length_squared().max(1e-30) {
-                    return Tilt::default();
-                }
-                let beam = (flow.length() / total).min(1.0);
-                let (whole, mean) = sphere.tilted(row, round, Rgb::ONE - (Rgb::ONE - e[k].mean_cos()) * q);
-                Tilt { along: tangent.normalize() * beam, whole: whole * carried[k], mean }
+                // Light from every side (the environment's, bounced) flows nowhere in particular.
+                let along = if total > 0.0 && tangent.length_squared() > 1e-12 * flow.length_squared() {
+                    tangent.normalize() * (flow.length() / total).min(1.0)
+                } else {
+                    Vec3::ZERO
+                };
+                Tilt { along, whole: whole * carried[k], mean, normal }
             })
             .collect()
     }
