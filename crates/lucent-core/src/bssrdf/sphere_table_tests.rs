@@ -25,6 +25,7 @@ fn the_committed_table_is_the_generator_s_grid() {
     assert!(table.rel_se.iter().all(|v| v.is_finite() && *v > 0.0));
     assert!(table.tilt.iter().all(|v| v.is_finite() && v.abs() <= 1.0));
     assert!((0..table.albedo.len() * table.radius.len()).all(|i| table.tilt[i * table.theta_deg.len()] == 0.0));
+    assert!(table.normal.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0));
     assert_eq!(Walked::decode(&table.encode()).as_ref(), Some(table));
     assert!(Walked::decode(&table.encode()[1..]).is_none());
 }
@@ -87,13 +88,14 @@ fn beyond_its_radii_the_table_follows_the_limits() {
     assert_eq!(SphereTable::for_albedo(0.0).at(2.0), 0.0);
 }
 
-/// The table's exit tilt meets fresh walks between its points, and the independent forward
-/// walk's (`validation/sphere_transmission.py --directions`, 200,000 photons, which scores
-/// the direction each photon leaves in rather than by reciprocity): a 5 mean free path sphere
-/// of albedo 0.999 read +0.103 over 45-70 degrees from the antipode and +0.121 over 70-90, and
-/// one of 2.41 mean free paths and albedo 0.747 (ketchup's red at 2 cm) +0.137 and +0.134.
+/// The table's exit tilt and normal cosine meet fresh walks between its points, and the
+/// independent forward walk's (`validation/sphere_transmission.py --directions`, 200,000
+/// photons, which scores the direction each photon leaves in rather than by reciprocity): a 5
+/// mean free path sphere of albedo 0.999 read a tilt of +0.103 over 45-70 degrees from the
+/// antipode and +0.121 over 70-90 (normal cosines 0.726 and 0.702), and one of 2.41 mean free
+/// paths and albedo 0.747 (ketchup's red at 2 cm) +0.137 and +0.134 (0.729 and 0.711).
 #[test]
-fn the_exit_tilt_meets_fresh_walks_and_the_forward_walk() {
+fn the_round_exit_meets_fresh_walks_and_the_forward_walk() {
     use crate::bssrdf::sphere_walk::walk_exits;
     for (i, (r, rho, deg)) in [(1.3, 0.999, 50.0), (7.7, 0.999, 70.0), (3.1, 0.99, 60.0), (2.2, 0.75, 80.0)]
         .into_iter()
@@ -101,13 +103,16 @@ fn the_exit_tilt_meets_fresh_walks_and_the_forward_walk() {
     {
         let theta = f64::to_radians(deg);
         let got = SphereTable::for_albedo(rho).tilt_at(r, theta);
-        let walked = walk_exits(r, rho, &[theta], 40_000, 77 + i as u64).tilt[0];
-        // The moment's standard error at 40,000 photons is about 0.005; the interpolation's
+        let fresh = walk_exits(r, rho, &[theta], 40_000, 77 + i as u64);
+        // The moments' standard errors at 40,000 photons are about 0.005; the interpolation's
         // bias in radius and albedo about as much.
+        let walked = fresh.tilt[0];
         assert!((got - walked).abs() < 0.02, "rho {rho} R {r} theta {deg}: table {got:.3} walk {walked:.3}");
+        let (got, walked) = (SphereTable::for_albedo(rho).normal_at(r, theta), fresh.normal[0]);
+        assert!((got - walked).abs() < 0.02, "rho {rho} R {r} theta {deg}: normal {got:.3} walk {walked:.3}");
     }
     // Band means of the table (nodes 1 degree apart, weighted by the band's area).
-    let band = |r: f64, rho: f64, lo: f64, hi: f64| {
+    let band = |r: f64, rho: f64, lo: f64, hi: f64, normal: bool| {
         let table = SphereTable::for_albedo(rho);
         let (mut sum, mut area) = (0.0, 0.0);
         let mut deg = lo + 0.5;
@@ -115,16 +120,21 @@ fn the_exit_tilt_meets_fresh_walks_and_the_forward_walk() {
             let theta = f64::to_radians(deg);
             // The tilt weighted by the light leaving there, as the forward walk's mean is.
             let w = theta.sin() * table.at_angle(r, theta.min(f64::to_radians(87.0)));
-            sum += w * table.tilt_at(r, theta);
+            sum += w * if normal { table.normal_at(r, theta) } else { table.tilt_at(r, theta) };
             area += w;
             deg += 1.0;
         }
         sum / area
     };
-    for (r, rho, lo, hi, forward) in
-        [(5.0, 0.999, 45.0, 70.0, 0.103), (5.0, 0.999, 70.0, 90.0, 0.121), (2.41, 0.747, 45.0, 70.0, 0.137), (2.41, 0.747, 70.0, 90.0, 0.134)]
-    {
-        let got = band(r, rho, lo, hi);
-        assert!((got - forward).abs() < 0.025, "R {r} albedo {rho} {lo}-{hi}: table {got:.3}, forward walk {forward}");
+    for (r, rho, lo, hi, tilt, normal) in [
+        (5.0, 0.999, 45.0, 70.0, 0.103, 0.726),
+        (5.0, 0.999, 70.0, 90.0, 0.121, 0.702),
+        (2.41, 0.747, 45.0, 70.0, 0.137, 0.729),
+        (2.41, 0.747, 70.0, 90.0, 0.134, 0.711),
+    ] {
+        let got = band(r, rho, lo, hi, false);
+        assert!((got - tilt).abs() < 0.025, "R {r} albedo {rho} {lo}-{hi}: tilt {got:.3}, forward walk {tilt}");
+        let got = band(r, rho, lo, hi, true);
+        assert!((got - normal).abs() < 0.02, "R {r} albedo {rho} {lo}-{hi}: normal {got:.3}, forward walk {normal}");
     }
 }

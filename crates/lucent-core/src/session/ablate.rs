@@ -53,9 +53,10 @@ pub struct Ablations {
     /// The bounces' geometric tail (`session/bounces.rs`): with this the series of bounces
     /// stops at the set number, leaving out the light of every further one.
     pub bounce_tail: bool,
-    /// The tilt of the sphere's transmitted light as it leaves (`shading::transmitted_exit`):
-    /// with this it leaves by the transmitted lobe alone, centred on the normal.
-    pub exit_tilt: bool,
+    /// The exit lobe of light that crossed a round part (`shading::transmitted_exit`: the
+    /// sphere walk's mean normal cosine and tilt): with this it leaves by the slab's
+    /// transmitted lobe, centred on the normal.
+    pub round_exit: bool,
 }
 
 impl Ablations {
@@ -75,7 +76,7 @@ impl Ablations {
         ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
         ("view-exp", "the split view terms' fast exponentials: the C library's"),
         ("bounce-tail", "the bounces' geometric tail: the series cut after the set number"),
-        ("exit-tilt", "the tilt of light that crossed a round part as it leaves: normal-centred"),
+        ("round-exit", "the exit lobe of light that crossed a round part (walked tilt and normal cosine): the slab's"),
     ];
 
     /// Whether nothing is left out (lucent's default).
@@ -99,7 +100,7 @@ impl Ablations {
             "light-paths" => &mut self.light_paths,
             "view-exp" => &mut self.view_exp,
             "bounce-tail" => &mut self.bounce_tail,
-            "exit-tilt" => &mut self.exit_tilt,
+            "round-exit" => &mut self.round_exit,
             _ => return None,
         })
     }

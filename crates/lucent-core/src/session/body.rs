@@ -75,7 +75,7 @@ impl Body {
     /// not modelled or ablated) for the carried irradiance `carried` made of the light `e`.
     pub(super) fn tilts(&self, f: &Frame, carried: &[Rgb], e: &[Entering]) -> Vec<Tilt> {
         match self.cross_body.as_ref() {
-            Some(cross) if !f.settings.ablate.exit_tilt => cross.tilts(&f.mesh, carried, e),
+            Some(cross) if !f.settings.ablate.round_exit => cross.tilts(&f.mesh, carried, e),
             _ => Vec::new(),
         }
     }
