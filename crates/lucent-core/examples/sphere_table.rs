@@ -40,8 +40,7 @@ fn main() {
         .par_iter()
         .map(|&(a, r)| {
             let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);
-            let exits =
-                walk_exits(radius[r], albedo[a], &thetas, paths, st::SEED + 64 * a as u64 + r as u64);
+            let exits = walk_exits(radius[r], albedo[a], &thetas, paths, st::SEED + 64 * a as u64 + r as u64);
             if r == 0 {
                 eprintln!("albedo {:.6}: {:.0} s", albedo[a], start.elapsed().as_secs_f64());
             }

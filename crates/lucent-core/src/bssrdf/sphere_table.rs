@@ -137,7 +137,12 @@ impl Walked {
             out.extend(v.to_le_bytes());
         }
         self.paths.iter().for_each(|p| out.extend(p.to_le_bytes()));
-        self.ln_t.iter().chain(&self.rel_se).chain(&self.tilt).chain(&self.normal).for_each(|v| out.extend(v.to_le_bytes()));
+        self.ln_t
+            .iter()
+            .chain(&self.rel_se)
+            .chain(&self.tilt)
+            .chain(&self.normal)
+            .for_each(|v| out.extend(v.to_le_bytes()));
         out
     }
 

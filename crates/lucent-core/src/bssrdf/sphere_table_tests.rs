@@ -24,7 +24,9 @@ fn the_committed_table_is_the_generator_s_grid() {
     assert!(table.ln_t.iter().all(|v| v.is_finite()));
     assert!(table.rel_se.iter().all(|v| v.is_finite() && *v > 0.0));
     assert!(table.tilt.iter().all(|v| v.is_finite() && v.abs() <= 1.0));
-    assert!((0..table.albedo.len() * table.radius.len()).all(|i| table.tilt[i * table.theta_deg.len()] == 0.0));
+    assert!(
+        (0..table.albedo.len() * table.radius.len()).all(|i| table.tilt[i * table.theta_deg.len()] == 0.0)
+    );
     assert!(table.normal.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0));
     assert_eq!(Walked::decode(&table.encode()).as_ref(), Some(table));
     assert!(Walked::decode(&table.encode()[1..]).is_none());
@@ -97,9 +99,8 @@ fn beyond_its_radii_the_table_follows_the_limits() {
 #[test]
 fn the_round_exit_meets_fresh_walks_and_the_forward_walk() {
     use crate::bssrdf::sphere_walk::walk_exits;
-    for (i, (r, rho, deg)) in [(1.3, 0.999, 50.0), (7.7, 0.999, 70.0), (3.1, 0.99, 60.0), (2.2, 0.75, 80.0)]
-        .into_iter()
-        .enumerate()
+    for (i, (r, rho, deg)) in
+        [(1.3, 0.999, 50.0), (7.7, 0.999, 70.0), (3.1, 0.99, 60.0), (2.2, 0.75, 80.0)].into_iter().enumerate()
     {
         let theta = f64::to_radians(deg);
         let got = SphereTable::for_albedo(rho).tilt_at(r, theta);
@@ -133,8 +134,14 @@ fn the_round_exit_meets_fresh_walks_and_the_forward_walk() {
         (2.41, 0.747, 70.0, 90.0, 0.134, 0.711),
     ] {
         let got = band(r, rho, lo, hi, false);
-        assert!((got - tilt).abs() < 0.025, "R {r} albedo {rho} {lo}-{hi}: tilt {got:.3}, forward walk {tilt}");
+        assert!(
+            (got - tilt).abs() < 0.025,
+            "R {r} albedo {rho} {lo}-{hi}: tilt {got:.3}, forward walk {tilt}"
+        );
         let got = band(r, rho, lo, hi, true);
-        assert!((got - normal).abs() < 0.02, "R {r} albedo {rho} {lo}-{hi}: normal {got:.3}, forward walk {normal}");
+        assert!(
+            (got - normal).abs() < 0.02,
+            "R {r} albedo {rho} {lo}-{hi}: normal {got:.3}, forward walk {normal}"
+        );
     }
 }

@@ -100,8 +100,7 @@ pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64
         .zip(thetas)
         .map(|((a, s), &th)| if *s > 0.0 && th > 0.0 { a / s } else { 0.0 })
         .collect();
-    let normal =
-        normal.iter().zip(&sum).map(|(a, s)| if *s > 0.0 { a / s } else { 2.0 / 3.0 }).collect();
+    let normal = normal.iter().zip(&sum).map(|(a, s)| if *s > 0.0 { a / s } else { 2.0 / 3.0 }).collect();
     Exits { t, se, tilt, normal }
 }
 

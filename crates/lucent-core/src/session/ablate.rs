@@ -76,7 +76,10 @@ impl Ablations {
         ("light-paths", "the view ray's light paths taken without a ray where certain: all traced"),
         ("view-exp", "the split view terms' fast exponentials: the C library's"),
         ("bounce-tail", "the bounces' geometric tail: the series cut after the set number"),
-        ("round-exit", "the exit lobe of light that crossed a round part (walked tilt and normal cosine): the slab's"),
+        (
+            "round-exit",
+            "the exit lobe of light that crossed a round part (walked tilt and normal cosine): the slab's",
+        ),
     ];
 
     /// Whether nothing is left out (lucent's default).

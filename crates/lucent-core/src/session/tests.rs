@@ -285,7 +285,9 @@ fn light_that_crossed_a_sphere_leaves_tilted_on() {
     let beyond = Vec3::new(0.0, 0.0, 6.0);
     let (dimmer, brighter) =
         (rim_red(lit_side, true) / rim_red(lit_side, false), rim_red(beyond, true) / rim_red(beyond, false));
-    println!("the rim's red with the tilt over without: from the lit side {dimmer:.3}, from beyond {brighter:.3}");
+    println!(
+        "the rim's red with the tilt over without: from the lit side {dimmer:.3}, from beyond {brighter:.3}"
+    );
     // Measured 0.59 and 1.46 (against the slab's lobe): the walk's tilt there is 0.13-0.14, and
     // the lobe `1 + 7.5 μ̄ μ_o (ω·t)` spans about 0.4-1.6 over these views, on most of the rim's
     // light.

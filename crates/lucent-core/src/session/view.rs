@@ -17,8 +17,8 @@ use crate::shading::single_scattering::{
     ViewRay, ViewRayScene, face_view_rays, view_ray_radiance_along, view_rays,
 };
 use crate::shading::transmitted_exit::{self, Transmitted};
-use crate::solver::transmission::Tilt;
 use crate::shading::view_basis::{DrawTerms, ViewBasis, ViewTerms};
+use crate::solver::transmission::Tilt;
 use glam::Vec3;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
@@ -154,7 +154,8 @@ impl View {
                 let transmitted = &self.transmitted;
                 if let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) {
                     let lobe = &f.profile.exit_lobe;
-                    factors = transmitted_exit::exit_factors(cross, &f.mesh, transmitted, rays, lobe, &factors);
+                    factors =
+                        transmitted_exit::exit_factors(cross, &f.mesh, transmitted, rays, lobe, &factors);
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

@@ -76,7 +76,8 @@ pub(crate) fn exit_factors(
     // Per vertex and channel, its first moment `Σ share μ̄_t t` (B units), by axis.
     let tilt_v: Option<[Vec<Rgb>; 3]> = (!round.is_empty()).then(|| {
         std::array::from_fn(|axis| {
-            let component: Vec<Rgb> = tilts.iter().zip(&round).map(|(t, r)| *r * t.mean * t.along[axis]).collect();
+            let component: Vec<Rgb> =
+                tilts.iter().zip(&round).map(|(t, r)| *r * t.mean * t.along[axis]).collect();
             mesh.face_to_vertex(&component)
         })
     });
@@ -92,7 +93,8 @@ pub(crate) fn exit_factors(
             let l = lobe.at(ray.mu_o).to_array();
             // The light leaves along -w_t (index 1, where the sphere's share is modelled).
             let w_o = -ray.w_t;
-            let along = tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
+            let along =
+                tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
             let round = round_v.get(v).copied().unwrap_or(Rgb::ZERO);
             let normal = normal_v.get(v).copied().unwrap_or(Rgb::ZERO);
             Rgb::from_array(std::array::from_fn(|k| {

@@ -109,7 +109,9 @@ impl SphereTerm {
         // lit rim, not across the diameter as the slab's slowest mode (the table's own
         // extrapolation, right at the antipode only) says.
         let walked_x: [[f64; 3]; ANGLES] = THETA_DEG.map(|d| {
-            std::array::from_fn(|c| sphere_carried(profile, WALK_R / profile.sigma_t[c], d.to_radians(), carried)[c])
+            std::array::from_fn(|c| {
+                sphere_carried(profile, WALK_R / profile.sigma_t[c], d.to_radians(), carried)[c]
+            })
         });
         let rows: Vec<_> = (0..STEPS)
             .into_par_iter()
@@ -213,7 +215,9 @@ impl SphereTerm {
             Rgb::new(self.entry.at(mu.x).x, self.entry.at(mu.y).y, self.entry.at(mu.z).z)
         };
         let (c_mu, mu) = (c_mu.to_array(), mu.to_array());
-        std::array::from_fn(|c| if c_mu[c] > 0.0 { self.head_on[c] / (c_mu[c] as f64 * mu[c] as f64) } else { 0.0 })
+        std::array::from_fn(|c| {
+            if c_mu[c] > 0.0 { self.head_on[c] / (c_mu[c] as f64 * mu[c] as f64) } else { 0.0 }
+        })
     }
 
     /// What a face gives up of its own carried light, per unit of it: `ρ(μ) (1 - s)` as
@@ -232,7 +236,9 @@ impl SphereTerm {
         let mu = mu.clamp(Rgb::splat(self.exit_cos[ANGLES - 1] as f32), Rgb::ONE);
         let (exact, x) = self.at(row, mu);
         let (g, norm) = (gain.to_array(), self.norm(mu));
-        Rgb::from_array(std::array::from_fn(|c| (round as f64 * (exact[c] - g[c] as f64 * x[c]) * norm[c]) as f32))
+        Rgb::from_array(std::array::from_fn(|c| {
+            (round as f64 * (exact[c] - g[c] as f64 * x[c]) * norm[c]) as f32
+        }))
     }
 }
 

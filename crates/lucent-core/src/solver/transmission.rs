@@ -52,16 +52,16 @@
 
 use crate::Rgb;
 use crate::bssrdf::Entry;
-use glam::Vec3;
 use crate::bssrdf::Profile;
 use crate::bssrdf::slab::SlabTable;
 use crate::bssrdf::slab_oblique::ObliqueTable;
-use crate::mesh::Mesh;
 use crate::irradiance::Entering;
+use crate::mesh::Mesh;
 use crate::mesh::bvh::Bvh;
 use crate::solver::cross_spread::Spread;
 use crate::solver::finite_body::{FiniteBody, ThicknessRays};
 use crate::solver::sphere_term::{Row, SphereTerm};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -190,7 +190,8 @@ impl CrossBody {
         let rows: Vec<Face> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| {
-                let none = (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, (Row::default(), 0.0, Rgb::ZERO, 0.0));
+                let none =
+                    (u32::MAX, Rgb::ZERO, Rgb::ZERO, 0.0, Rgb::ZERO, (Row::default(), 0.0, Rgb::ZERO, 0.0));
                 let (Some((t, s)), Some(k)) = (rays.body(mesh, f, offset), rays.inward_face(f)) else {
                     return none;
                 };
@@ -289,7 +290,13 @@ impl CrossBody {
     /// incidence cosine (head-on without `cos`), and the sphere's whole multiple scattering of
     /// the light across (`None`: no sphere's share; then the slab's far-side gather stands for
     /// it).
-    fn round_shares(&self, f: usize, k: usize, carried: &[Rgb], cos: Option<&[Rgb]>) -> (Rgb, Rgb, Option<Rgb>) {
+    fn round_shares(
+        &self,
+        f: usize,
+        k: usize,
+        carried: &[Rgb],
+        cos: Option<&[Rgb]>,
+    ) -> (Rgb, Rgb, Option<Rgb>) {
         let (Some(sphere), (row, round, gain, q)) = (&self.sphere, self.round[f]) else {
             return (Rgb::ZERO, Rgb::ZERO, None);
         };
@@ -310,7 +317,10 @@ impl CrossBody {
     /// `super::sphere_term`), along the beam's direction across projected on the face.
     pub(crate) fn tilts(&self, mesh: &Mesh, carried: &[Rgb], e: &[Entering]) -> Vec<Tilt> {
         let Some(sphere) = &self.sphere else { return Vec::new() };
-        if self.far.len() != mesh.triangles.len() || carried.len() != self.far.len() || e.len() != self.far.len() {
+        if self.far.len() != mesh.triangles.len()
+            || carried.len() != self.far.len()
+            || e.len() != self.far.len()
+        {
             return Vec::new();
         }
         (0..self.far.len())
@@ -425,9 +435,7 @@ mod tests {
         assert!(mean > 0.9 && q.iter().all(|&v| v > 0.75), "sphere: mean {mean}");
         let cube = crate::mesh::generate::cube(16);
         let normals = cube.vertex_normals();
-        let flat = (0..cube.triangles.len())
-            .filter(|&f| roundness(&cube, &normals, f, 2.0) == 0.0)
-            .count();
+        let flat = (0..cube.triangles.len()).filter(|&f| roundness(&cube, &normals, f, 2.0) == 0.0).count();
         // A 16 x 16 grid a side: the faces off the edges' ring (14 x 14 squares) are flat.
         assert!(flat >= 6 * 14 * 14 * 2, "{flat} of {} faces flat", cube.triangles.len());
     }
