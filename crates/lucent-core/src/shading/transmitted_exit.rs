@@ -34,16 +34,18 @@ pub(crate) struct Transmitted {
 /// `lobe` the half-space's exit lobe the mesh pass applies. `rays` are the vertices' view
 /// rays (`None`: not seen, `chord` as it is).
 ///
-/// The sphere's share of it flows on along the surface, away from where it entered, and
-/// leaves tilted that way (the sphere's walk, `bssrdf::sphere_walk::Exits::tilt`: a flux-
-/// weighted mean `μ̄_t` of `ω_o · t` of 0.05-0.29 from 45 degrees to the terminator): its
-/// lobe is times `1 + 7.5 μ̄_t μ_o (ω_o · t)`, which keeps its flux and has that first moment
-/// (the `7.5` is `1 / ∫ μ² (ω·t)² dω / π`). The forward walk that scores where each photon
-/// leaves (docs/transmission.md) favours it over the plain first-moment lobe `1 + 4 μ̄_t
-/// (ω_o · t)`: light that leaves at grazing angles is tilted less (spheres of 2.4 to 15 mean
-/// free paths: rms log error of the radiance in 16-32 direction cells 0.08-0.30 against
-/// 0.12-0.43, and 0.22-0.63 for no tilt). `tilts` carry `μ̄_t`, `t` and the share (at most
-/// the transmitted light) per face, area-weighted to the vertices like `B`.
+/// The sphere's share of it (`tilts`: at most the transmitted light, per face) came the short
+/// way round rather than through the diameter, and leaves by its own lobe instead, from the
+/// sphere walk's two moments there (`bssrdf::sphere_walk::Exits`): the mean normal cosine
+/// `μ̄_n` ([`round_lobe`]) and the tilt `μ̄_t`, the flux-weighted mean of `ω_o · t` along the
+/// flow (0.05-0.29 from 45 degrees to the terminator), as
+/// `1 + β (μ_o - 2/3) + 7.5 μ̄_t μ_o (ω_o · t)` over a Lambertian exit. The tilt term keeps
+/// the flux and has that first moment (the `7.5` is `1 / ∫ μ² (ω·t)² dω / π`); the forward walk
+/// that scores where each photon leaves (docs/transmission.md) favours it over the plain
+/// first-moment lobe `1 + 4 μ̄_t (ω_o · t)`: light that leaves at grazing angles is tilted less
+/// (spheres of 2.4 to 15 mean free paths: rms log error of the radiance in 16-32 direction
+/// cells 0.08-0.30 against 0.12-0.43, and 0.22-0.63 for no tilt). The moments are
+/// area-weighted to the vertices by the share, like `B`.
 pub(crate) fn exit_factors(
     cross: &CrossBody,
     mesh: &Mesh,
@@ -59,7 +61,6 @@ pub(crate) fn exit_factors(
         sent.iter().zip(cross.thickness()).map(|(s, &t)| Rgb::splat(s.element_sum() * t)).collect();
     let t_v = mesh.face_to_vertex(&weighted);
     let sum_v = mesh.face_to_vertex(&sent.iter().map(|s| Rgb::splat(s.element_sum())).collect::<Vec<_>>());
-    // Per vertex and channel, the tilted light's first moment `Σ share μ̄_t t` (B units), by axis.
     // Per face, the sphere's share of the transmitted light (at most all of it).
     let round: Vec<Rgb> = if tilts.len() == sent.len() {
         tilts.iter().zip(sent).map(|(t, s)| t.whole.min(*s).max(Rgb::ZERO)).collect()
