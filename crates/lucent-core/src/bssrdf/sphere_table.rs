@@ -277,20 +277,23 @@ impl SphereTable {
     /// in radius ([`Walked::tilt`]): bilinear as [`SphereTable::at_angle`], the nearest radius
     /// beyond the table's.
     pub fn tilt_at(&self, radius: f64, theta: f64) -> f64 {
-        if radius.is_nan() || radius <= 0.0 || self.rho <= 0.0 {
-            return 0.0;
-        }
-        let n = self.radius.len();
-        self.lerp(&self.tilt, radius.clamp(self.radius[0], self.radius[n - 1]), theta)
+        self.exit_moment(&self.tilt, radius, theta).unwrap_or(0.0)
     }
 
-    /// The exit's mean normal cosine at `theta` ([`Walked::normal`]), as [`SphereTable::tilt_at`].
+    /// The exit's mean normal cosine at `theta` ([`Walked::normal`]), as [`SphereTable::tilt_at`]
+    /// (a Lambertian exit's 2/3 where no light leaves).
     pub fn normal_at(&self, radius: f64, theta: f64) -> f64 {
-        let n = self.radius.len();
+        self.exit_moment(&self.normal, radius, theta).unwrap_or(2.0 / 3.0)
+    }
+
+    /// One of the exit's moments at `theta`, bilinear, the nearest radius beyond the table's;
+    /// `None` where no light leaves (no radius, no albedo).
+    fn exit_moment(&self, values: &[f64], radius: f64, theta: f64) -> Option<f64> {
         if radius.is_nan() || radius <= 0.0 || self.rho <= 0.0 {
-            return 2.0 / 3.0;
+            return None;
         }
-        self.lerp(&self.normal, radius.clamp(self.radius[0], self.radius[n - 1]), theta)
+        let n = self.radius.len();
+        Some(self.lerp(values, radius.clamp(self.radius[0], self.radius[n - 1]), theta))
     }
 
     /// The relative standard error of the walk behind [`SphereTable::at_angle`] (unitless; its

@@ -118,22 +118,26 @@ impl Entering {
     /// Adds light of irradiance `e` (already times its cosine) arriving at cosine `cos`.
     #[inline]
     pub fn add(&mut self, e: Rgb, entry: &Entry, cos: f32) {
-        self.carried += e * entry.at(cos);
-        self.local += e * entry.local_at(cos);
-        self.single += e * entry.single_at(cos);
-        self.carried_cos += e * entry.at(cos) * cos;
+        self.add_parts(e, entry, cos);
     }
 
     /// [`Entering::add`] for light travelling along the unit `travel`, which [`Entering::flow`]
     /// records.
     #[inline]
     pub fn add_beam(&mut self, e: Rgb, entry: &Entry, cos: f32, travel: Vec3) {
+        let carried = self.add_parts(e, entry, cos);
+        self.flow += travel * carried.element_sum();
+    }
+
+    /// Adds every part but the flow; returns what is carried.
+    #[inline]
+    fn add_parts(&mut self, e: Rgb, entry: &Entry, cos: f32) -> Rgb {
         let carried = e * entry.at(cos);
         self.carried += carried;
         self.local += e * entry.local_at(cos);
         self.single += e * entry.single_at(cos);
         self.carried_cos += carried * cos;
-        self.flow += travel * carried.element_sum();
+        carried
     }
 
     /// The mean incidence cosine of `carried`, per channel (1 where nothing is carried).

@@ -129,13 +129,15 @@ impl SphereTerm {
                         }
                     })
                 });
-                let tilt = THETA_DEG.map(|d| {
-                    std::array::from_fn(|c| tables[c].tilt_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
-                });
-                let normal = THETA_DEG.map(|d| {
-                    std::array::from_fn(|c| tables[c].normal_at(0.5 * profile.sigma_t[c] * t, d.to_radians()))
-                });
-                (exact, x, tilt, normal)
+                // The exit's moments per angle and channel, at each channel's radius.
+                let moment = |read: fn(&SphereTable, f64, f64) -> f64| {
+                    THETA_DEG.map(|d| {
+                        std::array::from_fn(|c| {
+                            read(&tables[c], 0.5 * profile.sigma_t[c] * t, d.to_radians())
+                        })
+                    })
+                };
+                (exact, x, moment(SphereTable::tilt_at), moment(SphereTable::normal_at))
             })
             .collect();
         Some(SphereTerm {

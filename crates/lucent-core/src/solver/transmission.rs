@@ -303,9 +303,7 @@ impl CrossBody {
         if round <= 0.0 {
             return (Rgb::ZERO, Rgb::ZERO, None);
         }
-        // The exit angle the light's cosine stands for holds on a round surface; a flat one
-        // (`q` 0) lit at a slant is a slab's slant, not a sphere's rim: head-on there.
-        let mu = |j: usize| cos.map_or(Rgb::ONE, |c| Rgb::ONE - (Rgb::ONE - c[j]) * q);
+        let mu = |j: usize| cos.map_or(Rgb::ONE, |c| exit_cos(c[j], q));
         let own = sphere.own_share(row, round, gain, mu(f));
         let whole = sphere.whole(row, round, mu(k)) * carried[k];
         (sphere.share(row, round, gain, mu(k)) * carried[k], own * carried[f], Some(whole))
@@ -331,8 +329,7 @@ impl CrossBody {
                     return Tilt::default();
                 }
                 let k = k as usize;
-                let (whole, mean, normal) =
-                    sphere.tilted(row, round, Rgb::ONE - (Rgb::ONE - e[k].mean_cos()) * q);
+                let (whole, mean, normal) = sphere.tilted(row, round, exit_cos(e[k].mean_cos(), q));
                 let total = carried[k].element_sum();
                 let flow = e[k].flow;
                 let n = mesh.face_normal(f);
@@ -399,6 +396,13 @@ impl CrossBody {
     pub fn is_empty(&self) -> bool {
         self.far.iter().all(|&k| k == u32::MAX)
     }
+}
+
+/// The cosine the sphere's share reads for light arriving at `cos` on a surface of roundness
+/// `q` ([`roundness`]): the exit angle the light's cosine stands for holds on a round surface; a
+/// flat one (`q` 0) lit at a slant is a slab's slant, not a sphere's rim, and reads head-on.
+fn exit_cos(cos: Rgb, q: f32) -> Rgb {
+    Rgb::ONE - (Rgb::ONE - cos) * q
 }
 
 /// How round the surface is at face `f` for a part `thickness` thick (0..=1): its largest
