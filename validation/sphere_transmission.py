@@ -4,7 +4,10 @@ lucent's transmission through curved bodies (issue 50; `bssrdf::sphere_walk` is 
 quantity by an independent, reciprocal estimator).
 
 A sphere of radius R mean free paths (sigma_t = 1) scatters isotropically, with an
-index-matched boundary (eta = 1, the validation suite's null boundary). A collimated beam of
+index-matched boundary (eta = 1, the validation suite's null boundary) or, with --eta, a smooth
+dielectric one (each photon reflected with Fresnel's probability where it enters and each time
+it meets the boundary from inside, total internal reflection included, else refracted; the
+exit direction is the refracted one: `bssrdf::sphere_forward` walks the same). A collimated beam of
 irradiance 1 travels along +z and lights the hemisphere z < 0; photons enter uniformly over
 the beam's cross-section (the disk of radius R), walk with albedo 1, and each one's number of
 scatterings n is kept, so that any albedo a weights it by a**n afterwards: one walk serves every
@@ -40,9 +43,30 @@ MATERIALS = {
 }
 
 
-def walk(radius, photons, rng, max_steps=10**7, directions=False):
+def fresnel(cos_i, eta):
+    """Unpolarised Fresnel reflectance arriving at cosine `cos_i` onto relative index `eta`
+    (total internal reflection: 1)."""
+    cos_i = np.clip(cos_i, 0.0, 1.0)
+    sin2_t = (1 - cos_i * cos_i) / (eta * eta)
+    cos_t = np.sqrt(np.maximum(1 - sin2_t, 0.0))
+    r_par = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    return np.where(sin2_t >= 1, 1.0, 0.5 * (r_par ** 2 + r_perp ** 2))
+
+
+def refract(d, m, ratio):
+    """Unit directions `d` refracted through unit normals `m` facing against them, `ratio` the
+    index they leave over the one they enter (no total internal reflection asked)."""
+    cos_i = -np.einsum("ij,ij->i", d, m)
+    cos_t = np.sqrt(np.maximum(1 - ratio * ratio * (1 - cos_i * cos_i), 0.0))
+    t = ratio * d + (ratio * cos_i - cos_t)[:, None] * m
+    return t / np.linalg.norm(t, axis=1, keepdims=True)
+
+
+def walk(radius, photons, rng, max_steps=10**7, directions=False, eta=1.0):
     """Exit cosine with +z (the exit point's z / R) and scatterings n of each photon; with
-    `directions`, also each photon's exit point and direction."""
+    `directions`, also each photon's exit point and direction (outside). A photon reflected
+    where it enters leaves with n = -1 (never scored)."""
     # Entry: uniform over the disk, on the lit hemisphere.
     r = radius * np.sqrt(rng.random(photons))
     a = 2 * np.pi * rng.random(photons)
@@ -54,6 +78,12 @@ def walk(radius, photons, rng, max_steps=10**7, directions=False):
     exit_z = np.zeros(photons)
     exit_p, exit_d = np.zeros((photons, 3)), np.zeros((photons, 3))
     idx = np.arange(photons)
+    if eta != 1.0:
+        m = pos / radius
+        enter = rng.random(photons) >= fresnel(-m[:, 2], eta)
+        n[~enter] = -1
+        d = refract(d, m, 1.0 / eta)
+        idx, pos, d = idx[enter], pos[enter], d[enter]
     for _ in range(max_steps):
         if idx.size == 0:
             break
@@ -61,26 +91,45 @@ def walk(radius, photons, rng, max_steps=10**7, directions=False):
         b = np.einsum("ij,ij->i", pos, d)
         c = np.einsum("ij,ij->i", pos, pos) - radius * radius
         to_exit = -b + np.sqrt(np.maximum(b * b - c, 0.0))
-        out = s >= to_exit
+        hit = s >= to_exit
+        out = hit
+        if eta != 1.0 and hit.any():
+            # At the boundary: reflected back in with Fresnel's probability, else out.
+            p_hit = pos[hit] + d[hit] * to_exit[hit, None]
+            m = p_hit / radius
+            cos = np.einsum("ij,ij->i", d[hit], m)
+            back = rng.random(cos.size) < fresnel(cos, 1.0 / eta)
+            out = hit.copy()
+            out[np.flatnonzero(hit)[back]] = False
+            sel = np.flatnonzero(hit)[back]
+            pos[sel] = p_hit[back] * (1 - 1e-12)
+            d[sel] = d[sel] - 2 * np.einsum("ij,ij->i", d[sel], m[back])[:, None] * m[back]
+            s[sel] = 0.0
         if out.any():
             p_out = pos[out] + d[out] * to_exit[out, None]
             exit_z[idx[out]] = p_out[:, 2] / radius
-            exit_p[idx[out]], exit_d[idx[out]] = p_out, d[out]
+            d_out = d[out] if eta == 1.0 else refract(d[out], -p_out / radius, eta)
+            exit_p[idx[out]], exit_d[idx[out]] = p_out, d_out
+        # Reflected photons moved to the boundary already and take no step (and add no
+        # scattering) this round.
+        refl = hit & ~out
         keep = ~out
-        idx, pos, d, s = idx[keep], pos[keep], d[keep], s[keep]
-        pos = pos + d * s[:, None]
-        n[idx] += 1
-        u = 1 - 2 * rng.random(idx.size)
-        phi = 2 * np.pi * rng.random(idx.size)
+        idx, pos, d, s, refl = idx[keep], pos[keep], d[keep], s[keep], refl[keep]
+        step = ~refl
+        pos[step] = pos[step] + d[step] * s[step, None]
+        n[idx[step]] += 1
+        k = int(step.sum())
+        u = 1 - 2 * rng.random(k)
+        phi = 2 * np.pi * rng.random(k)
         st = np.sqrt(np.maximum(0.0, 1 - u * u))
-        d = np.stack([st * np.cos(phi), st * np.sin(phi), u], axis=1)
+        d[step] = np.stack([st * np.cos(phi), st * np.sin(phi), u], axis=1)
     return (exit_z, n, exit_p, exit_d) if directions else (exit_z, n)
 
 
-def exit_directions(radius, albedo, photons, seed, edges_deg):
+def exit_directions(radius, albedo, photons, seed, edges_deg, eta=1.0):
     """Per bin of theta: (lo, hi, mean normal cosine, mean tangent cosine, back / on flux) of
     the multiply scattered light leaving there (module docs)."""
-    exit_z, n, p, d = walk(radius, photons, np.random.default_rng(seed), directions=True)
+    exit_z, n, p, d = walk(radius, photons, np.random.default_rng(seed), directions=True, eta=eta)
     theta = np.degrees(np.arccos(np.clip(exit_z, -1, 1)))
     w = np.where(n >= 2, np.power(float(albedo), n.astype(float)), 0.0)
     normal = p / radius
@@ -98,10 +147,10 @@ def exit_directions(radius, albedo, photons, seed, edges_deg):
     return rows
 
 
-def transmitted(radius, albedos, photons, seed, edges_deg):
+def transmitted(radius, albedos, photons, seed, edges_deg, eta=1.0):
     """T per bin of theta (edges in degrees from the antipode) and albedo, and standard errors."""
     rng = np.random.default_rng(seed)
-    exit_z, n = walk(radius, photons, rng)
+    exit_z, n = walk(radius, photons, rng, eta=eta)
     theta = np.degrees(np.arccos(np.clip(exit_z, -1, 1)))
     power = np.pi * radius * radius / photons  # each photon's share of the beam's power
     rows = []
@@ -125,11 +174,12 @@ def main():
     p.add_argument("--photons", type=int, default=200_000)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--edges", type=float, nargs="*", default=[0, 10, 20, 30, 45, 60, 90, 120, 180])
+    p.add_argument("--eta", type=float, default=1.0, help="the boundary's relative index (1: index-matched)")
     p.add_argument("--json", action="store_true")
     p.add_argument("--directions", action="store_true", help="where the light goes as it leaves (--radius, one --albedo)")
     a = p.parse_args()
     if a.directions:
-        for lo, hi, mu_n, mu_t, ratio in exit_directions(a.radius, a.albedo[0], a.photons, a.seed, a.edges):
+        for lo, hi, mu_n, mu_t, ratio in exit_directions(a.radius, a.albedo[0], a.photons, a.seed, a.edges, a.eta):
             print(f"  theta {lo:5.1f}-{hi:5.1f} deg: mean cos to normal {mu_n:.3f}, to the tangent away "
                   f"from the lit pole {mu_t:+.3f}, back / on flux {ratio:.2f}")
         return
@@ -138,11 +188,11 @@ def main():
         sp, sa = MATERIALS[a.material]
         for c in range(3):
             st = sp[c] + sa[c]
-            rows = transmitted(a.mm * st, [sp[c] / st], a.photons, a.seed + c, a.edges)
+            rows = transmitted(a.mm * st, [sp[c] / st], a.photons, a.seed + c, a.edges, a.eta)
             out.append({"channel": "RGB"[c], "radius_mfp": a.mm * st, "albedo": sp[c] / st,
                         "bins": [[lo, hi, r[0][0], r[0][1]] for (lo, hi), r in rows]})
     else:
-        rows = transmitted(a.radius, a.albedo, a.photons, a.seed, a.edges)
+        rows = transmitted(a.radius, a.albedo, a.photons, a.seed, a.edges, a.eta)
         for k, alb in enumerate(a.albedo):
             out.append({"radius_mfp": a.radius, "albedo": alb,
                         "bins": [[lo, hi, r[k][0], r[k][1]] for (lo, hi), r in rows]})

@@ -3,13 +3,17 @@
 //!
 //! ```sh
 //! cargo run --release -p lucent-core --example sphere_table              # write the table
+//! cargo run --release -p lucent-core --example sphere_table -- --eta 1.3 # the dielectric one
 //! cargo run --release -p lucent-core --example sphere_table -- --check   # table vs fresh walks
 //! ```
 //!
+//! `--eta 1.3` walks forward with the dielectric boundary (`bssrdf::sphere_forward`,
+//! [`st::FORWARD_PATHS`] times the photons) into `sphere_table_eta1.3.bin`.
 //! `--scale F` multiplies every photon count (a quick try), `--out PATH` writes elsewhere.
 //! `--check N` walks `N` photons (default 100,000) at points between the grid's, in all three
 //! directions, and prints the committed table's error there against the walk's standard error.
 
+use lucent_core::bssrdf::sphere_forward::forward_exits;
 use lucent_core::bssrdf::sphere_table::{self as st, SphereTable, Walked};
 use lucent_core::bssrdf::sphere_walk::{transmitted, walk_exits};
 use rayon::prelude::*;
@@ -26,9 +30,11 @@ fn main() {
         return check(paths);
     }
     let scale: f64 = value("--scale").and_then(|v| v.parse().ok()).unwrap_or(1.0);
+    let eta: f64 = value("--eta").and_then(|v| v.parse().ok()).unwrap_or(1.0);
+    let name = if eta == 1.0 { "sphere_table.bin".to_string() } else { format!("sphere_table_eta{eta}.bin") };
     let out = value("--out")
         .cloned()
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/src/bssrdf/sphere_table.bin").to_string());
+        .unwrap_or_else(|| format!("{}/src/bssrdf/{name}", env!("CARGO_MANIFEST_DIR")));
     let (albedo, radius) = (st::grid_albedos(), st::grid_radii());
     let thetas: Vec<f64> = st::THETA_DEG.iter().map(|d| d.to_radians()).collect();
     let start = Instant::now();
@@ -39,8 +45,15 @@ fn main() {
     let walked: Vec<Walk> = points
         .par_iter()
         .map(|&(a, r)| {
-            let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);
-            let exits = walk_exits(radius[r], albedo[a], &thetas, paths, st::SEED + 64 * a as u64 + r as u64);
+            let seed = st::SEED + 64 * a as u64 + r as u64;
+            let exits = if eta == 1.0 {
+                let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);
+                (paths, walk_exits(radius[r], albedo[a], &thetas, paths, seed))
+            } else {
+                let paths = ((st::grid_paths(radius[r]) as f64 * st::FORWARD_PATHS * scale) as usize).max(64);
+                (paths, forward_exits(radius[r], albedo[a], eta, &thetas, paths, seed))
+            };
+            let (paths, exits) = exits;
             if r == 0 {
                 eprintln!("albedo {:.6}: {:.0} s", albedo[a], start.elapsed().as_secs_f64());
             }
@@ -62,10 +75,17 @@ fn main() {
         let (t, se) = (&exits.t, &exits.se);
         table.paths[a * radius.len() + r] = paths as u32;
         for k in 0..thetas.len() {
-            assert!(t[k] > 0.0, "albedo {} radius {} angle {}: nothing scored", albedo[a], radius[r], k);
             let i = table.index(a, r, k);
-            table.ln_t[i] = t[k].ln() as f32;
-            table.rel_se[i] = (se[k] / t[k]) as f32;
+            if t[k] > 0.0 {
+                table.ln_t[i] = t[k].ln() as f32;
+                table.rel_se[i] = (se[k] / t[k]) as f32;
+            } else {
+                // Nothing left through this band (the forward walk, dark thick spheres): far
+                // below what any image shows, and flagged as unmeasured.
+                assert!(eta != 1.0, "albedo {} radius {} angle {}: nothing scored", albedo[a], radius[r], k);
+                table.ln_t[i] = st::UNSCORED_LN_T;
+                table.rel_se[i] = 1.0;
+            }
             table.tilt[i] = exits.tilt[k] as f32;
             table.normal[i] = exits.normal[k] as f32;
         }

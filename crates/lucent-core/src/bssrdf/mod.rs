@@ -17,6 +17,7 @@ mod quadrature;
 pub mod slab;
 pub mod slab_oblique;
 pub mod slab_spread;
+pub mod sphere_forward;
 pub mod sphere_table;
 pub mod sphere_walk;
 pub mod tables;

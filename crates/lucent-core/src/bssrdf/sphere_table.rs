@@ -61,6 +61,21 @@ const MAGIC: &[u8; 8] = b"LSPHT002";
 /// The committed table, as the generator wrote it.
 static COMMITTED: &[u8] = include_bytes!("sphere_table.bin");
 
+/// The relative index of the second committed table, walked forward with a dielectric
+/// boundary (`super::sphere_forward`): the presets'.
+pub const DIELECTRIC_ETA: f64 = 1.3;
+
+/// The second committed table (index [`DIELECTRIC_ETA`]).
+static COMMITTED_DIELECTRIC: &[u8] = include_bytes!("sphere_table_eta1.3.bin");
+
+/// How many times [`grid_paths`] the forward walk takes: its estimate at the antipode (a band
+/// of 10 degrees) has about twice the reciprocal walk's error per photon.
+pub const FORWARD_PATHS: f64 = 2.0;
+
+/// `ln T` stored where the forward walk scored nothing (its relative error then 1): far below
+/// what any image shows.
+pub const UNSCORED_LN_T: f32 = -69.0;
+
 /// The radii of the grid (mean free paths), ascending.
 pub fn grid_radii() -> Vec<f64> {
     (0..RADIUS_STEPS)
@@ -188,9 +203,17 @@ impl Walked {
         static TABLE: OnceLock<Walked> = OnceLock::new();
         TABLE.get_or_init(|| Walked::decode(COMMITTED).expect("sphere_table.bin is a walked table"))
     }
+
+    /// The table committed for the dielectric boundary of index [`DIELECTRIC_ETA`].
+    pub fn committed_dielectric() -> &'static Walked {
+        static TABLE: OnceLock<Walked> = OnceLock::new();
+        TABLE.get_or_init(|| {
+            Walked::decode(COMMITTED_DIELECTRIC).expect("sphere_table_eta1.3.bin is a walked table")
+        })
+    }
 }
 
-/// `T(R, θ)` of a sphere for one albedo, from the committed table (`η = 1`): what
+/// `T(R, θ)` of a sphere for one albedo and index, from the committed tables: what
 /// [`crate::solver::transmission`] reads for curved parts.
 #[derive(Clone, Debug)]
 pub struct SphereTable {
@@ -213,10 +236,32 @@ pub struct SphereTable {
 }
 
 impl SphereTable {
-    /// The table for albedo `rho` (0..=1; clamped), interpolated over the committed albedos
-    /// (microseconds; nothing is walked).
+    /// The table for albedo `rho` (0..=1; clamped) at index 1, interpolated over the committed
+    /// albedos (microseconds; nothing is walked).
     pub fn for_albedo(rho: f64) -> Self {
         Self::from_walked(Walked::committed(), rho)
+    }
+
+    /// The table for albedo `rho` (0..=1) and relative index `eta` (1..=3): the index-1 table,
+    /// the dielectric one at [`DIELECTRIC_ETA`], linear in `η` between them (in the
+    /// interpolated quantities, so geometric in `T`); above it the dielectric table's, which
+    /// under-reads: a higher index traps more light inside and sends more to the far side.
+    pub fn for_material(rho: f64, eta: f64) -> Self {
+        let w = ((eta - 1.0) / (DIELECTRIC_ETA - 1.0)).clamp(0.0, 1.0);
+        if w <= 0.0 || eta.is_nan() {
+            return Self::for_albedo(rho);
+        }
+        let dielectric = Self::from_walked(Walked::committed_dielectric(), rho);
+        if w >= 1.0 {
+            return dielectric;
+        }
+        let mut table = Self::for_albedo(rho);
+        let blend = |a: &mut Vec<f64>, b: &[f64]| a.iter_mut().zip(b).for_each(|(x, y)| *x += w * (y - *x));
+        blend(&mut table.g, &dielectric.g);
+        blend(&mut table.tilt, &dielectric.tilt);
+        blend(&mut table.normal, &dielectric.normal);
+        table.rel_se.iter_mut().zip(&dielectric.rel_se).for_each(|(x, y)| *x = x.max(*y));
+        table
     }
 
     /// The table for albedo `rho` (0..=1; clamped) from `walked`.

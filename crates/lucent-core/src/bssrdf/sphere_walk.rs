@@ -106,27 +106,83 @@ pub fn walk_exits(radius: f64, rho: f64, thetas: &[f64], paths: usize, seed: u64
 
 /// Distance from `pos` (inside or on a sphere of `radius` about the origin) to its boundary
 /// along the unit `dir`.
-fn to_boundary(pos: DVec3, dir: DVec3, radius: f64) -> f64 {
+pub(crate) fn to_boundary(pos: DVec3, dir: DVec3, radius: f64) -> f64 {
     let b = pos.dot(dir);
     -b + (b * b - (pos.dot(pos) - radius * radius)).max(0.0).sqrt()
 }
 
+/// A uniformly random unit direction.
+pub(crate) fn isotropic(rng: &mut Pcg64Mcg) -> DVec3 {
+    let z = 1.0 - 2.0 * rng.random::<f64>();
+    let a = 2.0 * PI * rng.random::<f64>();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    DVec3::new(r * a.cos(), r * a.sin(), z)
+}
+
+/// Importance splitting across a sphere: it is cut into at most [`LEVELS`] slices across
+/// `axis`, each at least three mean free paths thick, numbered up along `axis` (toward where the
+/// walk scores); a photon entering a slice further up is split in two per slice crossed (each
+/// half the weight), one moving down plays roulette (survives with half the chance per slice,
+/// twice the weight). The expected score is unchanged.
+pub(crate) struct Slices {
+    axis: DVec3,
+    radius: f64,
+    levels: i32,
+}
+
+impl Slices {
+    pub(crate) fn new(radius: f64, axis: DVec3) -> Self {
+        Slices { axis, radius, levels: ((2.0 * radius / 3.0) as i32).clamp(1, LEVELS) }
+    }
+
+    /// The slice holding `p`.
+    pub(crate) fn level_of(&self, p: DVec3) -> i32 {
+        (((p.dot(self.axis) + self.radius) / (2.0 * self.radius) * self.levels as f64) as i32)
+            .clamp(0, self.levels - 1)
+    }
+
+    /// A photon of `weight` that was in slice `level` collided at `pos`: moves it to the slice
+    /// there and returns how many copies it becomes (itself included; each of `weight`, now
+    /// divided among them), or `None` where roulette ended it.
+    pub(crate) fn split(
+        &self,
+        pos: DVec3,
+        level: &mut i32,
+        weight: &mut f64,
+        rng: &mut Pcg64Mcg,
+    ) -> Option<u32> {
+        let now = self.level_of(pos);
+        let mut copies = 1;
+        if now > *level {
+            copies = 1u32 << (now - *level);
+            *weight /= copies as f64;
+        } else if now < *level {
+            let keep = 1.0 / (1u32 << (*level - now)) as f64;
+            if rng.random::<f64>() >= keep {
+                return None;
+            }
+            *weight /= keep;
+        }
+        *level = now;
+        Some(copies)
+    }
+
+    /// How far splitting has lowered the weight of a photon in slice `level` (its roulette
+    /// compares the weight times this).
+    pub(crate) fn share(&self, level: i32) -> f64 {
+        (1u32 << level) as f64
+    }
+}
+
 /// One photon from the pole along `dir`: adds each collision's score toward each of `toward`.
 ///
-/// Few photons from the antipode reach the lit side, where they score; so the sphere is cut
-/// into at most [`LEVELS`] slices across the first direction of `toward`, each at least three
-/// mean free paths thick, and a photon entering a slice nearer the light is split in two per
-/// slice crossed (each half the weight), one moving away plays roulette (survives with half
-/// the chance per slice, twice the weight): splitting by importance, which leaves the expected
-/// score unchanged.
+/// Few photons from the antipode reach the lit side, where they score; so they are split as
+/// they move toward the light ([`Slices`] across the first direction of `toward`).
 fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], rng: &mut Pcg64Mcg) {
-    let axis = toward[0];
-    let levels = ((2.0 * radius / 3.0) as i32).clamp(1, LEVELS);
-    let level_of =
-        |p: DVec3| (((p.dot(axis) + radius) / (2.0 * radius) * levels as f64) as i32).clamp(0, levels - 1);
+    let slices = Slices::new(radius, toward[0]);
     // Photons to follow: position, direction, weight, scatterings, slice.
     let start = DVec3::new(0.0, 0.0, radius);
-    let mut stack = vec![(start, dir, 1.0, 0u32, level_of(start))];
+    let mut stack = vec![(start, dir, 1.0, 0u32, slices.level_of(start))];
     while let Some((mut pos, mut dir, mut weight, mut n, mut level)) = stack.pop() {
         for _ in 0..MAX_STEPS {
             let step = -(1.0 - rng.random::<f64>()).ln();
@@ -141,30 +197,17 @@ fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], 
                     *s += weight * (-to_boundary(pos, *u, radius)).exp() / 4.0;
                 }
             }
-            let z = 1.0 - 2.0 * rng.random::<f64>();
-            let a = 2.0 * PI * rng.random::<f64>();
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            dir = DVec3::new(r * a.cos(), r * a.sin(), z);
-            let now = level_of(pos);
-            if now > level {
-                let copies = 1u32 << (now - level);
-                weight /= copies as f64;
-                for _ in 1..copies {
-                    let z = 1.0 - 2.0 * rng.random::<f64>();
-                    let a = 2.0 * PI * rng.random::<f64>();
-                    let r = (1.0 - z * z).max(0.0).sqrt();
-                    stack.push((pos, DVec3::new(r * a.cos(), r * a.sin(), z), weight, n, now));
+            dir = isotropic(rng);
+            match slices.split(pos, &mut level, &mut weight, rng) {
+                Some(copies) => {
+                    for _ in 1..copies {
+                        stack.push((pos, isotropic(rng), weight, n, level));
+                    }
                 }
-            } else if now < level {
-                let keep = 1.0 / (1u32 << (level - now)) as f64;
-                if rng.random::<f64>() >= keep {
-                    break;
-                }
-                weight /= keep;
+                None => break,
             }
-            level = now;
             // Roulette against the slice's own weight (splitting halves it by design).
-            if weight * ((1u32 << level) as f64) < ROULETTE {
+            if weight * slices.share(level) < ROULETTE {
                 if rng.random::<f64>() < 0.5 {
                     break;
                 }

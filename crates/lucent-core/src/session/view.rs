@@ -153,9 +153,14 @@ impl View {
                 let mut factors = chord.vertex_factors(rays, means);
                 let transmitted = &self.transmitted;
                 if let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) {
-                    let lobe = &f.profile.exit_lobe;
-                    factors =
-                        transmitted_exit::exit_factors(cross, &f.mesh, transmitted, rays, lobe, &factors);
+                    factors = transmitted_exit::exit_factors(
+                        cross,
+                        &f.mesh,
+                        transmitted,
+                        rays,
+                        &f.profile,
+                        &factors,
+                    );
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

@@ -7,7 +7,8 @@
 //! lit from behind read 16% dark against the path tracer with `B` right.
 
 use crate::Rgb;
-use crate::bssrdf::ExitLobe;
+use crate::bssrdf::Profile;
+use crate::bssrdf::fresnel_transmittance;
 use crate::mesh::Mesh;
 use crate::shading::single_scattering::ViewRay;
 use crate::solver::transmission::{CrossBody, Tilt};
@@ -45,15 +46,18 @@ pub(crate) struct Transmitted {
 /// first-moment lobe `1 + 4 μ̄_t (ω_o · t)`: light that leaves at grazing angles is tilted less
 /// (spheres of 2.4 to 15 mean free paths: rms log error of the radiance in 16-32 direction
 /// cells 0.08-0.30 against 0.12-0.43, and 0.22-0.63 for no tilt). The moments are
-/// area-weighted to the vertices by the share, like `B`.
+/// area-weighted to the vertices by the share, like `B`. At `η ≠ 1` the moments are the
+/// dielectric walk's, of the light refracted out, and the lobe is over the mesh pass's own,
+/// `F_t(η, μ_o) T(μ_o) / c` (`bssrdf::exit`), which at `η = 1` is `T(μ_o)`.
 pub(crate) fn exit_factors(
     cross: &CrossBody,
     mesh: &Mesh,
     transmitted: &Transmitted,
     rays: &[Option<ViewRay>],
-    lobe: &ExitLobe,
+    profile: &Profile,
     chord: &[Rgb],
 ) -> Vec<Rgb> {
+    let (lobe, eta, inv_c) = (&profile.exit_lobe, profile.eta, profile.exit_normalization());
     let Transmitted { face_b, sent, tilts } = transmitted;
     let b_v = mesh.face_to_vertex(face_b);
     let sent_v = mesh.face_to_vertex(sent);
@@ -91,9 +95,17 @@ pub(crate) fn exit_factors(
                 return c;
             }
             let t = t_v[v].x / sum_v[v].x;
-            let l = lobe.at(ray.mu_o).to_array();
-            // The light leaves along -w_t (index 1, where the sphere's share is modelled).
-            let w_o = -ray.w_t;
+            let base =
+                if eta == 1.0 { 1.0 } else { (fresnel_transmittance(ray.mu_o as f64, eta) * inv_c) as f32 };
+            let l = (lobe.at(ray.mu_o) * base).to_array();
+            // The light reaches the surface along -w_t and leaves refracted: its tangential part
+            // grows by η (Snell), its normal cosine is μ_o.
+            let w_in = -ray.w_t;
+            let w_o = if eta == 1.0 {
+                w_in
+            } else {
+                (w_in - w_in.dot(ray.normal) * ray.normal) * eta as f32 + ray.normal * ray.mu_o
+            };
             let along =
                 tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
             let round = round_v.get(v).copied().unwrap_or(Rgb::ZERO);

@@ -37,7 +37,9 @@
 //! unit beam power: marble 2 cm 0.3765 slab, 0.3784 now, walk 0.3792; ketchup 2 cm 0.0977,
 //! 0.1058, walk 0.1010). Uniform light (head-on or at 2/3) is left alone: the term adds
 //! nothing there. Cosines are clamped to the table's angles (beyond 87 degrees the term reads
-//! less light than `E_0`). At `η = 1` only (the walk's boundary); no constant was chosen on any case.
+//! less light than `E_0`). At `η ≠ 1` `T_sph` is the dielectric sphere's (walked forward,
+//! [`crate::bssrdf::sphere_forward`]): per unit beam irradiance outside, so divided by `c(1)`,
+//! the Fresnel factor the carried light already holds. No constant was chosen on any case.
 
 use crate::Rgb;
 use crate::bssrdf::sphere_table::{SphereTable, THETA_DEG, WALK_R};
@@ -90,19 +92,19 @@ pub(crate) struct Row {
 impl SphereTerm {
     /// The term for `profile` over the thicknesses a body may have (a hundredth of the
     /// shortest mean free path to thirty of the longest diffusion length, as
-    /// [`super::finite_body`]'s slab table); `None` where the index is not 1 (not modelled).
-    pub(crate) fn new(profile: &Profile) -> Option<Self> {
-        if profile.eta != 1.0 {
-            return None;
-        }
+    /// [`super::finite_body`]'s slab table).
+    pub(crate) fn new(profile: &Profile) -> Self {
         let tables: [SphereTable; 3] =
-            std::array::from_fn(|c| SphereTable::for_albedo(profile.alpha_prime[c]));
+            std::array::from_fn(|c| SphereTable::for_material(profile.alpha_prime[c], profile.eta));
         let exit_cos = THETA_DEG.map(|d| d.to_radians().cos());
         let lo = 0.01 / profile.sigma_t.iter().copied().fold(0.0, f64::max).max(1e-12);
         let hi = (30.0 / profile.sigma_tr.iter().copied().fold(f64::MAX, f64::min).max(1e-12)).max(2.0 * lo);
         let ln_step = (hi / lo).ln() / (STEPS - 1) as f64;
         let entry = &profile.entry;
         let carried = |mu: f64| entry.at(mu as f32).to_array().map(f64::from);
+        // The walk's `T` is per unit beam irradiance outside; the carried light the term scales
+        // already holds the entry's Fresnel factor at the lit pole, `c(1)` (1 at index 1).
+        let head_on = carried(1.0);
         // Beyond the walked radii `T` keeps its ratio to what the profile gathers at the largest
         // (per channel and angle): a large sphere is locally a half-space, whose light the
         // profile carries, and toward the terminator the light comes the short way from the
@@ -122,11 +124,12 @@ impl SphereTerm {
                     let theta = THETA_DEG[j].to_radians();
                     std::array::from_fn(|c| {
                         let radius = 0.5 * profile.sigma_t[c] * t;
-                        if radius <= WALK_R || walked_x[j][c] <= 0.0 {
+                        let t = if radius <= WALK_R || walked_x[j][c] <= 0.0 {
                             tables[c].at_angle(radius, theta)
                         } else {
                             tables[c].at_angle(WALK_R, theta) * x[j][c] / walked_x[j][c]
-                        }
+                        };
+                        if head_on[c] > 0.0 { t / head_on[c] } else { 0.0 }
                     })
                 });
                 // The exit's moments per angle and channel, at each channel's radius.
@@ -140,7 +143,7 @@ impl SphereTerm {
                 (exact, x, moment(SphereTable::tilt_at), moment(SphereTable::normal_at))
             })
             .collect();
-        Some(SphereTerm {
+        SphereTerm {
             ln_t0: lo.ln(),
             ln_step,
             exact: rows.iter().map(|r| r.0).collect(),
@@ -149,8 +152,8 @@ impl SphereTerm {
             normal: rows.iter().map(|r| r.3).collect(),
             exit_cos,
             entry: entry.clone(),
-            head_on: carried(1.0),
-        })
+            head_on,
+        }
     }
 
     /// Where `thickness` (mesh units) lies in the tables.
@@ -323,13 +326,13 @@ mod tests {
     }
 
     /// The gathered share falls as the sphere grows; the table's transmittance meets the walk
-    /// at 2 cm of marble; at an index other than 1 there is no term.
+    /// at 2 cm of marble; at the presets' index it is larger.
     #[test]
     fn the_share_falls_with_the_sphere_and_the_term_is_exact_at_the_antipode() {
         let mut m = Material::by_name("marble").unwrap();
         m.eta = 1.0;
         let p = Profile::of_kind(&m, 10.0, ProfileKind::Pbd, true);
-        let term = SphereTerm::new(&p).unwrap();
+        let term = SphereTerm::new(&p);
         let head_on = |t: f32| term.at(term.row(t), Rgb::ONE);
         let (thin, thick) = (head_on(0.5).1, head_on(4.0).1);
         for c in 0..3 {
@@ -342,9 +345,18 @@ mod tests {
         for (c, want) in [0.0036, 0.0019, 0.00089].into_iter().enumerate() {
             assert!((exact[c] / want - 1.0).abs() < 0.15, "channel {c}: {exact:?}");
         }
+        // The presets' dielectric boundary traps light inside and sends more of it across (the
+        // forward walk at index 1.3: 1.8 to 2.2 times at 5-20 mean free paths).
         let dielectric =
             Profile::of_kind(&Material::by_name("marble").unwrap(), 10.0, ProfileKind::Pbd, true);
-        assert!(SphereTerm::new(&dielectric).is_none());
+        let trapped = SphereTerm::new(&dielectric);
+        let more = trapped.at(trapped.row(2.0), Rgb::ONE).0;
+        for c in 0..3 {
+            assert!(
+                more[c] > 1.4 * exact[c] && more[c] < 3.0 * exact[c],
+                "channel {c}: {more:?} vs {exact:?}"
+            );
+        }
     }
 
     /// Under uniform light (the same carried irradiance and cosine at every face, head-on or
@@ -352,11 +364,14 @@ mod tests {
     /// and thickness.
     #[test]
     fn the_cap_leaves_uniform_light_alone() {
-        for name in ["marble", "skimmilk", "ketchup", "skin1", "wholemilk", "apple", "cream"] {
+        for (name, eta) in ["marble", "skimmilk", "ketchup", "skin1", "wholemilk", "apple", "cream"]
+            .into_iter()
+            .flat_map(|n| [(n, 1.0), (n, 1.3)])
+        {
             let mut m = Material::by_name(name).unwrap();
-            m.eta = 1.0;
+            m.eta = eta;
             let p = Profile::of_kind(&m, 10.0, ProfileKind::Pbd, true);
-            let term = SphereTerm::new(&p).unwrap();
+            let term = SphereTerm::new(&p);
             for t in [0.05f32, 0.2, 1.0, 3.0, 10.0] {
                 for gain in [0.8f32, 1.0, 1.3] {
                     for mu in [1.0f32, 2.0 / 3.0] {

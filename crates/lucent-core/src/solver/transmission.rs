@@ -184,7 +184,7 @@ impl CrossBody {
         mode: Transmission,
     ) -> Self {
         let tables: [_; 3] = std::array::from_fn(|c| SlabTable::cached(profile.alpha_prime[c], profile.eta));
-        let sphere = if mode == Transmission::Curved { fb.sphere_term(profile) } else { None };
+        let sphere = if mode == Transmission::Curved { Some(fb.sphere_term(profile)) } else { None };
         let normals = if sphere.is_some() { mesh.vertex_normals() } else { Vec::new() };
         type Face = (u32, Rgb, Rgb, f32, Rgb, (Row, f32, Rgb, f32));
         let rows: Vec<Face> = (0..mesh.triangles.len())

@@ -92,7 +92,7 @@ pub struct FiniteBody {
 
 /// A [`SphereTerm`] made once per [`FiniteBody`]; derived data, so it takes no part in equality.
 #[derive(Clone, Debug, Default)]
-struct SphereCache(OnceLock<Option<Arc<SphereTerm>>>);
+struct SphereCache(OnceLock<Arc<SphereTerm>>);
 
 impl PartialEq for SphereCache {
     fn eq(&self, _: &Self) -> bool {
@@ -151,9 +151,9 @@ impl FiniteBody {
     }
 
     /// The sphere's share of the cross-body term for `profile`, the profile this was made for
-    /// (`None` where it is not modelled; [`SphereTerm::new`]), made on first use.
-    pub(crate) fn sphere_term(&self, profile: &Profile) -> Option<Arc<SphereTerm>> {
-        self.sphere.0.get_or_init(|| SphereTerm::new(profile).map(Arc::new)).clone()
+    /// ([`SphereTerm::new`]), made on first use.
+    pub(crate) fn sphere_term(&self, profile: &Profile) -> Arc<SphereTerm> {
+        self.sphere.0.get_or_init(|| Arc::new(SphereTerm::new(profile))).clone()
     }
 
     /// The same table applying only `terms` beside the sphere's gain.
