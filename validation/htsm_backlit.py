@@ -3,7 +3,10 @@
 bands of pixels, by (a) the distance of the pixel's surface point to the light-view silhouette
 and (b) the chord the light crosses to reach it (along the light's direction through the body),
 both in millimetres, with the Monte Carlo noise of each band (|a - b| / (a + b) of the two
-reference halves' band sums).
+reference halves' band sums). A chord of 0 is a point the light reaches (lit from the side
+the camera sees); it is its own band. Where the homogeneous suite renders the same scene's
+single scattering (`SINGLE`, its `.single.exr`), each band also gives that part's share of
+the reference: what lucent's view-ray single scattering should add where the light crossed.
 
     python3 validation/htsm_validation.py compare                     # renders into target/htsm_validation
     python3 validation/htsm_backlit.py htsm_bunny_uniform_5cm_back [MODEL] [RENDER_DIR]
@@ -22,6 +25,10 @@ import htsm_validation as hv
 import lucent_validation as lv
 
 GRID = 256
+# Homogeneous-suite cases with the same mesh, light, camera and base material whose `.single.exr`
+# (Mitsuba, max_depth 2) is the single scattering of an HTSM case (its sigma_a is 0.005 mm^-1
+# lower: the uniform case's density adds it; single scattering over a few mm barely sees it).
+SINGLE = {"htsm_bunny_uniform_5cm_back": "bunny_skimmilk_5cm_back", "htsm_bunny_uniform_5cm_front": "bunny_skimmilk_5cm"}
 
 
 def light_view_edges(mi, scene, c, radius, u, v, light):
@@ -57,6 +64,8 @@ def samples(name, model, render_dir):
     (ei, ej), step = light_view_edges(mi, scene, c, radius, u, v, light)
     ours = lv.read_exr(os.path.join(render_dir, f"{name}.{model}.exr"))
     a, b = (lv.read_exr(os.path.join(hv.REFS, f"{name}.{k}.exr"))[..., :3] for k in ("half_a", "half_b"))
+    single = (lv.read_exr(os.path.join(hv.REFS, f"{SINGLE[name]}.single.exr"))[..., :3]
+              if name in SINGLE else None)
     rows = []
     for y in range(h):
         for x in range(w):
@@ -71,20 +80,27 @@ def samples(name, model, render_dir):
             dist = float(np.sqrt((ei + 0.5 - gi) ** 2 + (ej + 0.5 - gj) ** 2).min()) * step
             back = scene.ray_intersect(si.spawn_ray(mi.Vector3f(*(-light))))
             chord = float(np.linalg.norm(np.array(back.p) - p)) if back.is_valid() else 0.0
-            rows.append((dist, chord, *ours[y, x, :3], *(0.5 * (a[y, x] + b[y, x])), *a[y, x], *b[y, x]))
+            row = (dist, chord, *ours[y, x, :3], *(0.5 * (a[y, x] + b[y, x])), *a[y, x], *b[y, x])
+            rows.append(row + (tuple(single[y, x]) if single is not None else ()))
     return np.array(rows)
 
 
 def table(name, model, r, col, edges, label):
-    print(f"{name} ({model}) by {label}: band sums lucent / reference R/G/B, noise R/G/B")
+    print(f"{name} ({model}) by {label}: band sums lucent / reference R/G/B, noise R/G/B"
+          + (", single-scattering share of the reference R/G/B" if r.shape[1] > 14 else ""))
     for lo, hi in zip(edges[:-1], edges[1:]):
         m = (r[:, col] >= lo) & (r[:, col] < hi)
         if m.sum() < 15:
             continue
         ours, ref, a, b = (r[m, k:k + 3].sum(0) for k in (2, 5, 8, 11))
         q, noise = ours / ref, np.abs(a - b) / (a + b)
-        print(f"  {lo:5.1f}-{hi:<5.1f} pixels {m.sum():5d}  ratio {q[0]:.2f}/{q[1]:.2f}/{q[2]:.2f}"
-              f"  noise {noise[0]:.3f}/{noise[1]:.3f}/{noise[2]:.3f}")
+        band = "lit (0)    " if hi <= 1e-3 else f"{lo:5.1f}-{hi:<5.1f}"
+        line = (f"  {band} pixels {m.sum():5d}  ratio {q[0]:.2f}/{q[1]:.2f}/{q[2]:.2f}"
+                f"  noise {noise[0]:.3f}/{noise[1]:.3f}/{noise[2]:.3f}")
+        if r.shape[1] > 14:
+            single = r[m, 14:17].sum(0) / ref
+            line += f"  single {single[0]:.2f}/{single[1]:.2f}/{single[2]:.2f}"
+        print(line)
 
 
 def main():
@@ -93,7 +109,7 @@ def main():
     render_dir = sys.argv[3] if len(sys.argv) > 3 else os.path.join(lv.ROOT, "target", "htsm_validation")
     r = samples(name, model, render_dir)
     table(name, model, r, 0, [0, 1, 2, 4, 7, 11, 16, 100], "distance to the light-view silhouette (mm)")
-    table(name, model, r, 1, [0, 5, 10, 15, 20, 25, 30, 40, 100], "chord to the light through the body (mm)")
+    table(name, model, r, 1, [0, 1e-3, 2.5, 5, 10, 15, 20, 25, 30, 40, 100], "chord to the light through the body (mm)")
 
 
 if __name__ == "__main__":

@@ -31,10 +31,12 @@
 //!   single scattering included ([`DiffusionUniforms::albedo`]).
 //! * **A point the light does not reach**: its samples' light crossed the body. The kernel's
 //!   source is at the depth `h` the sample lies below the visible point's tangent plane; the
-//!   total is the multiple-scattering transmittance of a slab `h` thick (diffusion optical
-//!   depth `h` times the ray's mean `sigma_tr`), from lucent-core's exact one-dimensional transport
-//!   (`lucent_core::bssrdf::slab::SlabTable`, normal incidence; [`DiffusionUniforms::slab`]),
-//!   in place of the straight ray's `exp(-sigma_tr D)`.
+//!   total is the multiple-scattering transmittance of a slab at the ray cast's diffusion
+//!   optical depth (the ray's length times its mean `sigma_tr`), from lucent-core's exact
+//!   one-dimensional transport (`lucent_core::bssrdf::slab::SlabTable`, normal incidence;
+//!   [`DiffusionUniforms::slab`]), in place of the straight ray's `exp(-sigma_tr D)`. The
+//!   table leaves single scattering out (lucent gives it to the view ray); the camera pass adds
+//!   the view ray's own (`view_single_scattering` in `htsm_render.wgsl`, docs/htsm.md).
 //!
 //! Both tables are made at [`DENSITY_LEVELS`] densities and interpolated.
 

@@ -92,11 +92,19 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
     // to keep the kernel's middle inside its rings (ring 2 at h_0): the samples then see how
     // far the lit surface really extends (htsm/diffusion.rs).
     var spread = 1.0;
+    // The chord from this point back along the light to the lit surface (object units).
+    var chord = 0.0;
     if (diffusion && !lit && ref_tc.a > 1e-3) {
-        let h_0 = dot(tc_to_object(ref_tc.xyz / ref_tc.a - tc), -n);
+        let to_lit = tc_to_object(ref_tc.xyz / ref_tc.a - tc);
+        let h_0 = dot(to_lit, -n);
+        chord = length(to_lit);
         spread = max(1.0, 0.25 * h_0 / g.rings.x);
     }
     var transport = vec3<f32>(0.0);
+    // The mean density along the centre sample's ray (the chord's medium) and its first step's
+    // (next to this point: the view ray's medium).
+    var rho_chord = 0.0;
+    var rho_view = 0.0;
     for (var i = 0; i < samples; i = i + 1) {
         let s = pattern(i);
         let radius_texels = light.flags.x * spread;
@@ -108,7 +116,11 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         }
         let suv = uv + offset;
         let irr = textureSampleLevel(ref_irradiance, ref_sampler, suv, level);
-        let tcc = textureSampleLevel(ref_texcoord, ref_sampler, suv, level);
+        // The centre sample (level 0 at uv) is the texel the lit test read.
+        var tcc = ref_tc;
+        if (i != 0) {
+            tcc = textureSampleLevel(ref_texcoord, ref_sampler, suv, level);
+        }
         // No lit surface under this sample (outside the silhouette): it brings no light.
         if (tcc.a < 1e-3) {
             continue;
@@ -139,6 +151,9 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         for (var j = 0; j < steps; j = j + 1) {
             let t = (f32(j) + 0.5) / f32(steps);
             let rho = textureSampleLevel(density, density_sampler, tc + dir * t, lod).r;
+            if (i == 0 && j == 0) {
+                rho_view = rho;
+            }
             let a = a0 + rho * g.density_absorption.rgb;
             sum = sum + sqrt(3.0 * a * (a + s0));
             rho_sum = rho_sum + rho;
@@ -152,6 +167,9 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         var cos_theta = 1.0;
         if (d_i > 1e-6) {
             cos_theta = dot(ray / d_i, -n);
+        }
+        if (i == 0) {
+            rho_chord = rho_sum / f32(steps);
         }
         if (diffusion) {
             // htsm/diffusion.rs: the kernel of the medium along the ray (its mean density, its
@@ -191,6 +209,11 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
     }
     // Exitant radiance of a Lambertian exit: irradiance / pi.
     var radiance = transport / 3.14159265;
+    // The slab's table holds multiple scattering only: where the light crossed the body, the
+    // light scattered once along the view ray comes on top (the lit side's albedo includes it).
+    if (diffusion && !lit && ref_tc.a > 1e-3) {
+        radiance = radiance + view_single_scattering(in.world, in.rest, chord, rho_chord, rho_view, l);
+    }
 
     // Surface shading where the surface faces the light and is not occluded: the lit surface
     // seen by the light at this point's light-space position must be this point itself.
@@ -210,6 +233,63 @@ fn fs_camera(in: CameraVarying, @builtin(front_facing) front: bool) -> @location
         radiance = radiance + environment_surface(in.world, n);
     }
     return vec4<f32>(radiance, 1.0);
+}
+
+// Radiance scattered once along the view ray where the light crossed the body (the slab's
+// transmittance counts multiple scattering only): L = E / (4 pi) integral sigma_s e^(-f(s)) ds
+// with f(s) = sigma_t s + sigma_t c(s), over the depth s (object units) along the view ray,
+// c(s) the chord from the point at depth s back along the light to the lit surface (the
+// reference image's texel above it), E the light's irradiance across its beam, isotropic
+// scattering (the medium's sigma_s = sigma_s'). c(0) = c_0, the centre sample's ray; c is read
+// at depths of 0.5 and 2 mean free paths and taken linear between and beyond them (f is then
+// linear and each piece's integral exact; a slab's chords are linear). The view ray's medium is
+// the density next to the point (rho_view, the centre ray's first step), the chord's the
+// centre ray's mean (rho_chord). Chords are rest-pose lengths (a deformation's stretch is not
+// in them). Unrefracted, no Fresnel factors: exact at eta = 1 (the validation's), an
+// approximation otherwise.
+fn view_single_scattering(world: vec3<f32>, rest: vec3<f32>, c_0: f32, rho_chord: f32, rho_view: f32, l: LightAt) -> vec3<f32> {
+    let t_view = g.sigma.rgb + rho_view * g.density_absorption.rgb + g.scatter.rgb;
+    let t_chord = g.sigma.rgb + rho_chord * g.density_absorption.rgb + g.scatter.rgb;
+    let t_mean = (t_view.x + t_view.y + t_view.z) / 3.0;
+    // Into the body along the view ray, mesh units per object unit of depth.
+    let into = normalize(world - g.eye.xyz) / g.box_size.w;
+    var s_a = 0.0;
+    var c_a = c_0;
+    var sum = vec3<f32>(0.0);
+    for (var k = 0; k < 2; k = k + 1) {
+        let s_b = select(2.0, 0.5, k == 0) / t_mean;
+        let p = world + into * s_b;
+        let lit_tc = textureSampleLevel(ref_texcoord, ref_sampler, light_uv(p), 0.0);
+        if (lit_tc.a < 0.5) {
+            // No lit surface above this depth: the view ray has left the body.
+            return l.irradiance * g.scatter.rgb * sum / (4.0 * 3.14159265);
+        }
+        let c_b = length(tc_to_object(lit_tc.xyz / lit_tc.a - texcoord_of(rest + into * s_b)));
+        sum = sum + exp_segment(t_view * s_a + t_chord * c_a, t_view * s_b + t_chord * c_b, s_b - s_a);
+        if (k == 1) {
+            // Beyond the last depth the chord goes on linearly: where it shrinks, the view
+            // ray leaves through the lit face when it reaches zero (exact for a slab).
+            let dc = (c_b - c_a) / (s_b - s_a);
+            let f_b = t_view * s_b + t_chord * c_b;
+            if (dc < 0.0) {
+                let len = c_b / -dc;
+                sum = sum + exp_segment(f_b, f_b + t_view * len - t_chord * c_b, len);
+            } else {
+                sum = sum + exp(-f_b) / (t_view + t_chord * dc);
+            }
+        }
+        s_a = s_b;
+        c_a = c_b;
+    }
+    return l.irradiance * g.scatter.rgb * sum / (4.0 * 3.14159265);
+}
+
+// The integral of e^(-f) over a segment `len` long on which f goes linearly from f_a to f_b.
+fn exp_segment(f_a: vec3<f32>, f_b: vec3<f32>, len: f32) -> vec3<f32> {
+    let df = f_b - f_a;
+    let flat = abs(df) < vec3<f32>(1e-4);
+    let mean = (exp(-f_a) - exp(-f_b)) / select(df, vec3<f32>(1.0), flat);
+    return len * select(mean, exp(-f_a), flat);
 }
 
 // The phase function f(theta_i) of §4.3.4 from its table (the thesis and Beer-Lambert models
