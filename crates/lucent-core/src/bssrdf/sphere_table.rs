@@ -24,7 +24,10 @@
 //! the largest it falls as the slab's slowest mode over the diameter, `e^{-2 κ R}`.
 //!
 //! Made by `cargo run --release -p lucent-core --example sphere_table` (docs/transmission.md
-//! says how long it took and how the table meets fresh walks).
+//! says how long it took and how the table meets fresh walks). A second table on the same grid,
+//! `sphere_table_eta1.3.bin` (`--eta 1.3`), holds the same quantities for a smooth dielectric
+//! boundary of the presets' index, walked forward ([`super::sphere_forward`]); both are read by
+//! [`SphereTable::for_material`].
 
 use super::slab::asymptotic_decay;
 pub use super::sphere_walk::WALK_R;
