@@ -306,6 +306,56 @@ fn light_that_crossed_a_sphere_leaves_tilted_on() {
     assert!(brighter > 1.15 && brighter < 1.6, "from beyond: {brighter}");
 }
 
+/// With the split view terms (the viewer's), a camera move draws the transmitted light's exit
+/// lobe as a fresh per-eye solve does: a skim-milk sphere lit from behind, at index 1 and at
+/// the presets' 1.3, seen from beyond after a move, vertex for vertex.
+#[test]
+fn a_split_camera_move_draws_the_light_that_crossed() {
+    use crate::shading::view_basis::ViewTerms;
+    let mesh = generate::icosphere(3);
+    let light = vec![SceneLight::from(Light::Directional {
+        direction: Vec3::new(0.3, -0.3, 0.9).normalize(),
+        irradiance: Vec3::ONE,
+    })];
+    let (eye_a, eye_b) = (Vec3::new(0.0, 1.0, 5.0), Vec3::new(2.5, 1.0, 4.5));
+    for eta in [1.0, 1.3] {
+        let mut milk = Material::by_name("skimmilk").unwrap();
+        milk.eta = eta;
+        let session = || {
+            let mut s = FrameSession::new(
+                mesh.clone(),
+                None,
+                Transport::new(milk.clone(), 0.02),
+                FrameSettings::default(),
+            );
+            s.set_lights(light.clone());
+            s
+        };
+        let mut split = session();
+        split.set_view_terms(ViewTerms::Split);
+        split.set_eye(Some(eye_a));
+        split.solve();
+        split.set_eye(Some(eye_b));
+        let moved = split.solve().vertex_radiance.clone();
+        let mut fresh = session();
+        fresh.set_eye(Some(eye_b));
+        let want = fresh.solve().vertex_radiance.clone();
+        let mut err: Vec<f32> = mesh
+            .positions
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.normalize().dot((eye_b - **p).normalize()) > 0.2 && p.z > 0.0)
+            .map(|(v, _)| (moved[v].element_sum() / want[v].element_sum() - 1.0).abs())
+            .collect();
+        err.sort_by(f32::total_cmp);
+        let (median, p90) = (err[err.len() / 2], err[err.len() * 9 / 10]);
+        println!("eta {eta}: {} vertices on the far side, median {median:.4}, 90th {p90:.4}", err.len());
+        // Measured 0.0000 and at most 0.0004; without the exit lobe on the split the far side
+        // read 16% off at the median and 24% at the 90th percentile (index 1).
+        assert!(median < 0.005 && p90 < 0.03, "eta {eta}: median {median}, 90th {p90}");
+    }
+}
+
 /// The validation's directional key light.
 fn validation_light() -> Vec<SceneLight> {
     vec![SceneLight::from(Light::Directional {

@@ -16,10 +16,11 @@ use crate::shading::exit_chord::ExitChord;
 use crate::shading::single_scattering::{
     ViewRay, ViewRayScene, face_view_rays, view_ray_radiance_along, view_rays,
 };
-use crate::shading::transmitted_exit::{self, Transmitted};
+use crate::shading::transmitted_exit::{self, ExitShares, Transmitted};
 use crate::shading::view_basis::{DrawTerms, ViewBasis, ViewTerms};
 use crate::solver::transmission::Tilt;
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
 #[derive(Default)]
@@ -38,6 +39,9 @@ pub(super) struct View {
     /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
     /// crossed the body.
     transmitted: Transmitted,
+    /// The split's part of the transmitted light's exit that no eye changes (made with
+    /// `basis`, for the same solve).
+    exit_shares: Option<ExitShares>,
     /// The view rays of the last eye, pose and refractive index, which a light move keeps.
     rays: RayCache,
 }
@@ -108,6 +112,7 @@ impl View {
         }
         self.diffuse = diffuse_radiance(&b, &f.profile);
         self.stale = self.basis.take().or(self.stale.take());
+        self.exit_shares = None;
         self.transmitted = if sent.is_empty() {
             Default::default()
         } else {
@@ -123,7 +128,7 @@ impl View {
     /// Without an eye: `B / (c π)` as solved, and no single scattering. With the split view
     /// terms a solve is still seen per eye (its image is the reference's); the split's
     /// eye-independent part is made on the first eye-only change after it and serves until
-    /// the next solve (it has no view rays, so the transmitted share takes the chord's lobe).
+    /// the next solve (the transmitted share's lobe from the eye direction alone: no rays).
     /// `eye_only`: an eye-only change, with the last image's two buffers, which the split
     /// overwrites (`None`: a solve's).
     pub(super) fn seen(
@@ -142,7 +147,12 @@ impl View {
             return (self.diffuse.clone(), Vec::new());
         }
         if self.terms == ViewTerms::Split && (eye_only.is_some() || self.basis.is_some()) {
-            return self.seen_split(f, irradiance, exit_chord, (eye, single), eye_only.unwrap_or_default());
+            let (mut radiance, single) =
+                self.seen_split(f, irradiance, exit_chord, (eye, single), eye_only.unwrap_or_default());
+            if exit_chord.is_some() {
+                self.transmitted_exit_split(f, body, eye, &mut radiance);
+            }
+            return (radiance, single);
         }
         let normals = f.mesh.vertex_normals();
         let scene = view_ray_scene(f, irradiance, caster, &normals);
@@ -206,6 +216,25 @@ impl View {
         basis.draw(&f.mesh, eye, terms, &mut radiance, &mut single_out);
         self.basis = Some(basis);
         (radiance, single_out)
+    }
+
+    /// The transmitted light's exit lobe on the split's `radiance` (the diffuse radiance times
+    /// the chord factor), per vertex from the eye's direction: what
+    /// `transmitted_exit::exit_factors` gives the traced view terms, without their rays.
+    fn transmitted_exit_split(&mut self, f: &Frame, body: &Body, eye: Vec3, radiance: &mut [Rgb]) {
+        let transmitted = &self.transmitted;
+        let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) else { return };
+        let shares = self
+            .exit_shares
+            .get_or_insert_with(|| ExitShares::new(cross, &f.mesh, &f.mesh.vertex_normals(), transmitted));
+        let diffuse = &self.diffuse;
+        radiance.par_iter_mut().enumerate().for_each(|(v, r)| {
+            let Some((mu_o, w_o)) = shares.seen_from(v, f.mesh.positions[v], eye) else { return };
+            let d = diffuse[v];
+            // The chord factor the split drew, per channel.
+            let c = Rgb::from_array(std::array::from_fn(|k| if d[k] > 0.0 { r[k] / d[k] } else { 1.0 }));
+            *r = d * shares.factor(v, cross, &f.profile, mu_o, w_o, c);
+        });
     }
 }
 

@@ -12,6 +12,7 @@ use crate::bssrdf::fresnel_transmittance;
 use crate::mesh::Mesh;
 use crate::shading::single_scattering::ViewRay;
 use crate::solver::transmission::{CrossBody, Tilt};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// What a solve's `B` holds of light that crossed the body, per face, for the way it leaves.
@@ -57,83 +58,176 @@ pub(crate) fn exit_factors(
     profile: &Profile,
     chord: &[Rgb],
 ) -> Vec<Rgb> {
-    let (lobe, eta, inv_c) = (&profile.exit_lobe, profile.eta, profile.exit_normalization());
-    let Transmitted { face_b, sent, tilts } = transmitted;
-    let b_v = mesh.face_to_vertex(face_b);
-    let sent_v = mesh.face_to_vertex(sent);
-    let weighted: Vec<Rgb> =
-        sent.iter().zip(cross.thickness()).map(|(s, &t)| Rgb::splat(s.element_sum() * t)).collect();
-    let t_v = mesh.face_to_vertex(&weighted);
-    let sum_v = mesh.face_to_vertex(&sent.iter().map(|s| Rgb::splat(s.element_sum())).collect::<Vec<_>>());
-    // Per face, the sphere's share of the transmitted light (at most all of it).
-    let round: Vec<Rgb> = if tilts.len() == sent.len() {
-        tilts.iter().zip(sent).map(|(t, s)| t.whole.min(*s).max(Rgb::ZERO)).collect()
-    } else {
-        Vec::new()
-    };
-    let round_v = if round.is_empty() { Vec::new() } else { mesh.face_to_vertex(&round) };
-    // Per vertex, the share-weighted mean of its exit's normal cosine (times the share).
-    let normal_v = if round.is_empty() {
-        Vec::new()
-    } else {
-        mesh.face_to_vertex(&tilts.iter().zip(&round).map(|(t, r)| *r * t.normal).collect::<Vec<_>>())
-    };
-    // Per vertex and channel, its first moment `Σ share μ̄_t t` (B units), by axis.
-    let tilt_v: Option<[Vec<Rgb>; 3]> = (!round.is_empty()).then(|| {
-        std::array::from_fn(|axis| {
-            let component: Vec<Rgb> =
-                tilts.iter().zip(&round).map(|(t, r)| *r * t.mean * t.along[axis]).collect();
-            mesh.face_to_vertex(&component)
-        })
-    });
+    let shares = ExitShares::new(cross, mesh, &[], transmitted);
+    let eta = profile.eta as f32;
     (0..mesh.positions.len())
         .into_par_iter()
         .map(|v| {
             let c = chord.get(v).copied().unwrap_or(Rgb::ONE);
             let Some(ray) = &rays[v] else { return c };
-            if sum_v[v].x <= 0.0 {
-                return c;
-            }
-            let t = t_v[v].x / sum_v[v].x;
-            let base =
-                if eta == 1.0 { 1.0 } else { (fresnel_transmittance(ray.mu_o as f64, eta) * inv_c) as f32 };
-            let l = (lobe.at(ray.mu_o) * base).to_array();
-            // The light reaches the surface along -w_t and leaves refracted: its tangential part
-            // grows by η (Snell), its normal cosine is μ_o.
+            // The light reaches the surface along -w_t and leaves refracted: its tangential
+            // part grows by η (Snell), its normal cosine is μ_o.
             let w_in = -ray.w_t;
             let w_o = if eta == 1.0 {
                 w_in
             } else {
-                (w_in - w_in.dot(ray.normal) * ray.normal) * eta as f32 + ray.normal * ray.mu_o
+                (w_in - w_in.dot(ray.normal) * ray.normal) * eta + ray.normal * ray.mu_o
             };
-            let along =
-                tilt_v.as_ref().map_or(Rgb::ZERO, |[x, y, z]| x[v] * w_o.x + y[v] * w_o.y + z[v] * w_o.z);
-            let round = round_v.get(v).copied().unwrap_or(Rgb::ZERO);
-            let normal = normal_v.get(v).copied().unwrap_or(Rgb::ZERO);
-            Rgb::from_array(std::array::from_fn(|k| {
-                let b = b_v[v][k];
-                if b <= 0.0 {
-                    return c[k];
-                }
-                // The slab's share leaves by the slab's lobe; the sphere's, which came the short
-                // way round rather than through the diameter, by its own: the walk's two
-                // moments there, its mean normal cosine and its tilt.
-                let w = (sent_v[v][k] / b).clamp(0.0, 1.0);
-                let w_round = (round[k] / b).clamp(0.0, w);
-                let w_slab = w - w_round;
-                if l[k] <= 1e-6 {
-                    return c[k];
-                }
-                let slab = match cross.transmitted_lobe(k, t, ray.mu_o) {
-                    Some(p) => w_slab * p / l[k],
-                    None => w_slab * c[k],
-                };
-                let mu_n = if round[k] > 0.0 { normal[k] / round[k] } else { 2.0 / 3.0 };
-                let sphere = (w_round * round_lobe(mu_n, ray.mu_o) + 7.5 * ray.mu_o * along[k] / b) / l[k];
-                ((1.0 - w) * c[k] + slab + sphere).max(0.0)
-            }))
+            shares.factor(v, cross, profile, ray.mu_o, w_o, c)
         })
         .collect()
+}
+
+/// What [`exit_factors`] needs per vertex that does not depend on the eye (made once per
+/// solve; the split view terms evaluate [`ExitShares::factor`] per eye from it).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ExitShares {
+    /// Per vertex: its share of transmitted light, `None` where it holds none.
+    vertices: Vec<Option<VertexShare>>,
+}
+
+/// One vertex's transmitted light, area-weighted from its faces.
+#[derive(Clone, Copy, Debug)]
+struct VertexShare {
+    /// `B` (radiosity units).
+    b: Rgb,
+    /// The transmitted share of `B` and the sphere's share of it (unitless, `0 <= round <= sent
+    /// <= 1` per channel).
+    sent: Rgb,
+    round: Rgb,
+    /// The thickness under it, weighted by the transmitted light (mesh units).
+    thickness: f32,
+    /// The sphere's share's mean normal cosine (unitless; 2/3 where it has none).
+    mean_cos: Rgb,
+    /// The sphere's share's first moment along the flow, `Σ share μ̄_t t` per axis (`B` units).
+    along: [Rgb; 3],
+    /// The unit vertex normal (zero where none was given).
+    normal: Vec3,
+}
+
+impl ExitShares {
+    /// The shares of `transmitted`'s light at every vertex of `mesh`, with its unit vertex
+    /// `normals` for [`ExitShares::seen_from`] (empty: not kept).
+    pub(crate) fn new(cross: &CrossBody, mesh: &Mesh, normals: &[Vec3], transmitted: &Transmitted) -> Self {
+        let Transmitted { face_b, sent, tilts } = transmitted;
+        let b_v = mesh.face_to_vertex(face_b);
+        let sent_v = mesh.face_to_vertex(sent);
+        let weighted: Vec<Rgb> =
+            sent.iter().zip(cross.thickness()).map(|(s, &t)| Rgb::splat(s.element_sum() * t)).collect();
+        let t_v = mesh.face_to_vertex(&weighted);
+        let sum_v =
+            mesh.face_to_vertex(&sent.iter().map(|s| Rgb::splat(s.element_sum())).collect::<Vec<_>>());
+        // Per face, the sphere's share of the transmitted light (at most all of it).
+        let round: Vec<Rgb> = if tilts.len() == sent.len() {
+            tilts.iter().zip(sent).map(|(t, s)| t.whole.min(*s).max(Rgb::ZERO)).collect()
+        } else {
+            Vec::new()
+        };
+        let round_v = if round.is_empty() { Vec::new() } else { mesh.face_to_vertex(&round) };
+        // Per vertex, the share-weighted mean of its exit's normal cosine (times the share).
+        let normal_v = if round.is_empty() {
+            Vec::new()
+        } else {
+            mesh.face_to_vertex(&tilts.iter().zip(&round).map(|(t, r)| *r * t.normal).collect::<Vec<_>>())
+        };
+        // Per vertex and channel, its first moment `Σ share μ̄_t t` (B units), by axis.
+        let tilt_v: Option<[Vec<Rgb>; 3]> = (!round.is_empty()).then(|| {
+            std::array::from_fn(|axis| {
+                let component: Vec<Rgb> =
+                    tilts.iter().zip(&round).map(|(t, r)| *r * t.mean * t.along[axis]).collect();
+                mesh.face_to_vertex(&component)
+            })
+        });
+        let vertices = (0..mesh.positions.len())
+            .into_par_iter()
+            .map(|v| {
+                let b = b_v[v];
+                if sum_v[v].x <= 0.0 || b.max_element() <= 0.0 {
+                    return None;
+                }
+                let per_b = |x: Rgb| {
+                    Rgb::from_array(std::array::from_fn(|k| if b[k] > 0.0 { x[k] / b[k] } else { 0.0 }))
+                };
+                let sent = per_b(sent_v[v]).clamp(Rgb::ZERO, Rgb::ONE);
+                let round_sum = round_v.get(v).copied().unwrap_or(Rgb::ZERO);
+                let round = per_b(round_sum).clamp(Rgb::ZERO, sent);
+                let normal = normal_v.get(v).copied().unwrap_or(Rgb::ZERO);
+                let mean_cos = Rgb::from_array(std::array::from_fn(|k| {
+                    if round_sum[k] > 0.0 { normal[k] / round_sum[k] } else { 2.0 / 3.0 }
+                }));
+                let along = tilt_v.as_ref().map_or([Rgb::ZERO; 3], |t| std::array::from_fn(|a| t[a][v]));
+                let normal = normals.get(v).copied().unwrap_or(Vec3::ZERO);
+                Some(VertexShare {
+                    b,
+                    sent,
+                    round,
+                    thickness: t_v[v].x / sum_v[v].x,
+                    mean_cos,
+                    along,
+                    normal,
+                })
+            })
+            .collect();
+        ExitShares { vertices }
+    }
+
+    /// What multiplies vertex `v`'s diffuse radiance `B / (c π)` seen at the exit cosine `mu_o`
+    /// along the unit direction `w_o` outside (toward the eye), given its chord factor `c`: the
+    /// non-transmitted share keeps `c`, the slab's share leaves by the slab's lobe, the
+    /// sphere's by its own (both over the mesh pass's lobe, `F_t T / c` of `profile`).
+    pub(crate) fn factor(
+        &self,
+        v: usize,
+        cross: &CrossBody,
+        profile: &Profile,
+        mu_o: f32,
+        w_o: Vec3,
+        c: Rgb,
+    ) -> Rgb {
+        let Some(share) = self.vertices.get(v).copied().flatten() else { return c };
+        let eta = profile.eta;
+        let base = if eta == 1.0 {
+            1.0
+        } else {
+            (fresnel_transmittance(mu_o as f64, eta) * profile.exit_normalization()) as f32
+        };
+        let l = (profile.exit_lobe.at(mu_o) * base).to_array();
+        let along = share.along[0] * w_o.x + share.along[1] * w_o.y + share.along[2] * w_o.z;
+        Rgb::from_array(std::array::from_fn(|k| {
+            if share.b[k] <= 0.0 || l[k] <= 1e-6 {
+                return c[k];
+            }
+            // The slab's share leaves by the slab's lobe; the sphere's, which came the short
+            // way round rather than through the diameter, by its own: the walk's two moments
+            // there, its mean normal cosine and its tilt.
+            let (w, w_round) = (share.sent[k], share.round[k]);
+            let w_slab = w - w_round;
+            let slab = match cross.transmitted_lobe(k, share.thickness, mu_o) {
+                Some(p) => w_slab * p / l[k],
+                None => w_slab * c[k],
+            };
+            let sphere =
+                (w_round * round_lobe(share.mean_cos[k], mu_o) + 7.5 * mu_o * along[k] / share.b[k]) / l[k];
+            ((1.0 - w) * c[k] + slab + sphere).max(0.0)
+        }))
+    }
+
+    /// The exit cosine and the direction outside toward `eye` (mesh units) of vertex `v` at
+    /// `position`, mirrored to the front where the vertex is turned slightly away (as the view
+    /// rays are); `None` where it holds no transmitted light or no normal was kept.
+    pub(crate) fn seen_from(&self, v: usize, position: Vec3, eye: Vec3) -> Option<(f32, Vec3)> {
+        let n = self.vertices.get(v).copied().flatten()?.normal;
+        if n == Vec3::ZERO {
+            return None;
+        }
+        let mut w_o = (eye - position).normalize_or_zero();
+        let mut mu_o = n.dot(w_o);
+        if mu_o < 0.0 {
+            w_o -= 2.0 * mu_o * n;
+            mu_o = -mu_o;
+        }
+        Some((mu_o.clamp(1e-3, 1.0), w_o))
+    }
 }
 
 /// The radiance of a sphere's transmitted light leaving at exit cosine `mu_o` over a Lambertian
