@@ -136,9 +136,11 @@ fn on_the_bunny_the_split_follows_the_per_eye_evaluation() {
     for (material, eye, single, chord, both) in rows {
         // Measured: single scattering's median 0.09-4.7%, 95th percentile 19-52% (the silhouette
         // and the terminator, where the source under a face is no exponential); the chord's
-        // 95th percentile 0-4.5%; what is drawn, median 0.01-0.11%, 95th percentile 1.6-5.6%.
+        // 95th percentile 0.05-5.1% (skim milk: where the round part's exit lobe, the same on
+        // both sides, dims the light that crossed, the split's chord error weighs more; 2.2-4.0%
+        // with `round_exit` ablated); what is drawn, median 0.02-0.29%, 95th percentile 2.1-5.4%.
         assert!(single.0 < 0.06 && single.1 < 0.6, "{material} {eye}: single scattering {single:?}");
-        assert!(chord.0 < 0.01 && chord.1 < 0.05, "{material} {eye}: chord factor {chord:?}");
+        assert!(chord.0 < 0.01 && chord.1 < 0.06, "{material} {eye}: chord factor {chord:?}");
         assert!(both.0 < 0.005 && both.1 < 0.08, "{material} {eye}: drawn {both:?}");
     }
 }
