@@ -17,14 +17,12 @@
 //! from the light ([`super::sphere_walk::Slices`], as the reciprocal walk does toward it).
 
 use super::fresnel::fresnel_dielectric;
-use super::sphere_walk::{Exits, Slices, isotropic, to_boundary};
+use super::sphere_walk::{Exits, Photon, Slices, to_boundary};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::f64::consts::PI;
 
-/// Photons below this weight (times their slice's share) play Russian roulette.
-const ROULETTE: f64 = 0.05;
 /// No path is followed further.
 const MAX_STEPS: usize = 1 << 20;
 /// Half the width of the band scored about each exit angle (degrees; the last band stops short
@@ -121,7 +119,7 @@ fn walk(
     moments: &mut [(f64, f64)],
     rng: &mut Pcg64Mcg,
 ) {
-    let mut stack = vec![(p, dir, weight, 0u32, slices.level_of(p))];
+    let mut stack: Vec<Photon> = vec![(p, dir, weight, 0, slices.level_of(p))];
     while let Some((mut pos, mut dir, mut weight, mut n, mut level)) = stack.pop() {
         for _ in 0..MAX_STEPS {
             let step = -(1.0 - rng.random::<f64>()).ln();
@@ -155,22 +153,13 @@ fn walk(
                 pos += dir * step;
                 weight *= rho;
                 n += 1;
-                dir = isotropic(rng);
-                match slices.split(pos, &mut level, &mut weight, rng) {
-                    Some(copies) => {
-                        for _ in 1..copies {
-                            stack.push((pos, isotropic(rng), weight, n, level));
-                        }
-                    }
+                match slices.scatter(pos, n, &mut level, &mut weight, &mut stack, rng) {
+                    Some(d) => dir = d,
                     None => break,
                 }
             }
-            // Roulette against the slice's own weight (splitting lowers it by design).
-            if weight * slices.share(level) < ROULETTE {
-                if rng.random::<f64>() < 0.5 {
-                    break;
-                }
-                weight *= 2.0;
+            if !slices.survives(level, &mut weight, rng) {
+                break;
             }
         }
     }

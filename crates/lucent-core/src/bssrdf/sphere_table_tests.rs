@@ -32,6 +32,41 @@ fn the_committed_table_is_the_generator_s_grid() {
     assert!(Walked::decode(&table.encode()[1..]).is_none());
 }
 
+/// The dielectric table is the same grid, walked forward with [`FORWARD_PATHS`] times the
+/// photons; where it scored nothing it says so ([`UNSCORED_LN_T`], relative error 1), and only
+/// where the index-1 table's `T` is already far below what an image shows. Up to 55 degrees
+/// from the antipode its light is more than the index-1 table's wherever both are well measured
+/// (internal reflection keeps the light in); toward the terminator of dark spheres it can be
+/// less (light there entered next to it at grazing incidence, which the boundary reflects).
+#[test]
+fn the_dielectric_table_is_the_same_grid_and_holds_more_light() {
+    let (one, table) = (Walked::committed(), Walked::committed_dielectric());
+    assert_eq!((&table.albedo, &table.radius, &table.theta_deg), (&one.albedo, &one.radius, &one.theta_deg));
+    for (i, &p) in table.paths.iter().enumerate() {
+        let want = (grid_paths(table.radius[i % table.radius.len()]) as f64 * FORWARD_PATHS) as usize;
+        assert_eq!(p as usize, want);
+    }
+    assert!(table.tilt.iter().chain(&table.normal).all(|v| v.is_finite() && v.abs() <= 1.0));
+    let (mut more, mut compared) = (0, 0);
+    for i in 0..table.ln_t.len() {
+        if table.ln_t[i] == UNSCORED_LN_T {
+            assert_eq!(table.rel_se[i], 1.0);
+            assert!(
+                one.ln_t[i] < (1e-5f32).ln(),
+                "point {i}: unscored where index 1 has {}",
+                one.ln_t[i].exp()
+            );
+        } else if table.rel_se[i] < 0.05
+            && one.rel_se[i] < 0.05
+            && table.theta_deg[i % table.theta_deg.len()] <= 55.0
+        {
+            compared += 1;
+            more += usize::from(table.ln_t[i] > one.ln_t[i]);
+        }
+    }
+    assert!(compared > 2000 && more == compared, "{more} of {compared}");
+}
+
 /// At its own points the table returns what was walked there.
 #[test]
 fn at_its_points_the_table_returns_the_walk() {

@@ -26,7 +26,8 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::f64::consts::PI;
 
-/// Photons below this weight play Russian roulette (survivors double).
+/// Photons below this weight (times their slice's share) play Russian roulette (survivors
+/// double).
 const ROULETTE: f64 = 0.05;
 /// No path is followed further (reached only at albedo 1 in very large spheres).
 const MAX_STEPS: usize = 1 << 20;
@@ -112,7 +113,7 @@ pub(crate) fn to_boundary(pos: DVec3, dir: DVec3, radius: f64) -> f64 {
 }
 
 /// A uniformly random unit direction.
-pub(crate) fn isotropic(rng: &mut Pcg64Mcg) -> DVec3 {
+fn isotropic(rng: &mut Pcg64Mcg) -> DVec3 {
     let z = 1.0 - 2.0 * rng.random::<f64>();
     let a = 2.0 * PI * rng.random::<f64>();
     let r = (1.0 - z * z).max(0.0).sqrt();
@@ -167,12 +168,39 @@ impl Slices {
         Some(copies)
     }
 
-    /// How far splitting has lowered the weight of a photon in slice `level` (its roulette
-    /// compares the weight times this).
-    pub(crate) fn share(&self, level: i32) -> f64 {
-        (1u32 << level) as f64
+    /// After a collision at `pos` of a photon with `n` scatterings: its new (isotropic)
+    /// direction, the photon split or played at roulette by slice ([`Slices::split`]), its
+    /// copies pushed on `stack`; `None` where roulette ended it.
+    pub(crate) fn scatter(
+        &self,
+        pos: DVec3,
+        n: u32,
+        level: &mut i32,
+        weight: &mut f64,
+        stack: &mut Vec<Photon>,
+        rng: &mut Pcg64Mcg,
+    ) -> Option<DVec3> {
+        let dir = isotropic(rng);
+        let copies = self.split(pos, level, weight, rng)?;
+        for _ in 1..copies {
+            stack.push((pos, isotropic(rng), *weight, n, *level));
+        }
+        Some(dir)
+    }
+
+    /// Russian roulette against the weight in the slice's own terms (splitting lowers it by
+    /// design): whether the photon goes on (twice the weight where it won).
+    pub(crate) fn survives(&self, level: i32, weight: &mut f64, rng: &mut Pcg64Mcg) -> bool {
+        if *weight * (1u32 << level) as f64 >= ROULETTE {
+            return true;
+        }
+        *weight *= 2.0;
+        rng.random::<f64>() >= 0.5
     }
 }
+
+/// A photon to follow: position, direction, weight, scatterings, slice.
+pub(crate) type Photon = (DVec3, DVec3, f64, u32, i32);
 
 /// One photon from the pole along `dir`: adds each collision's score toward each of `toward`.
 ///
@@ -180,9 +208,8 @@ impl Slices {
 /// they move toward the light ([`Slices`] across the first direction of `toward`).
 fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], rng: &mut Pcg64Mcg) {
     let slices = Slices::new(radius, toward[0]);
-    // Photons to follow: position, direction, weight, scatterings, slice.
     let start = DVec3::new(0.0, 0.0, radius);
-    let mut stack = vec![(start, dir, 1.0, 0u32, slices.level_of(start))];
+    let mut stack: Vec<Photon> = vec![(start, dir, 1.0, 0, slices.level_of(start))];
     while let Some((mut pos, mut dir, mut weight, mut n, mut level)) = stack.pop() {
         for _ in 0..MAX_STEPS {
             let step = -(1.0 - rng.random::<f64>()).ln();
@@ -197,21 +224,12 @@ fn walk(radius: f64, rho: f64, dir: DVec3, toward: &[DVec3], score: &mut [f64], 
                     *s += weight * (-to_boundary(pos, *u, radius)).exp() / 4.0;
                 }
             }
-            dir = isotropic(rng);
-            match slices.split(pos, &mut level, &mut weight, rng) {
-                Some(copies) => {
-                    for _ in 1..copies {
-                        stack.push((pos, isotropic(rng), weight, n, level));
-                    }
-                }
+            match slices.scatter(pos, n, &mut level, &mut weight, &mut stack, rng) {
+                Some(d) => dir = d,
                 None => break,
             }
-            // Roulette against the slice's own weight (splitting halves it by design).
-            if weight * slices.share(level) < ROULETTE {
-                if rng.random::<f64>() < 0.5 {
-                    break;
-                }
-                weight *= 2.0;
+            if !slices.survives(level, &mut weight, rng) {
+                break;
             }
         }
     }
