@@ -99,6 +99,17 @@ impl ExitLobe {
         Rgb::from_array(interpolate(&self.samples[..], cos_o))
     }
 
+    /// This lobe times `f(μ_o)` at each of its samples, interpolated alike (`f = 1` gives it back
+    /// bit for bit): with `f = F_t / c`, the mesh pass's whole exit over a Lambertian one.
+    pub fn times(&self, f: impl Fn(f32) -> f32) -> ExitLobe {
+        let mut samples = *self.samples;
+        for (k, s) in samples.iter_mut().enumerate() {
+            let g = f(k as f32 / (Self::COUNT - 1) as f32);
+            s.iter_mut().for_each(|v| *v *= g);
+        }
+        ExitLobe { samples: Arc::new(samples) }
+    }
+
     /// The table, `T` at `μ_o = k / (COUNT - 1)` per channel (what the mesh pass uploads).
     pub fn samples(&self) -> &[[f32; 3]; ExitLobe::COUNT] {
         &self.samples

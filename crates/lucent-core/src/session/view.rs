@@ -224,17 +224,25 @@ impl View {
     fn transmitted_exit_split(&mut self, f: &Frame, body: &Body, eye: Vec3, radiance: &mut [Rgb]) {
         let transmitted = &self.transmitted;
         let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) else { return };
-        let shares = self
-            .exit_shares
-            .get_or_insert_with(|| ExitShares::new(cross, &f.mesh, &f.mesh.vertex_normals(), transmitted));
-        let diffuse = &self.diffuse;
-        radiance.par_iter_mut().enumerate().for_each(|(v, r)| {
-            let Some((mu_o, w_o)) = shares.seen_from(v, f.mesh.positions[v], eye) else { return };
-            let d = diffuse[v];
-            // The chord factor the split drew, per channel.
-            let c = Rgb::from_array(std::array::from_fn(|k| if d[k] > 0.0 { r[k] / d[k] } else { 1.0 }));
-            *r = d * shares.factor(v, cross, &f.profile, mu_o, w_o, c);
+        let shares = self.exit_shares.get_or_insert_with(|| {
+            ExitShares::new(cross, &f.mesh, &f.mesh.vertex_normals(), transmitted, &f.profile)
         });
+        let diffuse = &self.diffuse;
+        let seen = &*radiance;
+        let updates: Vec<(u32, Rgb)> = shares
+            .split_vertices()
+            .par_iter()
+            .filter_map(|&v| {
+                let (r, d) = (seen[v as usize], diffuse[v as usize]);
+                // The chord factor the split drew, per channel.
+                let c =
+                    || Rgb::from_array(std::array::from_fn(|k| if d[k] > 0.0 { r[k] / d[k] } else { 1.0 }));
+                let factor =
+                    shares.factor_from_eye(v as usize, f.mesh.positions[v as usize], eye, cross, c)?;
+                Some((v, d * factor))
+            })
+            .collect();
+        updates.into_iter().for_each(|(v, r)| radiance[v as usize] = r);
     }
 }
 

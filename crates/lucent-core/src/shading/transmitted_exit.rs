@@ -7,8 +7,8 @@
 //! lit from behind read 16% dark against the path tracer with `B` right.
 
 use crate::Rgb;
-use crate::bssrdf::Profile;
 use crate::bssrdf::fresnel_transmittance;
+use crate::bssrdf::{ExitLobe, Profile};
 use crate::mesh::Mesh;
 use crate::shading::single_scattering::ViewRay;
 use crate::solver::transmission::{CrossBody, Tilt};
@@ -58,7 +58,7 @@ pub(crate) fn exit_factors(
     profile: &Profile,
     chord: &[Rgb],
 ) -> Vec<Rgb> {
-    let shares = ExitShares::new(cross, mesh, &[], transmitted);
+    let shares = ExitShares::new(cross, mesh, &[], transmitted, profile);
     let eta = profile.eta as f32;
     (0..mesh.positions.len())
         .into_par_iter()
@@ -73,10 +73,16 @@ pub(crate) fn exit_factors(
             } else {
                 (w_in - w_in.dot(ray.normal) * ray.normal) * eta + ray.normal * ray.mu_o
             };
-            shares.factor(v, cross, profile, ray.mu_o, w_o, c)
+            shares.factor(v, cross, ray.mu_o, w_o, c)
         })
         .collect()
 }
+
+/// The least transmitted share of a vertex's `B` whose lobe a camera move with the split view
+/// terms evaluates: below it the factor differs from the chord's by a few percent of this at
+/// most (the lobes' ratio to the chord's stays within about 0.4-1.6), and a camera move at 203K
+/// triangles does not read every vertex's share.
+const SPLIT_MIN_SHARE: f32 = 0.02;
 
 /// What [`exit_factors`] needs per vertex that does not depend on the eye (made once per
 /// solve; the split view terms evaluate [`ExitShares::factor`] per eye from it).
@@ -84,6 +90,12 @@ pub(crate) fn exit_factors(
 pub(crate) struct ExitShares {
     /// Per vertex: its share of transmitted light, `None` where it holds none.
     vertices: Vec<Option<VertexShare>>,
+    /// The vertices a camera move with the split view terms evaluates: a normal kept and a
+    /// transmitted share of at least [`SPLIT_MIN_SHARE`] (ascending).
+    split: Vec<u32>,
+    /// The mesh pass's exit over a Lambertian one, `F_t(η, μ_o) T(μ_o) / c` (`bssrdf::exit`;
+    /// `T` alone at `η = 1`), tabulated once: `c` is an integral and `F_t` costs a square root.
+    base: ExitLobe,
 }
 
 /// One vertex's transmitted light, area-weighted from its faces.
@@ -107,8 +119,14 @@ struct VertexShare {
 
 impl ExitShares {
     /// The shares of `transmitted`'s light at every vertex of `mesh`, with its unit vertex
-    /// `normals` for [`ExitShares::seen_from`] (empty: not kept).
-    pub(crate) fn new(cross: &CrossBody, mesh: &Mesh, normals: &[Vec3], transmitted: &Transmitted) -> Self {
+    /// `normals` for [`ExitShares::seen_from`] (empty: not kept), for `profile`'s exit.
+    pub(crate) fn new(
+        cross: &CrossBody,
+        mesh: &Mesh,
+        normals: &[Vec3],
+        transmitted: &Transmitted,
+        profile: &Profile,
+    ) -> Self {
         let Transmitted { face_b, sent, tilts } = transmitted;
         let b_v = mesh.face_to_vertex(face_b);
         let sent_v = mesh.face_to_vertex(sent);
@@ -138,7 +156,7 @@ impl ExitShares {
                 mesh.face_to_vertex(&component)
             })
         });
-        let vertices = (0..mesh.positions.len())
+        let vertices: Vec<Option<VertexShare>> = (0..mesh.positions.len())
             .into_par_iter()
             .map(|v| {
                 let b = b_v[v];
@@ -168,30 +186,39 @@ impl ExitShares {
                 })
             })
             .collect();
-        ExitShares { vertices }
+        let (eta, inv_c) = (profile.eta, profile.exit_normalization());
+        let base = if eta == 1.0 {
+            profile.exit_lobe.clone()
+        } else {
+            profile.exit_lobe.times(|mu| (fresnel_transmittance(mu as f64, eta) * inv_c) as f32)
+        };
+        let split = vertices
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| {
+                s.as_ref().is_some_and(|s: &VertexShare| {
+                    s.normal != Vec3::ZERO && s.sent.max_element() >= SPLIT_MIN_SHARE
+                })
+            })
+            .map(|(v, _)| v as u32)
+            .collect();
+        ExitShares { vertices, split, base }
     }
 
     /// What multiplies vertex `v`'s diffuse radiance `B / (c π)` seen at the exit cosine `mu_o`
     /// along the unit direction `w_o` outside (toward the eye), given its chord factor `c`: the
     /// non-transmitted share keeps `c`, the slab's share leaves by the slab's lobe, the
-    /// sphere's by its own (both over the mesh pass's lobe, `F_t T / c` of `profile`).
-    pub(crate) fn factor(
-        &self,
-        v: usize,
-        cross: &CrossBody,
-        profile: &Profile,
-        mu_o: f32,
-        w_o: Vec3,
-        c: Rgb,
-    ) -> Rgb {
-        let Some(share) = self.vertices.get(v).copied().flatten() else { return c };
-        let eta = profile.eta;
-        let base = if eta == 1.0 {
-            1.0
-        } else {
-            (fresnel_transmittance(mu_o as f64, eta) * profile.exit_normalization()) as f32
-        };
-        let l = (profile.exit_lobe.at(mu_o) * base).to_array();
+    /// sphere's by its own (both over the mesh pass's lobe).
+    pub(crate) fn factor(&self, v: usize, cross: &CrossBody, mu_o: f32, w_o: Vec3, c: Rgb) -> Rgb {
+        match self.vertices.get(v).and_then(Option::as_ref) {
+            Some(share) => self.factor_of(share, cross, mu_o, w_o, c),
+            None => c,
+        }
+    }
+
+    /// [`ExitShares::factor`] of one vertex's share.
+    fn factor_of(&self, share: &VertexShare, cross: &CrossBody, mu_o: f32, w_o: Vec3, c: Rgb) -> Rgb {
+        let l = self.base.at(mu_o).to_array();
         let along = share.along[0] * w_o.x + share.along[1] * w_o.y + share.along[2] * w_o.z;
         Rgb::from_array(std::array::from_fn(|k| {
             if share.b[k] <= 0.0 || l[k] <= 1e-6 {
@@ -212,21 +239,41 @@ impl ExitShares {
         }))
     }
 
-    /// The exit cosine and the direction outside toward `eye` (mesh units) of vertex `v` at
-    /// `position`, mirrored to the front where the vertex is turned slightly away (as the view
-    /// rays are); `None` where it holds no transmitted light or no normal was kept.
-    pub(crate) fn seen_from(&self, v: usize, position: Vec3, eye: Vec3) -> Option<(f32, Vec3)> {
-        let n = self.vertices.get(v).copied().flatten()?.normal;
+    /// The vertices a camera move with the split view terms evaluates
+    /// ([`ExitShares::factor_from_eye`]); the rest keep the chord's factor.
+    pub(crate) fn split_vertices(&self) -> &[u32] {
+        &self.split
+    }
+
+    /// [`ExitShares::factor`] of vertex `v` at `position` seen from `eye` (mesh units), the
+    /// direction mirrored to the front where the vertex is turned slightly away (as the view
+    /// rays are), over the chord factor `c`; `None` where the factor is the chord's: no
+    /// transmitted light worth a camera move's time (not one of
+    /// [`ExitShares::split_vertices`]), or turned well away (more than 120 degrees: none of its
+    /// faces is drawn but in the sharpest creases).
+    pub(crate) fn factor_from_eye(
+        &self,
+        v: usize,
+        position: Vec3,
+        eye: Vec3,
+        cross: &CrossBody,
+        c: impl FnOnce() -> Rgb,
+    ) -> Option<Rgb> {
+        let share = self.vertices.get(v).and_then(Option::as_ref)?;
+        let n = share.normal;
         if n == Vec3::ZERO {
             return None;
         }
         let mut w_o = (eye - position).normalize_or_zero();
         let mut mu_o = n.dot(w_o);
+        if mu_o < -0.5 {
+            return None;
+        }
         if mu_o < 0.0 {
             w_o -= 2.0 * mu_o * n;
             mu_o = -mu_o;
         }
-        Some((mu_o.clamp(1e-3, 1.0), w_o))
+        Some(self.factor_of(share, cross, mu_o.clamp(1e-3, 1.0), w_o, c()))
     }
 }
 
