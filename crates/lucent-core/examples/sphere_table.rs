@@ -46,14 +46,13 @@ fn main() {
         .par_iter()
         .map(|&(a, r)| {
             let seed = st::SEED + 64 * a as u64 + r as u64;
-            let exits = if eta == 1.0 {
+            let (paths, exits) = if eta == 1.0 {
                 let paths = ((st::grid_paths(radius[r]) as f64 * scale) as usize).max(64);
                 (paths, walk_exits(radius[r], albedo[a], &thetas, paths, seed))
             } else {
                 let paths = ((st::grid_paths(radius[r]) as f64 * st::FORWARD_PATHS * scale) as usize).max(64);
                 (paths, forward_exits(radius[r], albedo[a], eta, &thetas, paths, seed))
             };
-            let (paths, exits) = exits;
             if r == 0 {
                 eprintln!("albedo {:.6}: {:.0} s", albedo[a], start.elapsed().as_secs_f64());
             }

@@ -113,7 +113,7 @@ pub(crate) fn to_boundary(pos: DVec3, dir: DVec3, radius: f64) -> f64 {
 }
 
 /// A uniformly random unit direction.
-fn isotropic(rng: &mut Pcg64Mcg) -> DVec3 {
+pub(crate) fn isotropic(rng: &mut Pcg64Mcg) -> DVec3 {
     let z = 1.0 - 2.0 * rng.random::<f64>();
     let a = 2.0 * PI * rng.random::<f64>();
     let r = (1.0 - z * z).max(0.0).sqrt();

@@ -24,6 +24,7 @@
 
 use super::fresnel::{fresnel_dielectric, refracted_cosine};
 use super::halfspace::HalfSpace;
+use super::sphere_walk::isotropic;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -79,10 +80,7 @@ fn walk(radius: f64, rho: f64, eta: f64, mut dir: DVec3, rng: &mut Pcg64Mcg) -> 
         pos += dir * step;
         weight *= rho;
         scatters += 1;
-        let z = 1.0 - 2.0 * rng.random::<f64>();
-        let a = 2.0 * PI * rng.random::<f64>();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        dir = DVec3::new(r * a.cos(), r * a.sin(), z);
+        dir = isotropic(rng);
         if weight < ROULETTE {
             if rng.random::<f64>() < 0.5 {
                 return 0.0;

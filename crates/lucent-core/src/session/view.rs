@@ -39,8 +39,8 @@ pub(super) struct View {
     /// (`Body::add_transmission`), for the transmitted light's exit lobe; empty where no light
     /// crossed the body.
     transmitted: Transmitted,
-    /// The split's part of the transmitted light's exit that no eye changes (made with
-    /// `basis`, for the same solve).
+    /// What the transmitted light's exit needs that no eye changes, for the last solve (made on
+    /// its first view, traced or split, and kept for every eye until the next solve).
     exit_shares: Option<ExitShares>,
     /// The view rays of the last eye, pose and refractive index, which a light move keeps.
     rays: RayCache,
@@ -163,14 +163,10 @@ impl View {
                 let mut factors = chord.vertex_factors(rays, means);
                 let transmitted = &self.transmitted;
                 if let Some(cross) = body.cross_body().filter(|c| c.len() == transmitted.sent.len()) {
-                    factors = transmitted_exit::exit_factors(
-                        cross,
-                        &f.mesh,
-                        transmitted,
-                        rays,
-                        &f.profile,
-                        &factors,
-                    );
+                    let shares = self.exit_shares.get_or_insert_with(|| {
+                        ExitShares::new(cross, &f.mesh, &normals, transmitted, &f.profile)
+                    });
+                    factors = transmitted_exit::exit_factors(cross, shares, rays, f.profile.eta, &factors);
                 }
                 self.diffuse.iter().zip(factors).map(|(d, c)| *d * c).collect()
             }

@@ -26,8 +26,9 @@ pub(crate) struct Transmitted {
     pub tilts: Vec<Tilt>,
 }
 
-/// Per vertex of `mesh`, what multiplies the diffuse radiance `B / (c π)` for the way the
-/// light crossing the body leaves: the share `w` of the vertex's `B` that was transmitted
+/// Per vertex of `shares` (a solve's transmitted light, [`ExitShares`]), what multiplies the
+/// diffuse radiance `B / (c π)` for the way the light crossing the body leaves, for a material
+/// of relative index `eta`: the share `w` of the vertex's `B` that was transmitted
 /// (`sent` over `face_b`, area-weighted over its faces) leaves as a slab's transmitted light
 /// does (forward-peaked: 1.2 times a Lambertian exit head-on at 6.6 mean free paths, where
 /// the half-space's multiple scattering is 1.04-1.07), the rest as before, times its chord
@@ -52,15 +53,13 @@ pub(crate) struct Transmitted {
 /// `F_t(η, μ_o) T(μ_o) / c` (`bssrdf::exit`), which at `η = 1` is `T(μ_o)`.
 pub(crate) fn exit_factors(
     cross: &CrossBody,
-    mesh: &Mesh,
-    transmitted: &Transmitted,
+    shares: &ExitShares,
     rays: &[Option<ViewRay>],
-    profile: &Profile,
+    eta: f64,
     chord: &[Rgb],
 ) -> Vec<Rgb> {
-    let shares = ExitShares::new(cross, mesh, &[], transmitted, profile);
-    let eta = profile.eta as f32;
-    (0..mesh.positions.len())
+    let eta = eta as f32;
+    (0..rays.len())
         .into_par_iter()
         .map(|v| {
             let c = chord.get(v).copied().unwrap_or(Rgb::ONE);
