@@ -204,11 +204,17 @@ fn albedo_of(hs: &HalfSpace, mu_t: f64, with_single: bool) -> f64 {
 /// A table over `μ = k / SAMPLES` at `mu` (clamped to 0..1), linearly.
 #[inline]
 pub(super) fn interpolate(table: &[[f32; 3]], mu: f32) -> [f32; 3] {
-    let x = mu.clamp(0.0, 1.0) * SAMPLES as f32;
-    let k = (x as usize).min(SAMPLES - 1);
-    let t = x - k as f32;
+    let (k, t) = interpolation_point(mu);
     let (a, b) = (table[k], table[k + 1]);
     std::array::from_fn(|c| a[c] + (b[c] - a[c]) * t)
+}
+
+/// Where [`interpolate`] reads `mu`: the lower sample `k` and the share `t` of the next.
+#[inline(always)]
+pub(super) fn interpolation_point(mu: f32) -> (usize, f32) {
+    let x = mu.clamp(0.0, 1.0) * SAMPLES as f32;
+    let k = (x as usize).min(SAMPLES - 1);
+    (k, x - k as f32)
 }
 
 /// The light an oblique beam carries past one mean free path of its entry point, over a normal

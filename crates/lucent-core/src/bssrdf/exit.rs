@@ -34,7 +34,7 @@
 //! far field's `(μ_t + z_b) / (1 + z_b)`, within 0.6% of this one on every case. Mertens' profile
 //! keeps the paper's flat lobe (`T = 1`).
 
-use super::entry::{SAMPLES, interpolate};
+use super::entry::{SAMPLES, interpolate, interpolation_point};
 #[cfg(test)]
 use super::fresnel::fresnel_dielectric;
 use super::fresnel::{fresnel_transmittance, refracted_cosine};
@@ -97,6 +97,21 @@ impl ExitLobe {
     #[inline]
     pub fn at(&self, cos_o: f32) -> Rgb {
         Rgb::from_array(interpolate(&self.samples[..], cos_o))
+    }
+
+    /// [`ExitLobe::at`] of each of `cos_o`, per channel: the same interpolation, lane by lane
+    /// so that it compiles to vector instructions.
+    #[inline(always)]
+    pub fn at_lanes<const N: usize>(&self, cos_o: &[f32; N]) -> [[f32; N]; 3] {
+        let mut out = [[0.0; N]; 3];
+        for (i, &mu) in cos_o.iter().enumerate() {
+            let (k, t) = interpolation_point(mu);
+            let (a, b) = (self.samples[k], self.samples[k + 1]);
+            for c in 0..3 {
+                out[c][i] = a[c] + (b[c] - a[c]) * t;
+            }
+        }
+        out
     }
 
     /// This lobe times `f(μ_o)` at each of its samples, interpolated alike (`f = 1` gives it back

@@ -343,6 +343,14 @@ const WALK_PATHS: usize = 16_384;
 /// Exit cosines of a [`SlabTable`]'s transmitted lobe, `0, 1/16, ..., 1`.
 pub const LOBE_MU: usize = 17;
 
+/// A thickness's place among a [`SlabTable`]'s lobes: the thinner row `k` and the share `f`
+/// (0..=1) of the next, interpolated in `ln τ`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LobeRow {
+    k: u32,
+    f: f32,
+}
+
 /// A slab's multiple-scattering transmittance and reflectance over optical thickness for one
 /// albedo and index, at normal incidence: what [`crate::solver::transmission`] reads.
 #[derive(Debug)]
@@ -394,10 +402,11 @@ impl SlabTable {
         SlabTable { tau, at, lobe, kappa: asymptotic_decay(rho), half_space }
     }
 
-    /// The transmitted light's radiance at exit cosine `mu` over a Lambertian exit's, for a
-    /// slab `tau` mean free paths thick (the table's nearest thicknesses; its thinnest and
-    /// thickest beyond them), or `None` where the table has no lobe (`η ≠ 1`).
-    pub fn lobe(&self, tau: f64, mu: f32) -> Option<f32> {
+    /// Where a slab `tau` mean free paths thick reads the transmitted lobe ([`SlabTable::lobe_at`]):
+    /// between the table's nearest thicknesses (its thinnest and thickest beyond them), or
+    /// `None` where the table has no lobe (`η ≠ 1`). It does not depend on the exit direction,
+    /// so a caller that reads many directions finds it once.
+    pub fn lobe_row(&self, tau: f64) -> Option<LobeRow> {
         if self.lobe.is_empty() || tau.is_nan() || tau <= 0.0 {
             return None;
         }
@@ -410,11 +419,19 @@ impl SlabTable {
             let k = self.tau.partition_point(|&v| v <= tau) - 1;
             (k, ((tau / self.tau[k]).ln() / (self.tau[k + 1] / self.tau[k]).ln()) as f32)
         };
+        Some(LobeRow { k: k as u32, f })
+    }
+
+    /// The transmitted light's radiance at exit cosine `mu` over a Lambertian exit's, for the
+    /// slab `row` stands for ([`SlabTable::lobe_row`]).
+    #[inline]
+    pub fn lobe_at(&self, row: LobeRow, mu: f32) -> f32 {
         let x = mu.clamp(0.0, 1.0) * (LOBE_MU - 1) as f32;
         let i = (x as usize).min(LOBE_MU - 2);
         let g = x - i as f32;
         let at = |row: &[f32; LOBE_MU]| row[i] + (row[i + 1] - row[i]) * g;
-        Some(at(&self.lobe[k]) * (1.0 - f) + at(&self.lobe[k + 1]) * f)
+        let k = row.k as usize;
+        at(&self.lobe[k]) * (1.0 - row.f) + at(&self.lobe[k + 1]) * row.f
     }
 
     /// The slab's multiple-scattering return at optical thickness `tau` (mean free paths):

@@ -20,7 +20,6 @@ use crate::shading::transmitted_exit::{self, ExitShares, Transmitted};
 use crate::shading::view_basis::{DrawTerms, ViewBasis, ViewTerms};
 use crate::solver::transmission::Tilt;
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// The eye and the last solve's diffuse radiance, which an eye-only change sees again.
 #[derive(Default)]
@@ -223,22 +222,7 @@ impl View {
         let shares = self.exit_shares.get_or_insert_with(|| {
             ExitShares::new(cross, &f.mesh, &f.mesh.vertex_normals(), transmitted, &f.profile)
         });
-        let diffuse = &self.diffuse;
-        let seen = &*radiance;
-        let updates: Vec<(u32, Rgb)> = shares
-            .split_vertices()
-            .par_iter()
-            .filter_map(|&v| {
-                let (r, d) = (seen[v as usize], diffuse[v as usize]);
-                // The chord factor the split drew, per channel.
-                let c =
-                    || Rgb::from_array(std::array::from_fn(|k| if d[k] > 0.0 { r[k] / d[k] } else { 1.0 }));
-                let factor =
-                    shares.factor_from_eye(v as usize, f.mesh.positions[v as usize], eye, cross, c)?;
-                Some((v, d * factor))
-            })
-            .collect();
-        updates.into_iter().for_each(|(v, r)| radiance[v as usize] = r);
+        shares.draw_split(crate::simd::Isa::best(), eye, cross, &self.diffuse, radiance);
     }
 }
 

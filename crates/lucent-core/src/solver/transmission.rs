@@ -53,7 +53,7 @@
 use crate::Rgb;
 use crate::bssrdf::Entry;
 use crate::bssrdf::Profile;
-use crate::bssrdf::slab::SlabTable;
+use crate::bssrdf::slab::{LobeRow, SlabTable};
 use crate::bssrdf::slab_oblique::ObliqueTable;
 use crate::irradiance::Entering;
 use crate::mesh::Mesh;
@@ -369,10 +369,17 @@ impl CrossBody {
         &self.thickness
     }
 
+    /// Where channel `c`'s transmitted lobe is read for a part `thickness` mesh units thick
+    /// ([`SlabTable::lobe_row`]); `None` where not modelled.
+    pub(crate) fn transmitted_lobe_row(&self, c: usize, thickness: f32) -> Option<LobeRow> {
+        self.tables[c].lobe_row(self.sigma_t[c] * thickness as f64)
+    }
+
     /// The transmitted light's radiance over a Lambertian exit's in channel `c` at exit
-    /// cosine `mu`, for `thickness` mesh units ([`SlabTable::lobe`]); `None` where not modelled.
-    pub(crate) fn transmitted_lobe(&self, c: usize, thickness: f32, mu: f32) -> Option<f32> {
-        self.tables[c].lobe(self.sigma_t[c] * thickness as f64, mu)
+    /// cosine `mu`, at `row` ([`CrossBody::transmitted_lobe_row`]).
+    #[inline]
+    pub(crate) fn transmitted_lobe_at(&self, c: usize, row: LobeRow, mu: f32) -> f32 {
+        self.tables[c].lobe_at(row, mu)
     }
 
     /// What face `f`'s term adds to its `B` under uniform irradiance 1 (the positive part of
