@@ -128,10 +128,11 @@ pub enum TransportModel {
     #[default]
     BeerLambert,
     /// The diffusion quadrature ([`diffusion`], issue 55): each sample weighs the medium's
-    /// diffusion kernel integrated over the annulus it stands for, times the half-space's albedo
-    /// where the light reaches the visible point and the exact slab transmittance where it
-    /// crosses the body, times `exp(-alpha_i)` for the density. Needs [`HtsmParams::medium`];
-    /// the phase weight is not used (diffusion leaves the surface isotropically).
+    /// diffusion kernel along its ray integrated over the annulus it stands for, times the
+    /// half-space's albedo where the light reaches the visible point and the exact slab
+    /// transmittance where it crosses the body (the slab as thick as the ray's extent along the
+    /// light; that light leaves by diffusion's exit lobe). Needs [`HtsmParams::medium`]; the
+    /// phase weight is not used.
     Diffusion,
 }
 

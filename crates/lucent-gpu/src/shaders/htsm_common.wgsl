@@ -45,8 +45,8 @@ struct Frame {
     boundary: vec4<f32>,
     // rgb at density d / 8 and incidence cosine k / 8 (entry 9 d + k): the half-space's albedo.
     albedo: array<vec4<f32>, 81>,
-    // rgb at density d / 8 and diffusion optical depth 0.5 k (entry 33 d + k): the slab's
-    // transmittance times e^(0.5 k).
+    // rgb at density d / 8 and diffusion optical depth x = (k / 8)^2 (entry 33 d + k): the
+    // slab's transmittance times e^x.
     slab: array<vec4<f32>, 297>,
 }
 
