@@ -105,6 +105,7 @@ pub(crate) struct ExitShares {
 /// them as vectors. An empty lane has vertex `u32::MAX`, a zero normal and `keep` 1.
 #[derive(Clone, Debug)]
 struct ShareBlock {
+    /// Each lane's vertex (`u32::MAX`: an empty lane).
     vertex: [u32; LANES],
     /// Positions (mesh units) and unit normals, per axis.
     position: [[f32; LANES]; 3],
